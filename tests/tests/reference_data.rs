@@ -1,0 +1,170 @@
+//! The core against published reference data (palette-style): CIE tables,
+//! illuminant white points, ColorChecker colours and the CIEDE2000 test
+//! pairs of Sharma, Wu and Dalal (2005).
+
+use spectral_core::SpectralRange;
+use spectral_core::cmf::{self, Y_BAR_INTEGRAL};
+use spectral_core::color::Lab;
+use spectral_core::data::tables::{CIE1931_Y_BAR, COLORCHECKER_NAMES};
+use spectral_core::delta_e::{delta_e76, delta_e2000};
+use spectral_core::registry::Builtin;
+use spectral_core::xyz::{reference_xyz, white_point};
+use std::path::Path;
+
+fn data_file(name: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../data")
+        .join(name);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn generated_tables_are_fresh() {
+    let generated = datagen::generate(&datagen::data_dir()).unwrap();
+    let committed = std::fs::read_to_string(datagen::output_path()).unwrap();
+    assert!(
+        generated == committed,
+        "spectral-core/src/data/tables.rs is stale: run `cargo run -p datagen`"
+    );
+}
+
+#[test]
+fn y_bar_integral_matches_the_published_value() {
+    // pbrt-v4 `CIE_Y_integral` (sum of its 1 nm CIE 1931 samples, 360-830 nm).
+    // pbrt's table is an older transcription; CIE 018:2019 (ours) sums to
+    // 106.856917, 2e-7 relative above it.
+    let published_sum = 106.856_895;
+    let sum: f64 = CIE1931_Y_BAR.iter().sum();
+    assert!((sum / published_sum - 1.0).abs() < 1e-6, "{sum}");
+    let ends = 0.5 * (CIE1931_Y_BAR[0] + CIE1931_Y_BAR[CIE1931_Y_BAR.len() - 1]);
+    assert!((Y_BAR_INTEGRAL - (sum - ends)).abs() < 1e-12);
+    // A constant spectrum of 1 has Y = 1.
+    let one = Builtin::EqualEnergy.tabulated().unwrap();
+    let y = reference_xyz(&one, &SpectralRange::VISIBLE).y;
+    assert!((y - 1.0).abs() < 1e-12, "{y}");
+}
+
+#[test]
+fn illuminant_white_points() {
+    // CIE 15:2018 table 11.3 / 11.6: chromaticities of D65, D50, A (2°).
+    let cases = [
+        ("d65", [0.31272, 0.32903]),
+        ("d50", [0.34567, 0.35851]),
+        ("a", [0.44757, 0.40745]),
+    ];
+    for (name, expected) in cases {
+        let illuminant = Builtin::lookup(name).unwrap();
+        let white = white_point(&illuminant).unwrap();
+        let [x, y] = white.chromaticity();
+        assert!((x - expected[0]).abs() < 2e-4, "{name} x = {x}");
+        assert!((y - expected[1]).abs() < 2e-4, "{name} y = {y}");
+        assert!((white.y - 1.0).abs() < 1e-12);
+    }
+    // D65 XYZ (Y = 1) as commonly tabulated: (0.95047, 1, 1.08883).
+    let d65 = white_point(&Builtin::lookup("d65").unwrap()).unwrap();
+    assert!(
+        (d65.x - 0.95047).abs() < 5e-4 && (d65.z - 1.08883).abs() < 5e-4,
+        "{d65:?}"
+    );
+}
+
+fn colorchecker_lab_d65() -> Vec<Lab> {
+    let d65 = Builtin::lookup("d65").unwrap().tabulated().unwrap();
+    let range = SpectralRange::VISIBLE;
+    let white = reference_xyz(&d65, &range);
+    (1..=24)
+        .map(|patch| {
+            let reflectance = Builtin::lookup(&format!("colorchecker-{patch}"))
+                .unwrap()
+                .tabulated()
+                .unwrap();
+            // Reflected radiance resampled on the 1 nm CMF grid.
+            let nm: Vec<f64> = (0..cmf::SAMPLES)
+                .map(|i| cmf::FIRST_NM + i as f64)
+                .collect();
+            let product: Vec<f64> = nm
+                .iter()
+                .map(|&l| {
+                    use spectral_core::Spectrum;
+                    d65.value(l) * reflectance.value(l)
+                })
+                .collect();
+            let radiance = spectral_core::TabulatedSpectrum::new(&nm, &product).unwrap();
+            reference_xyz(&radiance, &range).to_lab(white)
+        })
+        .collect()
+}
+
+#[test]
+fn colorchecker_lab_under_d65_is_sane() {
+    let lab = colorchecker_lab_d65();
+    let index = |name: &str| COLORCHECKER_NAMES.iter().position(|n| *n == name).unwrap();
+    // Published CIELAB (D65, 2°) of the Ohta / ISO 17321 spectra, e.g. the
+    // colour-science "ColorChecker N Ohta" dataset: white L* ≈ 96, black ≈ 20.
+    let white = lab[index("white_9.5_(.05_D)")];
+    assert!(
+        (white.l - 96.0).abs() < 1.5 && white.a.abs() < 2.0 && white.b.abs() < 3.0,
+        "{white:?}"
+    );
+    let black = lab[index("black_2_(1.5_D)")];
+    assert!(
+        (black.l - 20.5).abs() < 2.0 && black.a.abs() < 2.0 && black.b.abs() < 2.0,
+        "{black:?}"
+    );
+    // The neutral row darkens monotonically.
+    for pair in lab[18..24].windows(2) {
+        assert!(pair[0].l > pair[1].l);
+    }
+    let red = lab[index("red")];
+    assert!(red.a > 40.0 && red.b > 15.0, "{red:?}");
+    let green = lab[index("green")];
+    assert!(green.a < -30.0 && green.b > 20.0, "{green:?}");
+    let blue = lab[index("blue")];
+    assert!(blue.b < -40.0, "{blue:?}");
+    let yellow = lab[index("yellow")];
+    assert!(yellow.l > 75.0 && yellow.b > 70.0, "{yellow:?}");
+    let cyan = lab[index("cyan")];
+    assert!(cyan.a < -20.0 && cyan.b < -20.0, "{cyan:?}");
+}
+
+#[test]
+fn ciede2000_sharma_pairs() {
+    let text = data_file("ciede2000_sharma.csv");
+    let mut pairs = 0;
+    for line in text.lines().filter(|l| !l.starts_with('#')).skip(1) {
+        let v: Vec<f64> = line.split(',').map(|c| c.trim().parse().unwrap()).collect();
+        let lab1 = Lab::new(v[1], v[2], v[3]);
+        let lab2 = Lab::new(v[4], v[5], v[6]);
+        let expected = v[7];
+        let got = delta_e2000(lab1, lab2);
+        assert!(
+            (got - expected).abs() < 1e-4,
+            "pair {}: {got} vs {expected}",
+            v[0]
+        );
+        assert!(
+            (delta_e2000(lab2, lab1) - expected).abs() < 1e-4,
+            "pair {} swapped",
+            v[0]
+        );
+        pairs += 1;
+    }
+    assert_eq!(pairs, 34);
+}
+
+#[test]
+fn delta_e76_is_euclidean() {
+    let a = Lab::new(50.0, 2.6772, -79.7751);
+    let b = Lab::new(50.0, 0.0, -82.7485);
+    let expected = (2.6772f64.powi(2) + (82.7485f64 - 79.7751).powi(2)).sqrt();
+    assert!((delta_e76(a, b) - expected).abs() < 1e-12);
+}
+
+#[test]
+fn srgb_white_of_d65_is_neutral() {
+    let d65 = white_point(&Builtin::lookup("d65").unwrap()).unwrap();
+    let rgb = d65.to_linear_srgb();
+    for v in [rgb.r, rgb.g, rgb.b] {
+        assert!((v - 1.0).abs() < 2e-3, "{rgb:?}");
+    }
+}
