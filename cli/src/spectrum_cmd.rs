@@ -33,7 +33,7 @@ pub struct SpectrumArgs {
     #[arg(long, default_value_t = cmf::LAST_NM)]
     pub max_nm: f64,
     /// Print the report as JSON with the keys coeffs, range_nm, coefficients,
-    /// xyz_reference, xyz {series, lut, zeroth}, max_abs_error, rms_error.
+    /// xyz_reference, xyz {series, lut, zeroth, mese}, max_abs_error, rms_error.
     #[arg(long)]
     pub json: bool,
     /// List the built-in spectra and exit.
@@ -50,6 +50,8 @@ pub struct XyzByRoute {
     pub lut: [f64; 3],
     /// Route 3: zeroth coefficient of the product with the CMFs.
     pub zeroth: [f64; 3],
+    /// Route 4: unbounded MESE reconstruction.
+    pub mese: [f64; 3],
 }
 
 /// The JSON report (exactly the documented keys).
@@ -123,6 +125,7 @@ fn analyse<const N: usize>(
                 series: route(XyzRoute::Series),
                 lut: route(XyzRoute::Lut),
                 zeroth: route(XyzRoute::Zeroth),
+                mese: route(XyzRoute::Mese),
             },
             max_abs_error,
             rms_error,
@@ -204,6 +207,7 @@ pub fn render_text(label: &str, report: &SpectrumReport, extras: &Extras) -> Str
         ("series", report.xyz.series),
         ("lut", report.xyz.lut),
         ("zeroth", report.xyz.zeroth),
+        ("mese", report.xyz.mese),
     ] {
         let de = delta_e2000(reference.to_lab(white), Xyz::from_array(v).to_lab(white));
         out += &format!("  {name:<9}  {}   {de:.2e}\n", format_xyz(v));
@@ -274,7 +278,12 @@ mod tests {
         let (_, report, _) = build_report(&args("d65", 16)).unwrap();
         assert_eq!(report.coefficients.len(), 16);
         let reference = report.xyz_reference;
-        for route in [report.xyz.series, report.xyz.lut, report.xyz.zeroth] {
+        for route in [
+            report.xyz.series,
+            report.xyz.lut,
+            report.xyz.zeroth,
+            report.xyz.mese,
+        ] {
             for r in 0..3 {
                 assert!(
                     (route[r] / reference[r] - 1.0).abs() < 0.01,

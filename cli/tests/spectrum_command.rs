@@ -50,8 +50,8 @@ fn json_has_exactly_the_documented_keys() {
         .map(String::as_str)
         .collect();
     routes.sort_unstable();
-    assert_eq!(routes, ["lut", "series", "zeroth"]);
-    for route in ["series", "lut", "zeroth"] {
+    assert_eq!(routes, ["lut", "mese", "series", "zeroth"]);
+    for route in ["series", "lut", "zeroth", "mese"] {
         assert_eq!(json["xyz"][route].as_array().unwrap().len(), 3);
     }
 }

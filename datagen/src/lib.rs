@@ -9,6 +9,8 @@
 //! integration test `generated_tables_are_fresh` fails when the committed file
 //! differs from what this generator produces.
 
+pub mod sigmoid_fit;
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -111,6 +113,24 @@ pub const METALS: [(&str, &str, &str); 4] = [
 /// Path of the repository's `data/` folder.
 pub fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../data")
+}
+
+/// Path of the generated RGB → spectrum table inside `spectral-core`.
+pub fn sigmoid_table_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../spectral-core/src/data/srgb_sigmoid.bin")
+}
+
+/// The sRGB → XYZ map the fit targets (linear sRGB, D65 white at Y = 1).
+pub fn srgb_to_xyz(rgb: [f64; 3]) -> [f64; 3] {
+    spectral_core::LinearSrgb::new(rgb[0], rgb[1], rgb[2])
+        .to_xyz()
+        .to_array()
+}
+
+/// The fitted sRGB sigmoid table as bytes.
+pub fn generate_sigmoid_table(threads: usize) -> Result<Vec<u8>, String> {
+    let data = sigmoid_fit::fit_table(sigmoid_fit::RESOLUTION, threads, &srgb_to_xyz)?;
+    Ok(sigmoid_fit::to_bytes(&data))
 }
 
 /// Path of the generated file inside `spectral-core`.

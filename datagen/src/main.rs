@@ -1,20 +1,28 @@
-//! `cargo run -p datagen`: rewrites `spectral-core/src/data/tables.rs` from `data/*.csv`.
+//! `cargo run --release -p datagen`: rewrites `spectral-core/src/data/tables.rs`
+//! from `data/*.csv` and refits `spectral-core/src/data/srgb_sigmoid.bin`.
 
 use std::process::ExitCode;
 
+fn write(path: &std::path::Path, bytes: &[u8]) -> Result<(), String> {
+    std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+fn run() -> Result<(), String> {
+    let text = datagen::generate(&datagen::data_dir())?;
+    write(&datagen::output_path(), text.as_bytes())?;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let table = datagen::generate_sigmoid_table(threads)?;
+    write(&datagen::sigmoid_table_path(), &table)
+}
+
 fn main() -> ExitCode {
-    let text = match datagen::generate(&datagen::data_dir()) {
-        Ok(text) => text,
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
         Err(message) => {
             eprintln!("datagen: {message}");
-            return ExitCode::from(2);
+            ExitCode::from(2)
         }
-    };
-    let path = datagen::output_path();
-    if let Err(e) = std::fs::write(&path, text) {
-        eprintln!("datagen: {}: {e}", path.display());
-        return ExitCode::from(2);
     }
-    println!("wrote {}", path.display());
-    ExitCode::SUCCESS
 }

@@ -4,13 +4,19 @@
 //!   FMA throughput, the yardstick of the product benchmark.
 //! * `product/{f32,f32x8}/N`: eight truncated products per iteration (eight
 //!   scalar calls, or one 8-lane call), so "elements" are products.
-//! * `xyz/<route>`: one N = 12 spectrum to XYZ.
+//! * `xyz/<route>`: one N = 12 spectrum (D65) to XYZ.
 //! * `project/471`: exact projection of a 471-sample table to 12 coefficients.
+//! * `mese/*`: MESE preparation (O(N²), f64) and evaluation per wavelength.
+//! * `table/*`, `upsample/*`: Fourier-table lookups, sRGB → sigmoid lookup and
+//!   its projection to 12 coefficients.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use spectral_core::data::tables::METALS;
+use spectral_core::mese::{BoundedMese, Mese};
 use spectral_core::registry::Builtin;
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, SpectralRange, Spectrum};
+use spectral_core::{table, upsample};
 use std::hint::black_box;
 use wide::f32x8;
 
@@ -76,12 +82,16 @@ fn xyz_routes(c: &mut Criterion) {
     let Ok(converter) = XyzConverter::<12>::new(SpectralRange::VISIBLE) else {
         return;
     };
-    let s = spectrum::<12>(3);
+    let Some(d65) = Builtin::Illuminant(0).tabulated() else {
+        return;
+    };
+    let s = d65.project::<12>(&SpectralRange::VISIBLE);
     let mut group = c.benchmark_group("xyz");
     for (name, route) in [
         ("series", XyzRoute::Series),
         ("lut", XyzRoute::Lut),
         ("zeroth", XyzRoute::Zeroth),
+        ("mese", XyzRoute::Mese),
     ] {
         group.bench_function(name, |b| {
             b.iter(|| black_box(converter.convert(route, black_box(&s))));
@@ -106,5 +116,58 @@ fn projection(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, fma_peak, products, xyz_routes, projection);
+fn mese(c: &mut Criterion) {
+    let range = SpectralRange::VISIBLE;
+    let Some(patch) = Builtin::ColorChecker(6).tabulated() else {
+        return;
+    };
+    let coefficients = patch.project::<12>(&range);
+    let mut group = c.benchmark_group("mese");
+    group.bench_function("bounded_prepare_N12", |b| {
+        b.iter(|| black_box(BoundedMese::new(black_box(&coefficients))));
+    });
+    group.bench_function("unbounded_prepare_N12", |b| {
+        b.iter(|| black_box(Mese::new(black_box(&coefficients))));
+    });
+    let Ok(bounded) = BoundedMese::new(&coefficients) else {
+        return;
+    };
+    group.bench_function("bounded_eval_N12", |b| {
+        b.iter(|| black_box(bounded.eval_cos(black_box(0.3))));
+    });
+    group.finish();
+}
+
+fn tables_and_upsampling(c: &mut Criterion) {
+    let range = SpectralRange::VISIBLE;
+    let Ok(table) = table::metal_reflectance::<12, 180>(&range, &METALS[0]) else {
+        return;
+    };
+    c.bench_function("table/lookup_N12_L180", |b| {
+        b.iter(|| black_box(table.lookup(black_box(0.437))));
+    });
+    let params = f32x8::new([0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8]);
+    c.bench_function("table/lookup_lanes_N12_L180", |b| {
+        b.iter(|| black_box(table.lookup_lanes(black_box(params))));
+    });
+    c.bench_function("upsample/srgb_reflectance_lookup", |b| {
+        b.iter(|| black_box(upsample::srgb_reflectance(black_box([0.7, 0.2, 0.4]))));
+    });
+    let Ok(poly) = upsample::srgb_reflectance([0.7, 0.2, 0.4]) else {
+        return;
+    };
+    c.bench_function("upsample/project_to_N12", |b| {
+        b.iter(|| black_box(black_box(&poly).project::<12>(&range)));
+    });
+}
+
+criterion_group!(
+    benches,
+    fma_peak,
+    products,
+    xyz_routes,
+    projection,
+    mese,
+    tables_and_upsampling
+);
 criterion_main!(benches);

@@ -44,6 +44,8 @@ extern crate std;
 
 pub mod cmf;
 pub mod color;
+pub mod complex;
+pub mod control_variate;
 pub mod csv;
 pub mod damping;
 pub mod data;
@@ -51,9 +53,14 @@ pub mod delta_e;
 mod error;
 pub mod fourier;
 pub mod lane;
+pub mod mese;
+pub mod optics;
 pub mod range;
 pub mod registry;
+pub mod sampling;
 pub mod spectrum;
+pub mod table;
+pub mod upsample;
 pub mod xyz;
 
 pub use color::{Lab, LinearSrgb, Xyz};

@@ -15,7 +15,9 @@
 //! 3. [`XyzRoute::Zeroth`]: `X = (λ1 − λ0) · h_0`, `h_0` the zeroth coefficient
 //!    of the truncated product of `s` with the projection of `x̄`:
 //!    `X = (λ1−λ0)(c_0 x_0 + 2 Σ c_j x_j) / ∫ȳ` — the 3×N [`XyzKernel`].
-//! 4. MESE (non-linear) arrives with the MESE module.
+//! 4. [`XyzRoute::Mese`]: reconstruct the spectrum by unbounded MESE
+//!    ([`crate::mese::Mese`], one `O(N²)` preparation, then `O(N)` per table
+//!    wavelength) and sum like route 1. The only non-linear route.
 //!
 //! By orthogonality routes 1–3 are the same linear map up to quadrature
 //! error: route 3 integrates the truncated series against the piecewise
@@ -29,6 +31,7 @@ use crate::cmf::{self, Y_BAR_INTEGRAL};
 use crate::color::Xyz;
 use crate::fourier::FourierSpectrum;
 use crate::lane::Lane;
+use crate::mese::Mese;
 use crate::range::SpectralRange;
 use crate::spectrum::{Spectrum, TabulatedSpectrum};
 
@@ -41,6 +44,8 @@ pub enum XyzRoute {
     Lut,
     /// Zeroth coefficient of the product with the CMF coefficients (the kernel).
     Zeroth,
+    /// Unbounded MESE reconstruction at the table wavelengths, then sum.
+    Mese,
 }
 
 /// The 3×N matrix `K` with `XYZ = K c` (route 3):
@@ -123,6 +128,8 @@ pub struct XyzConverter<const N: usize> {
     cosines: [[f32; N]; cmf::SAMPLES],
     /// Trapezoid weight × CMFs / ∫ȳ for each table sample in the range.
     weighted_cmf: [[f32; 3]; cmf::SAMPLES],
+    /// `cos φ_i` in f64 for the MESE route.
+    cos_phase: [f64; cmf::SAMPLES],
     first_sample: usize,
     sample_count: usize,
 }
@@ -134,6 +141,7 @@ impl<const N: usize> XyzConverter<N> {
         let kernel = XyzKernel::new(&range)?;
         let mut cosines = [[0.0f32; N]; cmf::SAMPLES];
         let mut weighted_cmf = [[0.0f32; 3]; cmf::SAMPLES];
+        let mut cos_phase = [0.0f64; cmf::SAMPLES];
         let mut first_sample = None;
         let mut sample_count = 0;
         for (row, (i, weight, phase)) in table_samples(&range).enumerate() {
@@ -141,6 +149,7 @@ impl<const N: usize> XyzConverter<N> {
             for (j, c) in cosines[row].iter_mut().enumerate() {
                 *c = libm::cos(j as f64 * phase) as f32;
             }
+            cos_phase[row] = libm::cos(phase);
             let cmf_i = cmf::sample(i);
             weighted_cmf[row] = cmf_i.map(|v| (v * weight / Y_BAR_INTEGRAL) as f32);
             sample_count = row + 1;
@@ -150,6 +159,7 @@ impl<const N: usize> XyzConverter<N> {
             kernel,
             cosines,
             weighted_cmf,
+            cos_phase,
             first_sample: first_sample.unwrap_or(0),
             sample_count,
         })
@@ -202,12 +212,33 @@ impl<const N: usize> XyzConverter<N> {
         self.kernel.apply(spectrum)
     }
 
+    /// Route 4: unbounded MESE reconstruction at the table wavelengths.
+    /// Non-finite coefficients give black (the film counts such samples
+    /// before they get here).
+    pub fn mese(&self, spectrum: &FourierSpectrum<f64, N>) -> [f64; 3] {
+        let Ok(mese) = Mese::new(spectrum) else {
+            return [0.0; 3];
+        };
+        let mut xyz = [0.0; 3];
+        let rows = self.cos_phase[..self.sample_count]
+            .iter()
+            .zip(&self.weighted_cmf[..self.sample_count]);
+        for (&cos_phase, weights) in rows {
+            let value = mese.eval_cos(cos_phase);
+            for (acc, &w) in xyz.iter_mut().zip(weights) {
+                *acc += value * f64::from(w);
+            }
+        }
+        xyz
+    }
+
     /// XYZ of one spectrum by `route`.
     pub fn convert(&self, route: XyzRoute, spectrum: &FourierSpectrum<f64, N>) -> Xyz {
         Xyz::from_array(match route {
             XyzRoute::Series => self.series(spectrum),
             XyzRoute::Lut => self.lut(spectrum),
             XyzRoute::Zeroth => self.zeroth(spectrum),
+            XyzRoute::Mese => self.mese(spectrum),
         })
     }
 }

@@ -168,3 +168,25 @@ fn srgb_white_of_d65_is_neutral() {
         assert!((v - 1.0).abs() < 2e-3, "{rgb:?}");
     }
 }
+
+#[test]
+fn sigmoid_table_is_fresh() {
+    // Refit the RGB → spectrum table and compare with the committed bytes
+    // (to 1e-4: the platform's cbrt may differ in the last ulp).
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let fresh = datagen::generate_sigmoid_table(threads).unwrap();
+    let committed = std::fs::read(datagen::sigmoid_table_path()).unwrap();
+    assert_eq!(
+        fresh.len(),
+        committed.len(),
+        "run `cargo run --release -p datagen`"
+    );
+    let as_f32 = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    for (i, (a, b)) in fresh.chunks(4).zip(committed.chunks(4)).enumerate() {
+        let (a, b) = (as_f32(a), as_f32(b));
+        assert!(
+            (a - b).abs() <= 1e-4 * (1.0 + a.abs()),
+            "coefficient {i}: fresh {a}, committed {b}: run `cargo run --release -p datagen`"
+        );
+    }
+}
