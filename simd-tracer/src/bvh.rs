@@ -1,0 +1,1 @@
+//! BVH (placeholder, being written).
