@@ -1,1 +1,1082 @@
-//! BVH (placeholder, being written).
+//! Bounding volume hierarchy over triangles, with a scalar (per-ray) and an
+//! 8-wide packet traversal.
+//!
+//! # Construction
+//!
+//! The tree is an `obvhs` [`Bvh2`] (binary BVH, PLOC build with reinsertion
+//! and leaf collapsing, preset [`BvhBuildParams::medium_build`], no spatial
+//! splits, so every triangle sits in exactly one leaf). Degenerate triangles
+//! (a non-finite vertex, or zero area: `|e1 × e2| ≤ 1e-7 |e1| |e2|` evaluated
+//! in `f64`, i.e. collinear to `f32` precision, or an `f32` edge cross product
+//! that is zero or overflows) are left out of the tree and counted. The kept
+//! triangles are stored in BVH leaf order (vertices and the normal
+//! `(v1 − v0) × (v2 − v0)`), so a leaf's triangles are contiguous, together
+//! with the map back to the caller's triangle index.
+//!
+//! # Ray/box test (slab test)
+//!
+//! Kay & Kajiya's slabs, in the form of Williams et al., "An Efficient and
+//! Robust Ray–Box Intersection Algorithm" (JGT 2005): per axis
+//! `t1 = (min − o) · inv_d`, `t2 = (max − o) · inv_d`;
+//! `t_entry = max_axis min(t1, t2)`, `t_exit = min_axis max(t1, t2)`; the box
+//! is hit when `t_exit ≥ t_entry`, `t_exit ≥ 0` and `t_entry < t_max`. This is
+//! exactly `obvhs::aabb::Aabb::intersect_ray` (same operations in the same
+//! order), evaluated on `f32x8` for packets. The inverse direction is
+//! `1/d`, replaced by `±f32::MAX` (sign of `d`) where `1/d` is not finite:
+//! unlike `∞` this never produces `0 · ∞ = NaN` for a ray lying in a slab
+//! plane, and unlike `obvhs::ray::safe_inverse` (`±1/ε` below `ε`) it does not
+//! shrink the slab interval of rays with tiny direction components, which
+//! could cull boxes the ray really enters. Scalar and packet paths use the
+//! same inverse, so their box tests agree bit for bit.
+//!
+//! # Ray/triangle test (edge functions, not plain Möller–Trumbore)
+//!
+//! Möller–Trumbore (T. Möller and B. Trumbore, "Fast, Minimum Storage
+//! Ray/Triangle Intersection", JGT 2(1), 1997: `p = d × e2`, `det = e1 · p`,
+//! `u = ((o − v0) · p) / det`, …) computes the barycentrics of both
+//! triangles of a quad from different vertices and edges, so a ray through
+//! the shared diagonal can be rejected by both: the first version of this
+//! module did exactly that for a camera ray aimed at the centre of the
+//! Cornell box's short-box top, and an `f32` Möller–Trumbore lets 4–8 % of
+//! the rays of the test `rays_through_shared_diagonals_do_not_leak` through.
+//! It also accepted nonsense hits for rays almost in a triangle's plane
+//! (`det` pure rounding noise). The test used instead is the edge-function
+//! (Plücker) form in ray-origin-translated space, as in Woop, Benthin & Wald,
+//! "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013, without
+//! their shear to 2D and without their double-precision fallback:
+//!
+//! * `a' = v0 − o`, `b' = v1 − o`, `c' = v2 − o`;
+//! * `w0 = d · (b' × c')`, `w1 = d · (c' × a')`, `w2 = d · (a' × b')`;
+//! * the ray crosses the triangle when `w0, w1, w2` are all `≥ 0` or all
+//!   `≤ 0` (both windings, no culling) and `Σw ≠ 0`;
+//! * `t = (n · a') / (n · d)` with `n = (v1 − v0) × (v2 − v0)`; a hit when
+//!   `0 < t < t_max` (both strict, no epsilon: callers offset secondary-ray
+//!   origins themselves, and a hit exactly at `t_max` is rejected);
+//! * `u = w1 / Σw`, `v = w2 / Σw` are the barycentric weights of vertices 1
+//!   and 2;
+//! * grazing rays miss: `|n · d| ≤ 1e-5 · |n| · |d|` (within ~1e-5 rad of
+//!   the plane), where `t` would be rounding noise.
+//!
+//! The edge function of an edge is bitwise antisymmetric in its endpoints
+//! (IEEE `a − b = −(b − a)`, `ab = ba`), so two triangles that share an edge
+//! (same vertex values) classify every ray identically against it: no ray
+//! passes between them. Rays exactly through a shared *vertex* are not
+//! guaranteed (the signs of the edge functions around it are rounded
+//! independently). The scalar and the 8-wide test are one generic function
+//! over `+ − × ÷` (no fused multiply-add), so every lane is bit-identical to
+//! the scalar test.
+//!
+//! # Traversal
+//!
+//! * Scalar ([`Bvh::intersect`], [`Bvh::occluded`]): `obvhs`'s own stack
+//!   traversal (`Bvh2::ray_traverse`, `Bvh2::ray_traverse_miss`) with the
+//!   triangle test above: this is the oracle.
+//! * Packet ([`Bvh::intersect_packet`], [`Bvh::occluded_packet`]): one node
+//!   stack per packet (after Wald, Slusallek, Benthin & Wagner, "Interactive
+//!   Rendering with Coherent Ray Tracing", Eurographics 2001). At an inner
+//!   node both children's boxes are tested against all lanes that reached the
+//!   node; a child is visited if any lane hits it, nearer child first (the
+//!   child with the smaller entry distance in more lanes), the other pushed
+//!   with its per-lane entry distances. A popped entry is revisited only by
+//!   the lanes whose entry is still below their current `t_max`. The lanes of
+//!   a node are those that hit every box on its path, so a lane tests exactly
+//!   the triangles its own scalar traversal could reach. Leaves test each
+//!   triangle against those lanes and shrink their `t_max` on a hit;
+//!   occlusion retires a lane at its first hit and stops when all are
+//!   retired.
+//!
+//! Hits agree between both paths up to genuine ties: two triangles at the
+//! same `t` (a shared edge or vertex) may be reported in either order, and
+//! near-ties at a box boundary may prune differently.
+
+use std::ops::{Add, Div, Mul, Sub};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::time::Duration;
+
+use glam::{Vec3, Vec3A};
+use obvhs::BvhBuildParams;
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::Bvh2;
+use obvhs::bvh2::builder::build_bvh2_from_tris;
+use obvhs::ray::{Ray as ObvhsRay, RayHit};
+use obvhs::triangle::Triangle as ObvhsTriangle;
+use wide::f32x8;
+
+use crate::packet::{LANES, LaneMask, PacketHit, Ray, RayPacket};
+
+/// Triangle index of packet lanes that hit nothing.
+pub const NO_TRIANGLE: u32 = u32::MAX;
+
+/// Relative area threshold below which a triangle counts as degenerate:
+/// `|e1 × e2| ≤ DEGENERATE_SINE · |e1| · |e2|`.
+const DEGENERATE_SINE: f64 = 1e-7;
+
+/// Rays closer than this (sine of the angle) to a triangle's plane miss it:
+/// `|n · d| ≤ GRAZING · |n| · |d|`. Below it the hit distance is rounding
+/// noise (`n · d` is a cancellation); see the module documentation.
+const GRAZING: f32 = 1e-5;
+
+/// Stack entries kept inline before spilling to the heap.
+const INLINE_STACK: usize = 64;
+
+/// A closest hit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    /// Hit distance in units of the ray direction, in `(0, t_max)`.
+    pub t: f32,
+    /// Barycentric weight of vertex 1.
+    pub u: f32,
+    /// Barycentric weight of vertex 2.
+    pub v: f32,
+    /// Index of the triangle in the order given to [`Bvh::build`].
+    pub triangle: u32,
+}
+
+/// A triangle prepared for the edge-function test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct PreparedTriangle {
+    /// Vertices 0, 1, 2.
+    vertices: [[f32; 3]; 3],
+    /// Geometric normal `(v1 − v0) × (v2 − v0)` (not normalised).
+    normal: [f32; 3],
+    /// `GRAZING · |normal|`: the grazing threshold before the `|d|` factor.
+    grazing: f32,
+}
+
+impl PreparedTriangle {
+    fn new(vertices: &[Vec3; 3]) -> Self {
+        let [a, b, c] = vertices.map(|v| v.to_array());
+        let normal = cross(sub3(b, a), sub3(c, a));
+        Self {
+            vertices: [a, b, c],
+            normal,
+            grazing: GRAZING * dot(normal, normal).sqrt(),
+        }
+    }
+}
+
+/// BVH over a triangle soup; see the module documentation.
+#[derive(Clone)]
+pub struct Bvh {
+    /// The `obvhs` tree; leaf `first_index` values index `triangles`.
+    bvh2: Bvh2,
+    /// Non-degenerate triangles in BVH (leaf) order.
+    triangles: Vec<PreparedTriangle>,
+    /// Their vertices, same order (for validation).
+    vertices: Vec<[Vec3; 3]>,
+    /// BVH slot → index in the input.
+    original: Vec<u32>,
+    /// Number of input triangles.
+    input_count: usize,
+    /// Number of degenerate input triangles left out.
+    skipped: usize,
+}
+
+impl core::fmt::Debug for Bvh {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Bvh")
+            .field("nodes", &self.bvh2.nodes.len())
+            .field("triangles", &self.triangles.len())
+            .field("input_count", &self.input_count)
+            .field("skipped", &self.skipped)
+            .finish()
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Arithmetic shared by the scalar and the 8-wide paths.
+
+/// `+ − × ÷` on `f32` and `f32x8`: the generic Möller–Trumbore below runs the
+/// same IEEE operations in the same order on both.
+trait Arith:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+}
+
+impl<T> Arith for T where
+    T: Copy + Add<Output = T> + Sub<Output = T> + Mul<Output = T> + Div<Output = T>
+{
+}
+
+#[inline(always)]
+fn sub3<T: Arith>(a: [T; 3], b: [T; 3]) -> [T; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline(always)]
+fn cross<T: Arith>(a: [T; 3], b: [T; 3]) -> [T; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline(always)]
+fn dot<T: Arith>(a: [T; 3], b: [T; 3]) -> T {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// The edge functions and plane terms of one ray/triangle pair.
+#[derive(Clone, Copy)]
+struct EdgeTerms<T> {
+    /// `w_i = d · (v_j' × v_k')` for the edge opposite vertex `i`, where
+    /// `v' = v − o`; proportional to the barycentric weight of vertex `i`.
+    w: [T; 3],
+    /// `n · (v0 − o)`.
+    num: T,
+    /// `n · d`.
+    den: T,
+}
+
+/// Edge functions in ray-origin-translated space. The function of the edge
+/// `(p, q)` is `d · ((p − o) × (q − o))`; for the edge taken the other way,
+/// `(q, p)`, every operation sees swapped operands and the result is the
+/// exact negation (IEEE `a − b = −(b − a)`, `ab = ba`), so two triangles
+/// sharing an edge always classify a ray consistently against it.
+#[inline(always)]
+fn edge_terms<T: Arith>(
+    origin: [T; 3],
+    direction: [T; 3],
+    vertices: [[T; 3]; 3],
+    normal: [T; 3],
+) -> EdgeTerms<T> {
+    let a = sub3(vertices[0], origin);
+    let b = sub3(vertices[1], origin);
+    let c = sub3(vertices[2], origin);
+    EdgeTerms {
+        w: [
+            dot(direction, cross(b, c)),
+            dot(direction, cross(c, a)),
+            dot(direction, cross(a, b)),
+        ],
+        num: dot(normal, a),
+        den: dot(normal, direction),
+    }
+}
+
+/// A scalar hit: `t` and the weights of vertices 1 and 2.
+#[derive(Clone, Copy)]
+struct ScalarHit {
+    t: f32,
+    u: f32,
+    v: f32,
+}
+
+/// Scalar acceptance for `t ∈ (0, t_max)`; the operations and their order
+/// are those of [`PacketRays::triangle`], lane by lane.
+#[inline(always)]
+fn accept_scalar(
+    e: &EdgeTerms<f32>,
+    triangle: &PreparedTriangle,
+    direction_length: f32,
+    t_max: f32,
+) -> Option<ScalarHit> {
+    let [w0, w1, w2] = e.w;
+    let sum = w0 + w1 + w2;
+    let inside = (w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0) || (w0 <= 0.0 && w1 <= 0.0 && w2 <= 0.0);
+    let steep = e.den.abs() > triangle.grazing * direction_length;
+    if !(inside && steep && sum != 0.0) {
+        return None;
+    }
+    let t = e.num / e.den;
+    (t > 0.0 && t < t_max).then(|| ScalarHit {
+        t,
+        u: w1 / sum,
+        v: w2 / sum,
+    })
+}
+
+/// `1/d`, or `±f32::MAX` (sign of `d`) where that is not finite.
+#[inline(always)]
+fn safe_inverse(d: f32) -> f32 {
+    let inv = 1.0 / d;
+    if inv.is_finite() {
+        inv
+    } else {
+        f32::MAX.copysign(d)
+    }
+}
+
+#[inline(always)]
+fn safe_inverse_x8(d: f32x8) -> f32x8 {
+    let inv = f32x8::ONE / d;
+    inv.is_finite().select(inv, f32x8::MAX.copysign(d))
+}
+
+/// Whether a triangle is left out of the tree (see the module docs).
+fn is_degenerate(vertices: &[Vec3; 3]) -> bool {
+    if !vertices.iter().all(|v| v.is_finite()) {
+        return true;
+    }
+    let normal = PreparedTriangle::new(vertices).normal;
+    if !normal.iter().all(|c| c.is_finite()) || normal.iter().all(|&c| c == 0.0) {
+        return true;
+    }
+    let [a, b, c] = vertices.map(Vec3::as_dvec3);
+    let (e1, e2) = (b - a, c - a);
+    e1.cross(e2).length() <= DEGENERATE_SINE * e1.length() * e2.length()
+}
+
+fn to_obvhs_triangle(vertices: &[Vec3; 3]) -> ObvhsTriangle {
+    ObvhsTriangle {
+        v0: Vec3A::from(vertices[0]),
+        v1: Vec3A::from(vertices[1]),
+        v2: Vec3A::from(vertices[2]),
+    }
+}
+
+fn index_u32(index: usize) -> u32 {
+    u32::try_from(index).unwrap_or(u32::MAX)
+}
+
+// ---------------------------------------------------------------------------
+// Packet state.
+
+/// A packet's rays with their inverse directions.
+struct PacketRays {
+    origin: [f32x8; 3],
+    direction: [f32x8; 3],
+    inv_direction: [f32x8; 3],
+    direction_length: f32x8,
+}
+
+impl PacketRays {
+    fn new(packet: &RayPacket) -> Self {
+        Self {
+            origin: packet.origin,
+            direction: packet.direction,
+            inv_direction: packet.direction.map(safe_inverse_x8),
+            direction_length: dot(packet.direction, packet.direction).sqrt(),
+        }
+    }
+
+    /// Slab test of `aabb` for the lanes in `path` (a mask). Returns the
+    /// per-lane entry distance (`+∞` in lanes that miss) and the hit mask.
+    #[inline(always)]
+    fn slab(&self, aabb: &Aabb, t_max: f32x8, path: f32x8) -> (f32x8, f32x8) {
+        let min = aabb.min.to_array();
+        let max = aabb.max.to_array();
+        let mut entry = f32x8::NEG_INFINITY;
+        let mut exit = f32x8::INFINITY;
+        for axis in 0..3 {
+            let t1 = (f32x8::splat(min[axis]) - self.origin[axis]) * self.inv_direction[axis];
+            let t2 = (f32x8::splat(max[axis]) - self.origin[axis]) * self.inv_direction[axis];
+            entry = entry.fast_max(t1.fast_min(t2));
+            exit = exit.fast_min(t1.fast_max(t2));
+        }
+        let hit = exit.simd_ge(entry) & exit.simd_ge(f32x8::ZERO) & entry.simd_lt(t_max) & path;
+        (hit.select(entry, f32x8::INFINITY), hit)
+    }
+
+    /// Edge-function test against all lanes in `lanes` (a mask). Returns the
+    /// mask of lanes that accept a hit with `t ∈ (0, t_max)`, with `t` and
+    /// the unnormalised weights `w1`, `w2` and their normaliser `Σw`.
+    #[inline(always)]
+    fn triangle(
+        &self,
+        triangle: &PreparedTriangle,
+        t_max: f32x8,
+        lanes: f32x8,
+    ) -> Option<(f32x8, f32x8, f32x8, f32x8, f32x8)> {
+        let e = edge_terms(
+            self.origin,
+            self.direction,
+            triangle.vertices.map(|v| v.map(f32x8::splat)),
+            triangle.normal.map(f32x8::splat),
+        );
+        let [w0, w1, w2] = e.w;
+        let zero = f32x8::ZERO;
+        let sum = w0 + w1 + w2;
+        let inside = (w0.simd_ge(zero) & w1.simd_ge(zero) & w2.simd_ge(zero))
+            | (w0.simd_le(zero) & w1.simd_le(zero) & w2.simd_le(zero));
+        let steep = e
+            .den
+            .abs()
+            .simd_gt(f32x8::splat(triangle.grazing) * self.direction_length);
+        let candidate = inside & steep & sum.simd_ne(zero) & lanes;
+        if !candidate.any() {
+            return None;
+        }
+        let t = e.num / e.den;
+        let accept = candidate & t.simd_gt(zero) & t.simd_lt(t_max);
+        accept.any().then_some((accept, t, w1, w2, sum))
+    }
+}
+
+/// Traversal stack of (node index, per-lane entry distance); inline storage
+/// with a heap spill for pathological depths.
+struct NodeStack {
+    nodes: [u32; INLINE_STACK],
+    entries: [f32x8; INLINE_STACK],
+    len: usize,
+    spill: Vec<(u32, f32x8)>,
+}
+
+impl NodeStack {
+    fn new() -> Self {
+        Self {
+            nodes: [0; INLINE_STACK],
+            entries: [f32x8::ZERO; INLINE_STACK],
+            len: 0,
+            spill: Vec::new(),
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, node: u32, entry: f32x8) {
+        if self.len < INLINE_STACK {
+            self.nodes[self.len] = node;
+            self.entries[self.len] = entry;
+            self.len += 1;
+        } else {
+            self.spill.push((node, entry));
+        }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, f32x8)> {
+        if let Some(top) = self.spill.pop() {
+            return Some(top);
+        }
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        Some((self.nodes[self.len], self.entries[self.len]))
+    }
+}
+
+// ---------------------------------------------------------------------------
+
+impl Bvh {
+    /// Builds over `triangles` (vertex positions, original order).
+    /// Degenerate (zero-area or non-finite) triangles are skipped (never hit)
+    /// and counted, see [`Bvh::skipped_triangles`].
+    pub fn build(triangles: &[[Vec3; 3]]) -> Bvh {
+        let mut kept_vertices = Vec::with_capacity(triangles.len());
+        let mut kept_original = Vec::with_capacity(triangles.len());
+        for (index, vertices) in triangles.iter().enumerate() {
+            if !is_degenerate(vertices) {
+                kept_vertices.push(*vertices);
+                kept_original.push(index_u32(index));
+            }
+        }
+        let skipped = triangles.len() - kept_vertices.len();
+
+        let bvh2 = if kept_vertices.is_empty() {
+            Bvh2::default()
+        } else {
+            let obvhs_triangles: Vec<ObvhsTriangle> =
+                kept_vertices.iter().map(to_obvhs_triangle).collect();
+            let mut build_time = Duration::ZERO;
+            build_bvh2_from_tris(
+                &obvhs_triangles,
+                BvhBuildParams::medium_build(),
+                &mut build_time,
+            )
+        };
+
+        // Reorder into leaf order so that leaves index the triangles directly.
+        let mut vertices = Vec::with_capacity(kept_vertices.len());
+        let mut original = Vec::with_capacity(kept_vertices.len());
+        for &kept in &bvh2.primitive_indices {
+            let kept = kept as usize;
+            if let (Some(v), Some(&o)) = (kept_vertices.get(kept), kept_original.get(kept)) {
+                vertices.push(*v);
+                original.push(o);
+            }
+        }
+        let triangles_prepared = vertices.iter().map(PreparedTriangle::new).collect();
+
+        Bvh {
+            bvh2,
+            triangles: triangles_prepared,
+            vertices,
+            original,
+            input_count: triangles.len(),
+            skipped,
+        }
+    }
+
+    /// Number of input triangles left out as degenerate.
+    pub fn skipped_triangles(&self) -> usize {
+        self.skipped
+    }
+
+    /// Number of input triangles (kept and skipped).
+    pub fn input_triangles(&self) -> usize {
+        self.input_count
+    }
+
+    /// Number of BVH nodes.
+    pub fn node_count(&self) -> usize {
+        self.bvh2.nodes.len()
+    }
+
+    /// Bounds of the whole scene (`None` when no triangle was kept).
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        self.bvh2
+            .nodes
+            .first()
+            .map(|root| (Vec3::from(root.aabb().min), Vec3::from(root.aabb().max)))
+    }
+
+    /// Checks the invariants: `obvhs`'s own validation, every inner node
+    /// bounds its children, every leaf bounds its triangles, every node is
+    /// reached exactly once from the root, and every non-degenerate input
+    /// triangle is referenced exactly once. `Err` says what is wrong.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.triangles.len();
+        let nodes = &self.bvh2.nodes;
+        if self.vertices.len() != n || self.original.len() != n {
+            return Err(format!(
+                "{} prepared triangles, {} vertex triples, {} original indices",
+                n,
+                self.vertices.len(),
+                self.original.len()
+            ));
+        }
+        if self.bvh2.primitive_indices.len() != n {
+            return Err(format!(
+                "{} primitive indices for {} triangles",
+                self.bvh2.primitive_indices.len(),
+                n
+            ));
+        }
+        if n + self.skipped != self.input_count {
+            return Err(format!(
+                "{} kept + {} skipped != {} input triangles",
+                n, self.skipped, self.input_count
+            ));
+        }
+        if n == 0 {
+            return if nodes.is_empty() {
+                Ok(())
+            } else {
+                Err(format!("no triangles but {} nodes", nodes.len()))
+            };
+        }
+
+        // obvhs's validation (it asserts, so catch its panic). It wants the
+        // primitives in build order: slot i holds build primitive
+        // `primitive_indices[i]`.
+        let mut build_order = vec![ObvhsTriangle::default(); n];
+        for (slot, &primitive) in self.bvh2.primitive_indices.iter().enumerate() {
+            let target = build_order
+                .get_mut(primitive as usize)
+                .ok_or_else(|| format!("primitive index {primitive} out of range"))?;
+            *target = to_obvhs_triangle(&self.vertices[slot]);
+        }
+        catch_unwind(AssertUnwindSafe(|| {
+            self.bvh2.validate(&build_order, false, false);
+        }))
+        .map_err(|payload| {
+            let message = payload
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| payload.downcast_ref::<&str>().map(|s| (*s).to_owned()))
+                .unwrap_or_else(|| "unknown panic".to_owned());
+            format!("obvhs validation failed: {message}")
+        })?;
+
+        // Own structural checks.
+        let contains = |outer: &Aabb, inner_min: Vec3A, inner_max: Vec3A| {
+            outer.min.cmple(inner_min).all() && inner_max.cmple(outer.max).all()
+        };
+        let mut visited = vec![false; nodes.len()];
+        let mut references = vec![0u32; n];
+        let mut stack = vec![0usize];
+        while let Some(index) = stack.pop() {
+            let node = nodes
+                .get(index)
+                .ok_or_else(|| format!("node {index} out of range"))?;
+            let seen = visited
+                .get_mut(index)
+                .ok_or_else(|| format!("node {index} out of range"))?;
+            if *seen {
+                return Err(format!("node {index} is reached twice"));
+            }
+            *seen = true;
+            let aabb = node.aabb();
+            if !(aabb.min.is_finite() && aabb.max.is_finite() && aabb.min.cmple(aabb.max).all()) {
+                return Err(format!("node {index} has an invalid box {aabb:?}"));
+            }
+            if node.is_leaf() {
+                let first = node.first_index as usize;
+                let end = first + node.prim_count as usize;
+                if end > n {
+                    return Err(format!(
+                        "leaf {index} references slots {first}..{end} of {n}"
+                    ));
+                }
+                for (slot, (count, vertices)) in references[first..end]
+                    .iter_mut()
+                    .zip(&self.vertices[first..end])
+                    .enumerate()
+                    .map(|(k, pair)| (first + k, pair))
+                {
+                    *count += 1;
+                    let [a, b, c] = vertices.map(Vec3A::from);
+                    if !contains(aabb, a.min(b).min(c), a.max(b).max(c)) {
+                        return Err(format!(
+                            "leaf {index} does not bound triangle slot {slot} (input {})",
+                            self.original[slot]
+                        ));
+                    }
+                }
+            } else {
+                let left = node.first_index as usize;
+                for child in [left, left + 1] {
+                    let child_node = nodes
+                        .get(child)
+                        .ok_or_else(|| format!("node {index} has child {child} out of range"))?;
+                    let child_box = child_node.aabb();
+                    if !contains(aabb, child_box.min, child_box.max) {
+                        return Err(format!("node {index} does not bound its child {child}"));
+                    }
+                    stack.push(child);
+                }
+            }
+        }
+        if let Some(unreached) = visited.iter().position(|&v| !v) {
+            return Err(format!("node {unreached} is not reachable from the root"));
+        }
+        if let Some(slot) = references.iter().position(|&r| r != 1) {
+            return Err(format!(
+                "triangle slot {slot} (input {}) is referenced {} times",
+                self.original[slot], references[slot]
+            ));
+        }
+
+        // The slot data and the map back to the input.
+        let mut seen_input = vec![false; self.input_count];
+        for (slot, &input) in self.original.iter().enumerate() {
+            let flag = seen_input
+                .get_mut(input as usize)
+                .ok_or_else(|| format!("slot {slot} maps to input {input} out of range"))?;
+            if *flag {
+                return Err(format!("input triangle {input} appears twice"));
+            }
+            *flag = true;
+            let vertices = &self.vertices[slot];
+            if is_degenerate(vertices) {
+                return Err(format!("degenerate input triangle {input} is in the tree"));
+            }
+            if PreparedTriangle::new(vertices) != self.triangles[slot] {
+                return Err(format!("prepared data of slot {slot} is stale"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The `obvhs` ray for `ray` (same inverse direction as the packets).
+    fn obvhs_ray(ray: &Ray) -> ObvhsRay {
+        ObvhsRay {
+            origin: Vec3A::from(ray.origin),
+            direction: Vec3A::from(ray.direction),
+            inv_direction: Vec3A::from_array(ray.direction.to_array().map(safe_inverse)),
+            tmin: 0.0,
+            tmax: ray.t_max,
+        }
+    }
+
+    /// Scalar edge-function test of `ray` against the triangle in `slot`.
+    #[inline(always)]
+    fn triangle_scalar(
+        &self,
+        slot: usize,
+        ray: &Ray,
+        direction_length: f32,
+        t_max: f32,
+    ) -> Option<ScalarHit> {
+        let triangle = self.triangles.get(slot)?;
+        let e = edge_terms(
+            ray.origin.to_array(),
+            ray.direction.to_array(),
+            triangle.vertices,
+            triangle.normal,
+        );
+        accept_scalar(&e, triangle, direction_length, t_max)
+    }
+
+    /// Scalar closest hit using obvhs's own single-ray traversal (the
+    /// oracle). Hits have `t ∈ (0, ray.t_max)`.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let d = ray.direction.to_array();
+        let length = dot(d, d).sqrt();
+        let mut best: Option<(usize, ScalarHit)> = None;
+        let mut hit = RayHit::none();
+        self.bvh2
+            .ray_traverse(Self::obvhs_ray(ray), &mut hit, |current, slot| {
+                match self.triangle_scalar(slot, ray, length, current.tmax) {
+                    Some(h) => {
+                        best = Some((slot, h));
+                        h.t
+                    }
+                    None => f32::INFINITY,
+                }
+            });
+        best.map(|(slot, h)| Hit {
+            t: h.t,
+            u: h.u,
+            v: h.v,
+            triangle: self.original.get(slot).copied().unwrap_or(NO_TRIANGLE),
+        })
+    }
+
+    /// Scalar any-hit occlusion test for `t ∈ (0, ray.t_max)`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        let d = ray.direction.to_array();
+        let length = dot(d, d).sqrt();
+        !self
+            .bvh2
+            .ray_traverse_miss(Self::obvhs_ray(ray), |current, slot| {
+                self.triangle_scalar(slot, ray, length, current.tmax)
+                    .map_or(f32::INFINITY, |h| h.t)
+            })
+    }
+
+    /// Packet traversal. `t_max` holds each lane's current limit (`−∞` in
+    /// lanes that take no part); `leaf(first, count, lanes, t_max)` tests the
+    /// triangles `first..first + count` for the lanes in the mask `lanes` and
+    /// returns `false` to stop.
+    #[inline(always)]
+    fn traverse_packet<F>(&self, rays: &PacketRays, t_max: &mut f32x8, mut leaf: F)
+    where
+        F: FnMut(usize, usize, f32x8, &mut f32x8) -> bool,
+    {
+        let nodes = &self.bvh2.nodes;
+        let Some(root) = nodes.first() else {
+            return;
+        };
+        let all = f32x8::from_bits(wide::u32x8::splat(u32::MAX));
+        let (_, mut lanes) = rays.slab(root.aabb(), *t_max, all);
+        if !lanes.any() {
+            return;
+        }
+        let mut stack = NodeStack::new();
+        let mut current = 0usize;
+        loop {
+            let mut next = None;
+            if let Some(node) = nodes.get(current) {
+                if node.is_leaf() {
+                    let first = node.first_index as usize;
+                    if !leaf(first, node.prim_count as usize, lanes, t_max) {
+                        return;
+                    }
+                } else {
+                    let left = node.first_index as usize;
+                    if let (Some(left_node), Some(right_node)) =
+                        (nodes.get(left), nodes.get(left + 1))
+                    {
+                        let (left_entry, left_hit) = rays.slab(left_node.aabb(), *t_max, lanes);
+                        let (right_entry, right_hit) = rays.slab(right_node.aabb(), *t_max, lanes);
+                        match (left_hit.any(), right_hit.any()) {
+                            (true, true) => {
+                                let left_first = left_entry.simd_lt(right_entry).to_bitmask();
+                                let right_first = right_entry.simd_lt(left_entry).to_bitmask();
+                                if left_first.count_ones() >= right_first.count_ones() {
+                                    stack.push(index_u32(left + 1), right_entry);
+                                    next = Some((left, left_hit));
+                                } else {
+                                    stack.push(index_u32(left), left_entry);
+                                    next = Some((left + 1, right_hit));
+                                }
+                            }
+                            (true, false) => next = Some((left, left_hit)),
+                            (false, true) => next = Some((left + 1, right_hit)),
+                            (false, false) => {}
+                        }
+                    }
+                }
+            }
+            if next.is_none() {
+                while let Some((node, entry)) = stack.pop() {
+                    let alive = entry.simd_lt(*t_max);
+                    if alive.any() {
+                        next = Some((node as usize, alive));
+                        break;
+                    }
+                }
+            }
+            match next {
+                Some((node, node_lanes)) => {
+                    current = node;
+                    lanes = node_lanes;
+                }
+                None => return,
+            }
+        }
+    }
+
+    /// Packet closest hit: the 8 rays traverse the tree together (slab test
+    /// and Möller–Trumbore on `f32x8`); only lanes in `packet.active` are
+    /// considered. Lanes without a hit carry their `t_max`, `u = v = 0` and
+    /// triangle [`NO_TRIANGLE`].
+    pub fn intersect_packet(&self, packet: &RayPacket) -> PacketHit {
+        let rays = PacketRays::new(packet);
+        let active = packet.active.to_simd();
+        let mut t_max = active.select(packet.t_max, f32x8::NEG_INFINITY);
+        let mut u = f32x8::ZERO;
+        let mut v = f32x8::ZERO;
+        let mut slots = [NO_TRIANGLE; LANES];
+        let mut hit_bits = 0u32;
+        self.traverse_packet(&rays, &mut t_max, |first, count, lanes, t_max| {
+            for slot in first..first + count {
+                let Some(triangle) = self.triangles.get(slot) else {
+                    continue;
+                };
+                if let Some((accept, t, w1, w2, sum)) = rays.triangle(triangle, *t_max, lanes) {
+                    let bits = accept.to_bitmask();
+                    *t_max = accept.select(t, *t_max);
+                    u = accept.select(w1 / sum, u);
+                    v = accept.select(w2 / sum, v);
+                    hit_bits |= bits;
+                    for (lane, id) in slots.iter_mut().enumerate() {
+                        if bits & (1 << lane) != 0 {
+                            *id = index_u32(slot);
+                        }
+                    }
+                }
+            }
+            true
+        });
+        let hit = LaneMask((hit_bits & 0xff) as u8).and(packet.active);
+        let hit_simd = hit.to_simd();
+        let triangle = core::array::from_fn(|lane| {
+            if hit.contains(lane) {
+                self.original
+                    .get(slots[lane] as usize)
+                    .copied()
+                    .unwrap_or(NO_TRIANGLE)
+            } else {
+                NO_TRIANGLE
+            }
+        });
+        PacketHit {
+            t: hit_simd.select(t_max, packet.t_max),
+            u: hit_simd.select(u, f32x8::ZERO),
+            v: hit_simd.select(v, f32x8::ZERO),
+            triangle,
+            hit,
+        }
+    }
+
+    /// Packet occlusion: the mask of active lanes that are blocked for
+    /// `t ∈ (0, t_max)`. A lane retires at its first hit; traversal stops
+    /// when every active lane has.
+    pub fn occluded_packet(&self, packet: &RayPacket) -> LaneMask {
+        if packet.active.is_empty() {
+            return LaneMask::NONE;
+        }
+        let rays = PacketRays::new(packet);
+        let active = packet.active.to_simd();
+        let mut t_max = active.select(packet.t_max, f32x8::NEG_INFINITY);
+        let wanted = u32::from(packet.active.0);
+        let mut blocked = 0u32;
+        self.traverse_packet(&rays, &mut t_max, |first, count, lanes, t_max| {
+            for slot in first..first + count {
+                let Some(triangle) = self.triangles.get(slot) else {
+                    continue;
+                };
+                if let Some((accept, ..)) = rays.triangle(triangle, *t_max, lanes) {
+                    blocked |= accept.to_bitmask();
+                    *t_max = accept.select(f32x8::NEG_INFINITY, *t_max);
+                    if blocked & wanted == wanted {
+                        return false;
+                    }
+                }
+            }
+            true
+        });
+        LaneMask((blocked & 0xff) as u8).and(packet.active)
+    }
+
+    /// Per-ray traversal of a packet (each active lane through
+    /// [`Bvh::intersect`]), for comparison and as a fallback for incoherent
+    /// rays. Same output convention as [`Bvh::intersect_packet`].
+    pub fn intersect_lanes(&self, packet: &RayPacket) -> PacketHit {
+        let mut t = packet.t_max.to_array();
+        let mut u = [0.0f32; LANES];
+        let mut v = [0.0f32; LANES];
+        let mut triangle = [NO_TRIANGLE; LANES];
+        let mut hit = LaneMask::NONE;
+        for lane in packet.active.iter() {
+            if let Some(h) = self.intersect(&packet.ray(lane)) {
+                t[lane] = h.t;
+                u[lane] = h.u;
+                v[lane] = h.v;
+                triangle[lane] = h.triangle;
+                hit = hit.with(lane);
+            }
+        }
+        PacketHit {
+            t: f32x8::new(t),
+            u: f32x8::new(u),
+            v: f32x8::new(v),
+            triangle,
+            hit,
+        }
+    }
+
+    /// Per-ray occlusion of a packet (each active lane through
+    /// [`Bvh::occluded`]).
+    pub fn occluded_lanes(&self, packet: &RayPacket) -> LaneMask {
+        packet
+            .active
+            .iter()
+            .filter(|&lane| self.occluded(&packet.ray(lane)))
+            .fold(LaneMask::NONE, LaneMask::with)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad_box(min: Vec3, max: Vec3) -> Vec<[Vec3; 3]> {
+        let c = |x: usize, y: usize, z: usize| {
+            Vec3::new(
+                if x == 0 { min.x } else { max.x },
+                if y == 0 { min.y } else { max.y },
+                if z == 0 { min.z } else { max.z },
+            )
+        };
+        let faces = [
+            [c(0, 0, 0), c(0, 1, 0), c(0, 1, 1), c(0, 0, 1)],
+            [c(1, 0, 0), c(1, 0, 1), c(1, 1, 1), c(1, 1, 0)],
+            [c(0, 0, 0), c(0, 0, 1), c(1, 0, 1), c(1, 0, 0)],
+            [c(0, 1, 0), c(1, 1, 0), c(1, 1, 1), c(0, 1, 1)],
+            [c(0, 0, 0), c(1, 0, 0), c(1, 1, 0), c(0, 1, 0)],
+            [c(0, 0, 1), c(0, 1, 1), c(1, 1, 1), c(1, 0, 1)],
+        ];
+        faces
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect()
+    }
+
+    fn scene() -> Vec<[Vec3; 3]> {
+        let mut tris = quad_box(Vec3::splat(-1.0), Vec3::splat(1.0));
+        tris.extend(quad_box(
+            Vec3::new(-0.5, -1.0, -0.5),
+            Vec3::new(0.0, 0.0, 0.0),
+        ));
+        tris.extend(quad_box(
+            Vec3::new(0.2, -1.0, 0.1),
+            Vec3::new(0.6, -0.4, 0.5),
+        ));
+        tris
+    }
+
+    #[test]
+    fn validates_and_detects_corruption() {
+        let bvh = Bvh::build(&scene());
+        assert_eq!(bvh.skipped_triangles(), 0);
+        bvh.validate().unwrap();
+
+        // A node box that no longer bounds its triangles.
+        let mut broken = bvh.clone();
+        let leaf = broken.bvh2.nodes.iter().position(|n| n.is_leaf()).unwrap();
+        let mut aabb = *broken.bvh2.nodes[leaf].aabb();
+        aabb.max = aabb.min;
+        broken.bvh2.nodes[leaf].set_aabb(aabb);
+        assert!(broken.validate().is_err());
+
+        // A triangle referenced twice (and another never).
+        let mut broken = bvh.clone();
+        broken.original.swap(0, 1);
+        broken.original[1] = broken.original[0];
+        assert!(broken.validate().is_err());
+
+        // Stale prepared data.
+        let mut broken = bvh.clone();
+        broken.triangles[3].vertices[1][0] += 0.5;
+        assert!(broken.validate().is_err());
+
+        // Wrong bookkeeping.
+        let mut broken = bvh;
+        broken.skipped += 1;
+        assert!(broken.validate().is_err());
+    }
+
+    #[test]
+    fn axis_parallel_rays_hit_the_walls() {
+        let bvh = Bvh::build(&scene());
+        for axis in 0..3 {
+            for sign in [-1.0f32, 1.0] {
+                let mut direction = Vec3::ZERO;
+                direction[axis] = sign;
+                let ray = Ray {
+                    origin: Vec3::new(0.7, 0.3, -0.8),
+                    direction,
+                    t_max: f32::INFINITY,
+                };
+                let hit = bvh.intersect(&ray).unwrap();
+                assert!(hit.t > 0.0 && hit.t.is_finite());
+                let packet = RayPacket::from_rays(&[ray; 8]);
+                let packed = bvh.intersect_packet(&packet);
+                assert_eq!(packed.hit, LaneMask::ALL);
+                assert_eq!(packed.t.to_array(), [hit.t; 8]);
+                assert_eq!(packed.triangle, [hit.triangle; 8]);
+                assert_eq!(bvh.occluded_packet(&packet), LaneMask::ALL);
+            }
+        }
+    }
+
+    #[test]
+    fn grazing_rays_miss_and_steep_rays_hit() {
+        let bvh = Bvh::build(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]);
+        for (height, expect_hit) in [(1e-7f32, false), (1e-3, true)] {
+            let ray = Ray {
+                origin: Vec3::new(-1.0, 0.25, height),
+                direction: Vec3::new(1.0, 0.0, -height / 1.25),
+                t_max: f32::INFINITY,
+            };
+            let hit = bvh.intersect(&ray);
+            assert_eq!(hit.is_some(), expect_hit, "height {height}: {hit:?}");
+            let packet = RayPacket::from_rays(&[ray]);
+            assert_eq!(bvh.intersect_packet(&packet).hit.contains(0), expect_hit);
+            if let Some(hit) = hit {
+                assert!((hit.t - 1.25).abs() < 1e-4, "{hit:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn empty_and_single_triangle_scenes() {
+        let empty = Bvh::build(&[]);
+        empty.validate().unwrap();
+        let ray = Ray {
+            origin: Vec3::new(0.2, 0.2, 1.0),
+            direction: Vec3::NEG_Z,
+            t_max: f32::INFINITY,
+        };
+        assert!(empty.intersect(&ray).is_none());
+        assert!(!empty.occluded(&ray));
+        let packet = RayPacket::from_rays(&[ray; 3]);
+        assert!(empty.intersect_packet(&packet).hit.is_empty());
+        assert!(empty.occluded_packet(&packet).is_empty());
+
+        let one = Bvh::build(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]);
+        one.validate().unwrap();
+        let hit = one.intersect(&ray).unwrap();
+        assert_eq!((hit.t, hit.triangle), (1.0, 0));
+        assert!(
+            (hit.u - 0.2).abs() < 1e-6 && (hit.v - 0.2).abs() < 1e-6,
+            "{hit:?}"
+        );
+        let packed = one.intersect_packet(&packet);
+        assert_eq!(packed.hit, LaneMask::first(3));
+        assert_eq!(packed.t.to_array()[0], 1.0);
+        // t_max exactly at the hit: rejected (the interval is open).
+        let at_hit = Ray { t_max: 1.0, ..ray };
+        assert!(one.intersect(&at_hit).is_none());
+        assert!(
+            one.intersect_packet(&RayPacket::from_rays(&[at_hit]))
+                .hit
+                .is_empty()
+        );
+    }
+}

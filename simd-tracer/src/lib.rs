@@ -4,8 +4,26 @@
 //! meshes, materials, lights, camera) in, a per-pixel image buffer out, with
 //! light carried as Fourier coefficients, sampled wavelengths, or both as
 //! control variates. See `ARCHITECTURE.md` for the data flow.
+//!
+//! ```text
+//! Scene -> Bvh -> RayPacket (8 rays, f32x8) -> PacketHit
+//!   -> Material eval/sample per lane -> Transport (FourierSpectrum<f32x8, N> products)
+//!   -> NEE + MIS -> Film (coefficients or XYZ per pixel) -> XYZ image
+//! ```
 
 pub mod bvh;
+pub mod camera;
+pub mod filter;
+pub mod integrator;
+pub mod light;
+pub mod material;
+pub mod obj;
 pub mod packet;
+pub mod render;
+pub mod rng;
+pub mod scene;
+pub mod scenes;
+pub mod spectra;
+pub mod transport;
 
 pub use spectral_core;

@@ -15,11 +15,17 @@
 //! `0 … b−1` only (the first batch uses `α = 0`): a running estimate that is
 //! independent of the batch it weights, so the estimator stays unbiased
 //! while `α_b → α*`. The test `same_batch_alpha_is_biased` shows the bias
-//! this avoids.
+//! this avoids. With very few samples per estimator (a pixel with tens of
+//! samples), the running `α` is itself noisy; [`AlphaStatistics`] lets a
+//! renderer pool the earlier batches of all pixels into one shared `α` per
+//! channel, still independent of the batch it weights.
 
-/// Running sums over finished batches, for `α`.
+/// Sums over samples `(Y, D = C − μ)` from which `α = Cov(Y, D)/Var(D)`
+/// is estimated. Statistics of several estimators (e.g. all pixels of an
+/// image) can be merged into one shared `α`: because `E[D] = 0` within each
+/// estimator, the pooled covariance is the mean within-estimator covariance.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-struct Moments {
+pub struct AlphaStatistics {
     count: f64,
     sum_y: f64,
     sum_d: f64,
@@ -27,8 +33,9 @@ struct Moments {
     sum_dd: f64,
 }
 
-impl Moments {
-    fn add(&mut self, y: f64, d: f64) {
+impl AlphaStatistics {
+    /// Adds one sample.
+    pub fn add(&mut self, y: f64, d: f64) {
         self.count += 1.0;
         self.sum_y += y;
         self.sum_d += d;
@@ -36,7 +43,8 @@ impl Moments {
         self.sum_dd += d * d;
     }
 
-    fn merge(&mut self, other: &Self) {
+    /// Adds the samples of `other`.
+    pub fn merge(&mut self, other: &Self) {
         self.count += other.count;
         self.sum_y += other.sum_y;
         self.sum_d += other.sum_d;
@@ -44,8 +52,8 @@ impl Moments {
         self.sum_dd += other.sum_dd;
     }
 
-    /// `Cov(Y, D)/Var(D)`, 0 when undefined.
-    fn alpha(&self) -> f64 {
+    /// `Cov(Y, D)/Var(D)`, 0 when undefined (fewer than 2 samples, no variance).
+    pub fn alpha(&self) -> f64 {
         if self.count < 2.0 {
             return 0.0;
         }
@@ -65,8 +73,8 @@ impl Moments {
 /// Control-variate estimator of one channel of one pixel.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ControlVariate {
-    finished: Moments,
-    batch: Moments,
+    finished: AlphaStatistics,
+    batch: AlphaStatistics,
     corrected_sum: f64,
     samples: f64,
 }
@@ -86,11 +94,22 @@ impl ControlVariate {
     /// Closes the current batch: weights it with `α` from the earlier
     /// batches, then adds it to the statistics for later batches.
     pub fn end_batch(&mut self) {
-        let alpha = self.finished.alpha();
+        self.end_batch_with_alpha(self.finished.alpha());
+    }
+
+    /// Closes the current batch weighting it with a given `α`, which must
+    /// not depend on this batch's samples (e.g. pooled from the earlier
+    /// batches of many estimators via [`statistics`](Self::statistics)).
+    pub fn end_batch_with_alpha(&mut self, alpha: f64) {
         self.corrected_sum += self.batch.sum_y - alpha * self.batch.sum_d;
         self.samples += self.batch.count;
         self.finished.merge(&self.batch);
-        self.batch = Moments::default();
+        self.batch = AlphaStatistics::default();
+    }
+
+    /// Statistics of the closed batches.
+    pub fn statistics(&self) -> &AlphaStatistics {
+        &self.finished
     }
 
     /// The estimate over all closed batches (0 before the first).

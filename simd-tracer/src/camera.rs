@@ -1,0 +1,107 @@
+//! A pinhole camera with the field of view along the smaller image axis
+//! (Mitsuba's `fov_axis = "smaller"`, the convention of the Cornell box
+//! notes).
+//!
+//! For a film of `w × h` pixels and image-plane coordinates `(x, y)` in
+//! pixels (origin top-left, y down), the direction is
+//! `forward + ((x − w/2) s) right − ((y − h/2) s) up` with
+//! `s = 2 tan(fov/2) / min(w, h)`.
+
+use glam::Vec3;
+
+/// A pinhole camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    position: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    fov_deg: f32,
+}
+
+/// Why a camera is invalid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CameraError {
+    /// Position, target or up is not finite, or target equals position.
+    Degenerate,
+    /// `up` is parallel to the viewing direction.
+    UpParallel,
+    /// The field of view is not in (0°, 180°).
+    FieldOfView,
+}
+
+impl core::fmt::Display for CameraError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::Degenerate => "camera position/target/up must be finite and target != position",
+            Self::UpParallel => "camera up vector is parallel to the viewing direction",
+            Self::FieldOfView => "field of view must be between 0 and 180 degrees",
+        })
+    }
+}
+
+impl std::error::Error for CameraError {}
+
+impl Camera {
+    /// A camera at `position` looking at `target`.
+    pub fn look_at(position: Vec3, target: Vec3, up: Vec3, fov_deg: f32) -> Result<Self, CameraError> {
+        if !(position.is_finite() && target.is_finite() && up.is_finite()) || position == target {
+            return Err(CameraError::Degenerate);
+        }
+        if !(fov_deg > 0.0 && fov_deg < 180.0) {
+            return Err(CameraError::FieldOfView);
+        }
+        let forward = (target - position).normalize();
+        let right = forward.cross(up);
+        if right.length_squared() < 1e-12 {
+            return Err(CameraError::UpParallel);
+        }
+        let right = right.normalize();
+        let up = right.cross(forward);
+        Ok(Self {
+            position,
+            forward,
+            right,
+            up,
+            fov_deg,
+        })
+    }
+
+    /// The camera position.
+    pub fn position(&self) -> Vec3 {
+        self.position
+    }
+
+    /// Field of view along the smaller image axis, degrees.
+    pub fn fov_deg(&self) -> f32 {
+        self.fov_deg
+    }
+
+    /// The (unnormalised) ray direction through film point `(x, y)` in pixels.
+    pub fn direction(&self, x: f32, y: f32, width: u32, height: u32) -> Vec3 {
+        let scale = 2.0 * (0.5 * self.fov_deg.to_radians()).tan() / width.min(height) as f32;
+        let dx = (x - 0.5 * width as f32) * scale;
+        let dy = (y - 0.5 * height as f32) * scale;
+        self.forward + dx * self.right - dy * self.up
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn centre_and_edges() {
+        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 3.9), Vec3::ZERO, Vec3::Y, 90.0).unwrap();
+        let d = cam.direction(50.0, 50.0, 100, 100);
+        assert!((d - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
+        // fov 90° along the smaller axis: the left edge is at 45°.
+        let d = cam.direction(0.0, 50.0, 100, 100).normalize();
+        assert!((d.x + std::f32::consts::FRAC_1_SQRT_2).abs() < 1e-6);
+        let d = cam.direction(50.0, 0.0, 200, 100).normalize();
+        assert!((d.y - std::f32::consts::FRAC_1_SQRT_2).abs() < 1e-6, "{d}");
+        assert_eq!(Camera::look_at(Vec3::ZERO, Vec3::Y, Vec3::Y, 40.0), Err(CameraError::UpParallel));
+        assert_eq!(Camera::look_at(Vec3::ZERO, Vec3::ZERO, Vec3::Y, 40.0), Err(CameraError::Degenerate));
+        assert_eq!(Camera::look_at(Vec3::ZERO, Vec3::X, Vec3::Y, 180.0), Err(CameraError::FieldOfView));
+    }
+}

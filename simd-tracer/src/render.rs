@@ -1,0 +1,300 @@
+//! Progressive rendering: passes of one sample per pixel over 16 × 16 tiles
+//! in parallel (rayon), packets of 8 pixels (4 × 2) per trace.
+//!
+//! Determinism: every sample draws its random numbers from streams keyed by
+//! (seed, pixel, pass) ([`crate::rng`]), the filter is importance-sampled so
+//! a sample only touches its own pixel, and each tile is owned by one task
+//! per pass: the image depends only on the seed, never on the thread count
+//! or scheduling (tested bit for bit).
+//!
+//! After each pass the `progress` callback sees the totals and may stop the
+//! render; a time limit stops after the pass that crosses it. Samples with
+//! NaN or infinite values never reach the film: they are counted in
+//! [`RenderResult::rejected`].
+
+use crate::filter::Filter;
+use crate::integrator::{trace, IntegratorSettings, RayCounts};
+use crate::packet::{Ray, RayPacket, LANES};
+use crate::rng::{Purpose, Rng};
+use crate::scene::Scene;
+use crate::transport::Transport;
+use rayon::prelude::*;
+use spectral_core::color::Xyz;
+use std::time::{Duration, Instant};
+
+/// Tile edge, pixels.
+pub const TILE_SIZE: u32 = 16;
+/// Packet footprint: 4 × 2 pixels.
+const PACKET_WIDTH: u32 = 4;
+const PACKET_HEIGHT: u32 = 2;
+
+/// What and how to render.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderSettings {
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Samples per pixel (one per pass).
+    pub spp: u32,
+    /// Depth and roulette.
+    pub integrator: IntegratorSettings,
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Pixel filter.
+    pub filter: Filter,
+    /// Worker threads (`None`: all cores).
+    pub threads: Option<usize>,
+    /// Stop after the pass during which this much time has passed.
+    pub time_limit: Option<Duration>,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 256,
+            height: 256,
+            spp: 16,
+            integrator: IntegratorSettings::default(),
+            seed: 0,
+            filter: Filter::gaussian(),
+            threads: None,
+            time_limit: None,
+        }
+    }
+}
+
+/// Why a render could not run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum RenderError {
+    /// Width, height or samples per pixel is zero.
+    EmptyImage,
+    /// The thread pool could not be created.
+    Threads(String),
+}
+
+impl core::fmt::Display for RenderError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::EmptyImage => write!(f, "width, height and samples per pixel must be at least 1"),
+            Self::Threads(e) => write!(f, "cannot start worker threads: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for RenderError {}
+
+/// Render progress after a pass.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Passes finished.
+    pub passes_done: u32,
+    /// Passes requested.
+    pub passes_total: u32,
+    /// Samples traced so far.
+    pub samples: u64,
+    /// Time since the start.
+    pub elapsed: Duration,
+}
+
+/// A finished render.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderResult {
+    /// Width, pixels.
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// XYZ per pixel, row-major from the top-left.
+    pub xyz: Vec<Xyz>,
+    /// Mean Fourier coefficients per pixel (`N` per pixel, row-major), when
+    /// the transport keeps a spectral buffer.
+    pub coefficients: Option<(usize, Vec<f32>)>,
+    /// Passes completed (samples per pixel actually taken).
+    pub passes: u32,
+    /// Samples traced.
+    pub samples: u64,
+    /// Samples rejected for NaN or infinite values.
+    pub rejected: u64,
+    /// Rays cast.
+    pub rays: RayCounts,
+    /// Wall time.
+    pub elapsed: Duration,
+}
+
+struct Tile<P> {
+    x0: u32,
+    y0: u32,
+    width: u32,
+    height: u32,
+    pixels: Vec<P>,
+    rejected: u64,
+    rays: RayCounts,
+}
+
+/// The camera ray of pixel `(x, y)` and the path random stream.
+fn camera_ray(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, rng: &mut Rng) -> Ray {
+    let (dx, dy) = settings.filter.sample_offset(rng.next_f32(), rng.next_f32());
+    let film_x = x as f32 + 0.5 + dx;
+    let film_y = y as f32 + 0.5 + dy;
+    Ray {
+        origin: scene.camera.position(),
+        direction: scene.camera.direction(film_x, film_y, settings.width, settings.height),
+        t_max: f32::INFINITY,
+    }
+}
+
+fn render_tile<T: Transport>(
+    transport: &T,
+    scene: &Scene,
+    settings: &RenderSettings,
+    pass: u32,
+    tile: &mut Tile<T::Pixel>,
+) {
+    for by in (0..tile.height).step_by(PACKET_HEIGHT as usize) {
+        for bx in (0..tile.width).step_by(PACKET_WIDTH as usize) {
+            let mut lanes: [Option<(u32, u32)>; LANES] = [None; LANES];
+            for (lane, slot) in lanes.iter_mut().enumerate() {
+                let (lx, ly) = (bx + lane as u32 % PACKET_WIDTH, by + lane as u32 / PACKET_WIDTH);
+                if lx < tile.width && ly < tile.height {
+                    *slot = Some((lx, ly));
+                }
+            }
+            let pixel_index =
+                |(lx, ly): (u32, u32)| u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx);
+            let mut path_rngs: [Rng; LANES] = core::array::from_fn(|lane| {
+                let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
+                Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Path)
+            });
+            let mut wavelength_rngs: [Rng; LANES] = core::array::from_fn(|lane| {
+                let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
+                Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Wavelengths)
+            });
+            let rays: [Ray; LANES] = core::array::from_fn(|lane| match lanes[lane] {
+                Some((lx, ly)) => camera_ray(scene, settings, tile.x0 + lx, tile.y0 + ly, &mut path_rngs[lane]),
+                None => Ray {
+                    origin: scene.camera.position(),
+                    direction: glam::Vec3::Z,
+                    t_max: 0.0,
+                },
+            });
+            let mut packet = RayPacket::from_rays(&rays);
+            packet.active = crate::packet::LaneMask(
+                lanes.iter().enumerate().fold(0u8, |m, (lane, l)| if l.is_some() { m | (1 << lane) } else { m }),
+            );
+            let wavelengths = transport.sample_wavelengths(&mut wavelength_rngs);
+            let radiance = trace(
+                transport,
+                scene,
+                &settings.integrator,
+                &packet,
+                &mut path_rngs,
+                &wavelengths,
+                &mut tile.rays,
+            );
+            let samples = transport.samples(&radiance, &wavelengths);
+            for (lane, slot) in lanes.iter().enumerate() {
+                if let Some((lx, ly)) = *slot {
+                    if T::sample_is_finite(&samples[lane]) {
+                        let index = (ly * tile.width + lx) as usize;
+                        transport.accumulate(&mut tile.pixels[index], &samples[lane]);
+                    } else {
+                        tile.rejected += 1;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Renders `scene` with `transport`. `progress` runs after every pass and
+/// returns whether to continue.
+pub fn render<T: Transport>(
+    transport: &T,
+    scene: &Scene,
+    settings: &RenderSettings,
+    progress: &mut dyn FnMut(&Progress) -> bool,
+) -> Result<RenderResult, RenderError> {
+    if settings.width == 0 || settings.height == 0 || settings.spp == 0 {
+        return Err(RenderError::EmptyImage);
+    }
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(threads) = settings.threads {
+        builder = builder.num_threads(threads.max(1));
+    }
+    let pool = builder.build().map_err(|e| RenderError::Threads(e.to_string()))?;
+    let start = Instant::now();
+    let mut tiles = Vec::new();
+    for y0 in (0..settings.height).step_by(TILE_SIZE as usize) {
+        for x0 in (0..settings.width).step_by(TILE_SIZE as usize) {
+            let width = TILE_SIZE.min(settings.width - x0);
+            let height = TILE_SIZE.min(settings.height - y0);
+            tiles.push(Tile {
+                x0,
+                y0,
+                width,
+                height,
+                pixels: vec![transport.empty_pixel(); (width * height) as usize],
+                rejected: 0,
+                rays: RayCounts::default(),
+            });
+        }
+    }
+    let pixel_count = u64::from(settings.width) * u64::from(settings.height);
+    let mut passes = 0;
+    for pass in 0..settings.spp {
+        pool.install(|| {
+            tiles
+                .par_iter_mut()
+                .for_each(|tile| render_tile(transport, scene, settings, pass, tile));
+        });
+        let shared = transport.pass_shared(&mut tiles.iter().flat_map(|tile| tile.pixels.iter()));
+        for tile in &mut tiles {
+            for pixel in &mut tile.pixels {
+                transport.end_pass(pixel, &shared);
+            }
+        }
+        passes = pass + 1;
+        let elapsed = start.elapsed();
+        let keep_going = progress(&Progress {
+            passes_done: passes,
+            passes_total: settings.spp,
+            samples: pixel_count * u64::from(passes),
+            elapsed,
+        });
+        if !keep_going || settings.time_limit.is_some_and(|limit| elapsed >= limit) {
+            break;
+        }
+    }
+    let mut xyz = vec![Xyz::default(); pixel_count as usize];
+    let mut planes: Option<(usize, Vec<f32>)> = None;
+    let mut rejected = 0;
+    let mut rays = RayCounts::default();
+    for tile in &tiles {
+        rejected += tile.rejected;
+        rays.add(&tile.rays);
+        for ly in 0..tile.height {
+            for lx in 0..tile.width {
+                let pixel = &tile.pixels[(ly * tile.width + lx) as usize];
+                let index = ((tile.y0 + ly) * settings.width + tile.x0 + lx) as usize;
+                xyz[index] = transport.resolve(pixel);
+                if let Some(c) = transport.coefficients(pixel) {
+                    let (n, data) = planes.get_or_insert_with(|| (c.len(), vec![0.0; pixel_count as usize * c.len()]));
+                    for (j, &v) in c.iter().enumerate().take(*n) {
+                        data[index * *n + j] = v as f32;
+                    }
+                }
+            }
+        }
+    }
+    Ok(RenderResult {
+        width: settings.width,
+        height: settings.height,
+        xyz,
+        coefficients: planes,
+        passes,
+        samples: pixel_count * u64::from(passes) - rejected,
+        rejected,
+        rays,
+        elapsed: start.elapsed(),
+    })
+}

@@ -1,0 +1,98 @@
+//! Deterministic random numbers: one PCG32 stream per (seed, pixel, sample,
+//! purpose).
+//!
+//! PCG32 (O'Neill 2014, `pcg32_random_r`: 64-bit LCG state, XSH-RR output).
+//! Streams are selected by hashing the pixel, sample index and purpose with
+//! SplitMix64 (Steele et al. 2014), so a pixel's samples never depend on
+//! which thread renders it or in which order: the image depends only on the
+//! seed. Separate purposes (path decisions vs wavelengths) keep the path
+//! geometry identical across spectral transports.
+
+/// Which decisions a stream drives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Purpose {
+    /// Camera, filter, BSDF, light and Russian-roulette decisions.
+    Path = 1,
+    /// Wavelength sampling of the sampled transports.
+    Wavelengths = 2,
+}
+
+const PCG_MULTIPLIER: u64 = 6_364_136_223_846_793_005;
+
+/// SplitMix64 finaliser.
+pub fn mix64(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// A PCG32 generator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Rng {
+    state: u64,
+    increment: u64,
+}
+
+impl Rng {
+    /// The stream of (seed, pixel, sample, purpose).
+    pub fn for_sample(seed: u64, pixel: u64, sample: u64, purpose: Purpose) -> Self {
+        let key = mix64(seed ^ mix64(pixel ^ mix64(sample ^ mix64(purpose as u64))));
+        Self::new(key, mix64(key ^ 0x5851_f42d_4c95_7f2d))
+    }
+
+    /// A generator from a state and a stream selector.
+    pub fn new(state: u64, stream: u64) -> Self {
+        let mut rng = Self {
+            state: 0,
+            increment: (stream << 1) | 1,
+        };
+        rng.next_u32();
+        rng.state = rng.state.wrapping_add(state);
+        rng.next_u32();
+        rng
+    }
+
+    /// The next 32 random bits.
+    pub fn next_u32(&mut self) -> u32 {
+        let old = self.state;
+        self.state = old.wrapping_mul(PCG_MULTIPLIER).wrapping_add(self.increment);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        let rotation = (old >> 59) as u32;
+        xorshifted.rotate_right(rotation)
+    }
+
+    /// A uniform `f32` in `[0, 1)` (24 random bits).
+    pub fn next_f32(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pcg32_reference_output() {
+        // pcg32-global demo, seed 42, stream 54: first outputs of the
+        // reference implementation (pcg-c-basic).
+        let mut rng = Rng::new(42, 54);
+        let expected = [0xa15c_02b7, 0x7b47_f409, 0xba1d_3330, 0x83d2_f293, 0xbfa4_784b, 0xcbed_606e];
+        for e in expected {
+            assert_eq!(rng.next_u32(), e);
+        }
+    }
+
+    #[test]
+    fn streams_are_deterministic_and_distinct() {
+        let a = Rng::for_sample(1, 2, 3, Purpose::Path);
+        assert_eq!(a, Rng::for_sample(1, 2, 3, Purpose::Path));
+        assert_ne!(a, Rng::for_sample(1, 2, 3, Purpose::Wavelengths));
+        assert_ne!(a, Rng::for_sample(1, 2, 4, Purpose::Path));
+        let mut r = a;
+        let mean: f32 = (0..10_000).map(|_| r.next_f32()).sum::<f32>() / 10_000.0;
+        assert!((mean - 0.5).abs() < 0.02);
+        let mut r = a;
+        assert!((0..1000).all(|_| (0.0..1.0).contains(&r.next_f32())));
+    }
+}

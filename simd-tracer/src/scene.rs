@@ -1,0 +1,235 @@
+//! Scenes: triangles with materials, spectra, emitters, a camera, and the
+//! acceleration structure, assembled by a [`SceneBuilder`].
+//!
+//! Emitters are triangles whose material has an emission spectrum; they emit
+//! from their front face (counter-clockwise seen from the front) unless the
+//! material is two-sided. Degenerate triangles (zero area, non-finite) are
+//! dropped at build time and counted in [`Scene::skipped_triangles`].
+
+use crate::bvh::Bvh;
+use crate::camera::Camera;
+use crate::light::LightSet;
+use crate::material::Material;
+use crate::spectra::{SceneSpectrum, SpectrumSource};
+use glam::Vec3;
+use spectral_core::{SpectralError, SpectralRange};
+
+/// Index of a spectrum in [`Scene::spectra`].
+pub type SpectrumId = u32;
+/// Index of a material in [`Scene::materials`].
+pub type MaterialId = u32;
+
+/// Why a scene could not be built.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SceneError {
+    /// A spectrum (named in the message) is invalid.
+    Spectrum(String, SpectralError),
+    /// A triangle refers to a material that does not exist.
+    UnknownMaterial(MaterialId),
+    /// A mesh index refers to a vertex that does not exist.
+    IndexOutOfRange {
+        /// The index.
+        index: u32,
+        /// Number of vertices.
+        vertices: usize,
+    },
+    /// The scene has no (non-degenerate) triangle.
+    Empty,
+    /// No camera was set.
+    NoCamera,
+    /// The BVH failed validation.
+    Bvh(String),
+}
+
+impl core::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Spectrum(name, e) => write!(f, "spectrum `{name}`: {e}"),
+            Self::UnknownMaterial(id) => write!(f, "material {id} does not exist"),
+            Self::IndexOutOfRange { index, vertices } => {
+                write!(f, "vertex index {index} out of range ({vertices} vertices)")
+            }
+            Self::Empty => write!(f, "the scene has no usable triangle"),
+            Self::NoCamera => write!(f, "the scene has no camera"),
+            Self::Bvh(message) => write!(f, "BVH: {message}"),
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// A renderable scene.
+#[derive(Debug)]
+pub struct Scene {
+    /// The spectral range of every spectrum and of the render.
+    pub range: SpectralRange,
+    /// Prepared spectra.
+    pub spectra: Vec<SceneSpectrum>,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Triangle vertices (non-degenerate ones only).
+    pub triangles: Vec<[Vec3; 3]>,
+    /// Unit geometric normal of each triangle (right-handed, CCW front).
+    pub normals: Vec<Vec3>,
+    /// Material of each triangle.
+    pub triangle_material: Vec<MaterialId>,
+    /// The camera.
+    pub camera: Camera,
+    /// Radiance arriving from every direction that escapes the scene.
+    pub environment: Option<SpectrumId>,
+    /// The acceleration structure.
+    pub bvh: Bvh,
+    /// Emissive triangles and their sampling distribution.
+    pub lights: LightSet,
+    skipped_triangles: usize,
+}
+
+impl Scene {
+    /// Triangles dropped at build time as degenerate.
+    pub fn skipped_triangles(&self) -> usize {
+        self.skipped_triangles
+    }
+
+    /// Area of triangle `index`.
+    pub fn area(&self, index: usize) -> f32 {
+        let [a, b, c] = self.triangles[index];
+        0.5 * (b - a).cross(c - a).length()
+    }
+}
+
+/// Incremental construction of a [`Scene`].
+#[derive(Debug)]
+pub struct SceneBuilder {
+    range: SpectralRange,
+    spectra: Vec<SceneSpectrum>,
+    materials: Vec<Material>,
+    triangles: Vec<[Vec3; 3]>,
+    triangle_material: Vec<MaterialId>,
+    camera: Option<Camera>,
+    environment: Option<SpectrumId>,
+    skipped: usize,
+}
+
+impl SceneBuilder {
+    /// An empty scene over `range`.
+    pub fn new(range: SpectralRange) -> Self {
+        Self {
+            range,
+            spectra: Vec::new(),
+            materials: Vec::new(),
+            triangles: Vec::new(),
+            triangle_material: Vec::new(),
+            camera: None,
+            environment: None,
+            skipped: 0,
+        }
+    }
+
+    /// The spectral range.
+    pub fn range(&self) -> SpectralRange {
+        self.range
+    }
+
+    /// Adds a spectrum; `name` appears in error messages.
+    pub fn add_spectrum(&mut self, name: &str, source: SpectrumSource) -> Result<SpectrumId, SceneError> {
+        let spectrum =
+            SceneSpectrum::new(source, self.range).map_err(|e| SceneError::Spectrum(name.to_string(), e))?;
+        self.spectra.push(spectrum);
+        Ok((self.spectra.len() - 1) as SpectrumId)
+    }
+
+    /// Adds a material.
+    pub fn add_material(&mut self, material: Material) -> MaterialId {
+        self.materials.push(material);
+        (self.materials.len() - 1) as MaterialId
+    }
+
+    /// Adds one triangle (counter-clockwise seen from its front).
+    pub fn add_triangle(&mut self, vertices: [Vec3; 3], material: MaterialId) {
+        let [a, b, c] = vertices;
+        let area2 = (b - a).cross(c - a).length_squared();
+        if vertices.iter().all(|v| v.is_finite()) && area2.is_finite() && area2 > 0.0 {
+            self.triangles.push(vertices);
+            self.triangle_material.push(material);
+        } else {
+            self.skipped += 1;
+        }
+    }
+
+    /// Adds the quad `a b c d` (counter-clockwise) as two triangles.
+    pub fn add_quad(&mut self, quad: [Vec3; 4], material: MaterialId) {
+        self.add_triangle([quad[0], quad[1], quad[2]], material);
+        self.add_triangle([quad[0], quad[2], quad[3]], material);
+    }
+
+    /// Adds an indexed triangle mesh.
+    pub fn add_mesh(&mut self, positions: &[Vec3], indices: &[u32], material: MaterialId) -> Result<(), SceneError> {
+        for tri in indices.chunks_exact(3) {
+            let mut vertices = [Vec3::ZERO; 3];
+            for (v, &index) in vertices.iter_mut().zip(tri) {
+                *v = *positions.get(index as usize).ok_or(SceneError::IndexOutOfRange {
+                    index,
+                    vertices: positions.len(),
+                })?;
+            }
+            self.add_triangle(vertices, material);
+        }
+        Ok(())
+    }
+
+    /// Sets the camera.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.camera = Some(camera);
+    }
+
+    /// Sets a constant environment emission.
+    pub fn set_environment(&mut self, spectrum: Option<SpectrumId>) {
+        self.environment = spectrum;
+    }
+
+    /// Builds the BVH and the light distribution.
+    pub fn build(self) -> Result<Scene, SceneError> {
+        let camera = self.camera.ok_or(SceneError::NoCamera)?;
+        if self.triangles.is_empty() {
+            return Err(SceneError::Empty);
+        }
+        if let Some(&bad) = self
+            .triangle_material
+            .iter()
+            .find(|&&m| m as usize >= self.materials.len())
+        {
+            return Err(SceneError::UnknownMaterial(bad));
+        }
+        for material in &self.materials {
+            for id in material.spectra() {
+                if id as usize >= self.spectra.len() {
+                    return Err(SceneError::Spectrum(
+                        format!("#{id}"),
+                        SpectralError::InvalidParameter("spectrum id"),
+                    ));
+                }
+            }
+        }
+        let normals = self
+            .triangles
+            .iter()
+            .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize())
+            .collect();
+        let bvh = Bvh::build(&self.triangles);
+        bvh.validate().map_err(SceneError::Bvh)?;
+        let lights = LightSet::new(&self.triangles, &self.triangle_material, &self.materials, &self.spectra);
+        Ok(Scene {
+            range: self.range,
+            spectra: self.spectra,
+            materials: self.materials,
+            triangles: self.triangles,
+            normals,
+            triangle_material: self.triangle_material,
+            camera,
+            environment: self.environment,
+            bvh,
+            lights,
+            skipped_triangles: self.skipped,
+        })
+    }
+}

@@ -1,0 +1,574 @@
+//! Spectral transports: what a path carries, how it is multiplied, and how a
+//! finished sample reaches the film.
+//!
+//! * [`FourierTransport<N>`]: throughput and radiance are
+//!   `FourierSpectrum<f32x8, N>` — eight spectra, one per ray lane — and every
+//!   spectral product is the core's truncated product across the lanes. The
+//!   film keeps per-pixel coefficient sums (spectral buffer, converted once
+//!   by the chosen route) or converts every sample to XYZ (XYZ buffer).
+//! * [`SampledTransport<C>`]: `C` wavelengths per path; the packet stores
+//!   `[f32x8; C]` (wavelength index × lane), i.e. one `SampledSpectrum<C>`
+//!   per lane in structure-of-arrays form; products are element-wise. Each
+//!   sample reaches the film as the estimate `(1/C) Σ L x̄/p / ∫ȳ`.
+//! * [`ControlVariateTransport<C, N>`]: both at once (paper §3): `Y` the
+//!   sampled estimate, `C` the path's Fourier spectrum evaluated at the same
+//!   wavelengths through the same estimator, `μ` its exact XYZ (3×N kernel);
+//!   per pixel and channel a [`ControlVariate`] weighted by `α` from the
+//!   earlier passes only — pooled over all pixels ([`AlphaMode::Shared`],
+//!   the default: a single pixel's tens of samples give a noisy `α`) or per
+//!   pixel ([`AlphaMode::PerPixel`]).
+
+use crate::material::LaneSpectrum;
+use crate::packet::LANES;
+use crate::rng::Rng;
+use crate::scene::Scene;
+use spectral_core::color::Xyz;
+use spectral_core::control_variate::{AlphaStatistics, ControlVariate};
+use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy};
+use spectral_core::xyz::{XyzConverter, XyzRoute};
+use spectral_core::{FourierSpectrum, Lane, SpectralError, SpectralRange};
+use wide::f32x8;
+
+/// Where Fourier samples are converted to colour.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Buffer {
+    /// Per-pixel coefficient sums, converted once at the end.
+    Spectral,
+    /// Per-sample conversion to XYZ (the conversion cost is paid per sample).
+    Xyz,
+}
+
+/// A spectral representation of light paths (module docs).
+pub trait Transport: Sync {
+    /// Per-packet wavelengths (unit for Fourier).
+    type Wavelengths: Copy + Send;
+    /// Packet-wide spectral values, 8 lanes.
+    type Spectra: Copy;
+    /// One finished sample as the film consumes it.
+    type Sample: Copy;
+    /// Per-pixel accumulator.
+    type Pixel: Clone + Send + Sync;
+    /// What all pixels share when a pass ends (the pooled `α` of control variates).
+    type PassShared: Send + Sync;
+
+    /// A short description, e.g. `fourier N=12`.
+    fn describe(&self) -> String;
+    /// An empty pixel.
+    fn empty_pixel(&self) -> Self::Pixel;
+    /// Draws the wavelengths of a packet from per-lane wavelength streams.
+    fn sample_wavelengths(&self, rngs: &mut [Rng; LANES]) -> Self::Wavelengths;
+    /// 1 in every lane.
+    fn one(&self) -> Self::Spectra;
+    /// 0 in every lane.
+    fn zero(&self) -> Self::Spectra;
+    /// The per-lane spectral factors as packet-wide values.
+    fn gather(&self, scene: &Scene, wavelengths: &Self::Wavelengths, lanes: &[LaneSpectrum; LANES]) -> Self::Spectra;
+    /// Spectral product (truncated for Fourier).
+    fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra;
+    /// Multiplies each lane by a scalar.
+    fn scale(&self, a: &Self::Spectra, weight: f32x8) -> Self::Spectra;
+    /// Sum.
+    fn add(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra;
+    /// Mean over wavelengths per lane (the Russian-roulette proxy).
+    fn mean(&self, a: &Self::Spectra) -> f32x8;
+    /// The finished samples of a packet.
+    fn samples(&self, radiance: &Self::Spectra, wavelengths: &Self::Wavelengths) -> [Self::Sample; LANES];
+    /// Whether a sample is free of NaN and infinity (else it is rejected).
+    fn sample_is_finite(sample: &Self::Sample) -> bool;
+    /// Adds a sample to a pixel.
+    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample);
+    /// The shared state for ending the current pass, from every pixel
+    /// before any of them ends it.
+    fn pass_shared<'a>(&self, pixels: &mut dyn Iterator<Item = &'a Self::Pixel>) -> Self::PassShared
+    where
+        Self::Pixel: 'a;
+    /// Ends a pass (a control-variate batch).
+    fn end_pass(&self, pixel: &mut Self::Pixel, shared: &Self::PassShared);
+    /// The pixel's XYZ.
+    fn resolve(&self, pixel: &Self::Pixel) -> Xyz;
+    /// The pixel's mean Fourier coefficients, if the transport keeps them.
+    fn coefficients(&self, _pixel: &Self::Pixel) -> Option<Vec<f64>> {
+        None
+    }
+}
+
+fn all_finite(values: &[f32]) -> bool {
+    values.iter().all(|v| v.is_finite())
+}
+
+// ---------------------------------------------------------------- Fourier
+
+/// Light as `N` Fourier coefficients per ray lane.
+#[derive(Debug, Clone)]
+pub struct FourierTransport<const N: usize> {
+    converter: Box<XyzConverter<N>>,
+    buffer: Buffer,
+    route: XyzRoute,
+}
+
+impl<const N: usize> FourierTransport<N> {
+    /// A Fourier transport over `range` converting by `route` in `buffer`.
+    pub fn new(range: SpectralRange, buffer: Buffer, route: XyzRoute) -> Result<Self, SpectralError> {
+        Ok(Self {
+            converter: Box::new(XyzConverter::new(range)?),
+            buffer,
+            route,
+        })
+    }
+
+    /// The XYZ converter (and its kernel).
+    pub fn converter(&self) -> &XyzConverter<N> {
+        &self.converter
+    }
+}
+
+/// A finished Fourier sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FourierSample<const N: usize> {
+    /// Coefficients (spectral buffer).
+    pub coeffs: [f32; N],
+    /// XYZ (XYZ buffer).
+    pub xyz: [f32; 3],
+}
+
+/// A Fourier pixel: coefficient sums, XYZ sums and the sample count.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FourierPixel<const N: usize> {
+    coeffs: [f64; N],
+    xyz: [f64; 3],
+    count: f64,
+}
+
+fn gather_fourier<const N: usize>(scene: &Scene, lanes: &[LaneSpectrum; LANES]) -> FourierSpectrum<f32x8, N> {
+    let mut rows = [[0.0f32; N]; LANES];
+    for (row, lane) in rows.iter_mut().zip(lanes) {
+        match *lane {
+            LaneSpectrum::Zero => {}
+            LaneSpectrum::One => row[0] = 1.0,
+            LaneSpectrum::Scene(id) => {
+                if let Some(s) = scene.spectra.get(id as usize) {
+                    row.copy_from_slice(&s.coefficients_f32()[..N]);
+                }
+            }
+        }
+    }
+    FourierSpectrum::from_coeffs(core::array::from_fn(|j| f32x8::new(core::array::from_fn(|lane| rows[lane][j]))))
+}
+
+impl<const N: usize> Transport for FourierTransport<N> {
+    type Wavelengths = ();
+    type Spectra = FourierSpectrum<f32x8, N>;
+    type Sample = FourierSample<N>;
+    type Pixel = FourierPixel<N>;
+    type PassShared = ();
+
+    fn describe(&self) -> String {
+        format!("fourier N={N}")
+    }
+
+    fn empty_pixel(&self) -> Self::Pixel {
+        FourierPixel {
+            coeffs: [0.0; N],
+            xyz: [0.0; 3],
+            count: 0.0,
+        }
+    }
+
+    fn sample_wavelengths(&self, _rngs: &mut [Rng; LANES]) {}
+
+    fn one(&self) -> Self::Spectra {
+        FourierSpectrum::constant(f32x8::splat(1.0))
+    }
+
+    fn zero(&self) -> Self::Spectra {
+        FourierSpectrum::zero()
+    }
+
+    fn gather(&self, scene: &Scene, _wavelengths: &(), lanes: &[LaneSpectrum; LANES]) -> Self::Spectra {
+        gather_fourier(scene, lanes)
+    }
+
+    fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        a.product(b)
+    }
+
+    fn scale(&self, a: &Self::Spectra, weight: f32x8) -> Self::Spectra {
+        a.scale(weight)
+    }
+
+    fn add(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        *a + *b
+    }
+
+    fn mean(&self, a: &Self::Spectra) -> f32x8 {
+        a.mean()
+    }
+
+    fn samples(&self, radiance: &Self::Spectra, _wavelengths: &()) -> [Self::Sample; LANES] {
+        let coeffs: [[f32; N]; LANES] =
+            core::array::from_fn(|lane| core::array::from_fn(|j| radiance.coeffs[j].to_array()[lane]));
+        let xyz: [[f32; 3]; LANES] = match (self.buffer, self.route) {
+            (Buffer::Spectral, _) => [[0.0; 3]; LANES],
+            (Buffer::Xyz, XyzRoute::Mese) => core::array::from_fn(|lane| {
+                let c = radiance.lane(lane);
+                self.converter.mese(&c).map(|v| v as f32)
+            }),
+            (Buffer::Xyz, route) => {
+                let xyz = match route {
+                    XyzRoute::Series => self.converter.series(radiance),
+                    XyzRoute::Lut => self.converter.lut(radiance),
+                    _ => self.converter.zeroth(radiance),
+                };
+                core::array::from_fn(|lane| core::array::from_fn(|r| xyz[r].lane(lane) as f32))
+            }
+        };
+        core::array::from_fn(|lane| FourierSample {
+            coeffs: coeffs[lane],
+            xyz: xyz[lane],
+        })
+    }
+
+    fn sample_is_finite(sample: &Self::Sample) -> bool {
+        all_finite(&sample.coeffs) && all_finite(&sample.xyz)
+    }
+
+    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
+        match self.buffer {
+            Buffer::Spectral => {
+                for (acc, &c) in pixel.coeffs.iter_mut().zip(&sample.coeffs) {
+                    *acc += f64::from(c);
+                }
+            }
+            Buffer::Xyz => {
+                for (acc, &c) in pixel.xyz.iter_mut().zip(&sample.xyz) {
+                    *acc += f64::from(c);
+                }
+            }
+        }
+        pixel.count += 1.0;
+    }
+
+    fn pass_shared<'a>(&self, _pixels: &mut dyn Iterator<Item = &'a Self::Pixel>) -> Self::PassShared
+    where
+        Self::Pixel: 'a,
+    {
+    }
+
+    fn end_pass(&self, _pixel: &mut Self::Pixel, _shared: &()) {}
+
+    fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
+        if pixel.count == 0.0 {
+            return Xyz::default();
+        }
+        match self.buffer {
+            Buffer::Spectral => {
+                let mean = FourierSpectrum::from_coeffs(pixel.coeffs.map(|c| c / pixel.count));
+                self.converter.convert(self.route, &mean)
+            }
+            Buffer::Xyz => Xyz::from_array(pixel.xyz.map(|v| v / pixel.count)),
+        }
+    }
+
+    fn coefficients(&self, pixel: &Self::Pixel) -> Option<Vec<f64>> {
+        match self.buffer {
+            Buffer::Spectral if pixel.count > 0.0 => Some(pixel.coeffs.iter().map(|c| c / pixel.count).collect()),
+            Buffer::Spectral => Some(vec![0.0; N]),
+            Buffer::Xyz => None,
+        }
+    }
+}
+
+// ---------------------------------------------------------------- sampled
+
+/// Light as `C` sampled wavelengths per path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SampledTransport<const C: usize> {
+    strategy: WavelengthStrategy,
+    range: SpectralRange,
+}
+
+impl<const C: usize> SampledTransport<C> {
+    /// `C` wavelengths per path over `range`, drawn by `strategy`.
+    pub fn new(range: SpectralRange, strategy: WavelengthStrategy) -> Self {
+        Self { strategy, range }
+    }
+}
+
+/// A sampled pixel: XYZ sums and the sample count.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct XyzPixel {
+    xyz: [f64; 3],
+    count: f64,
+}
+
+fn gather_sampled<const C: usize>(
+    scene: &Scene,
+    wavelengths: &[SampledWavelengths<C>; LANES],
+    lanes: &[LaneSpectrum; LANES],
+) -> [f32x8; C] {
+    let mut values = [[0.0f32; LANES]; C];
+    for (lane, spectrum) in lanes.iter().enumerate() {
+        match *spectrum {
+            LaneSpectrum::Zero => {}
+            LaneSpectrum::One => {
+                for v in values.iter_mut() {
+                    v[lane] = 1.0;
+                }
+            }
+            LaneSpectrum::Scene(id) => {
+                if let Some(s) = scene.spectra.get(id as usize) {
+                    for (v, &l) in values.iter_mut().zip(wavelengths[lane].lambda_nm()) {
+                        v[lane] = s.value(l);
+                    }
+                }
+            }
+        }
+    }
+    values.map(f32x8::new)
+}
+
+fn sampled_lane<const C: usize>(values: &[f32x8; C], lane: usize) -> SampledSpectrum<C> {
+    SampledSpectrum {
+        values: core::array::from_fn(|i| values[i].to_array()[lane]),
+    }
+}
+
+impl<const C: usize> Transport for SampledTransport<C> {
+    type Wavelengths = [SampledWavelengths<C>; LANES];
+    type Spectra = [f32x8; C];
+    type Sample = [f32; 3];
+    type Pixel = XyzPixel;
+    type PassShared = ();
+
+    fn describe(&self) -> String {
+        format!("sampled C={C} {:?}", self.strategy)
+    }
+
+    fn empty_pixel(&self) -> Self::Pixel {
+        XyzPixel::default()
+    }
+
+    fn sample_wavelengths(&self, rngs: &mut [Rng; LANES]) -> Self::Wavelengths {
+        core::array::from_fn(|lane| {
+            let u: [f32; C] = core::array::from_fn(|_| rngs[lane].next_f32());
+            SampledWavelengths::sample(self.strategy, &self.range, u)
+        })
+    }
+
+    fn one(&self) -> Self::Spectra {
+        [f32x8::splat(1.0); C]
+    }
+
+    fn zero(&self) -> Self::Spectra {
+        [f32x8::splat(0.0); C]
+    }
+
+    fn gather(&self, scene: &Scene, wavelengths: &Self::Wavelengths, lanes: &[LaneSpectrum; LANES]) -> Self::Spectra {
+        gather_sampled(scene, wavelengths, lanes)
+    }
+
+    fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        core::array::from_fn(|i| a[i] * b[i])
+    }
+
+    fn scale(&self, a: &Self::Spectra, weight: f32x8) -> Self::Spectra {
+        a.map(|v| v * weight)
+    }
+
+    fn add(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        core::array::from_fn(|i| a[i] + b[i])
+    }
+
+    fn mean(&self, a: &Self::Spectra) -> f32x8 {
+        a.iter().fold(f32x8::splat(0.0), |acc, &v| acc + v) * f32x8::splat(1.0 / C as f32)
+    }
+
+    fn samples(&self, radiance: &Self::Spectra, wavelengths: &Self::Wavelengths) -> [Self::Sample; LANES] {
+        core::array::from_fn(|lane| {
+            sampled_lane(radiance, lane)
+                .to_xyz(&wavelengths[lane])
+                .to_array()
+                .map(|v| v as f32)
+        })
+    }
+
+    fn sample_is_finite(sample: &Self::Sample) -> bool {
+        all_finite(sample)
+    }
+
+    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
+        for (acc, &v) in pixel.xyz.iter_mut().zip(sample) {
+            *acc += f64::from(v);
+        }
+        pixel.count += 1.0;
+    }
+
+    fn pass_shared<'a>(&self, _pixels: &mut dyn Iterator<Item = &'a Self::Pixel>) -> Self::PassShared
+    where
+        Self::Pixel: 'a,
+    {
+    }
+
+    fn end_pass(&self, _pixel: &mut Self::Pixel, _shared: &()) {}
+
+    fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
+        if pixel.count == 0.0 {
+            return Xyz::default();
+        }
+        Xyz::from_array(pixel.xyz.map(|v| v / pixel.count))
+    }
+}
+
+// ---------------------------------------------------------------- control variate
+
+/// Where the control-variate coefficient `α` comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AlphaMode {
+    /// Each pixel's own earlier passes (noisy with few samples per pixel).
+    PerPixel,
+    /// The earlier passes of all pixels pooled, one `α` per XYZ channel.
+    Shared,
+}
+
+/// Sampled wavelengths with the Fourier estimate as a control variate.
+#[derive(Debug, Clone)]
+pub struct ControlVariateTransport<const C: usize, const N: usize> {
+    fourier: FourierTransport<N>,
+    sampled: SampledTransport<C>,
+    range: SpectralRange,
+    alpha: AlphaMode,
+}
+
+impl<const C: usize, const N: usize> ControlVariateTransport<C, N> {
+    /// `C` wavelengths by `strategy` plus `N` coefficients over `range`.
+    pub fn new(range: SpectralRange, strategy: WavelengthStrategy, alpha: AlphaMode) -> Result<Self, SpectralError> {
+        Ok(Self {
+            fourier: FourierTransport::new(range, Buffer::Xyz, XyzRoute::Zeroth)?,
+            sampled: SampledTransport::new(range, strategy),
+            range,
+            alpha,
+        })
+    }
+}
+
+/// One control-variate sample: `Y`, `C` and `μ` in XYZ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CvSample {
+    /// Sampled estimate.
+    pub y: [f32; 3],
+    /// Fourier spectrum through the same estimator.
+    pub c: [f32; 3],
+    /// Exact XYZ of the Fourier spectrum.
+    pub mu: [f32; 3],
+}
+
+/// A control-variate pixel.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct CvPixel {
+    channels: [ControlVariate; 3],
+}
+
+impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N> {
+    type Wavelengths = [SampledWavelengths<C>; LANES];
+    type Spectra = (FourierSpectrum<f32x8, N>, [f32x8; C]);
+    type Sample = CvSample;
+    type Pixel = CvPixel;
+    type PassShared = Option<[f64; 3]>;
+
+    fn describe(&self) -> String {
+        format!("control variate C={C} N={N} {:?}", self.sampled.strategy)
+    }
+
+    fn empty_pixel(&self) -> Self::Pixel {
+        CvPixel::default()
+    }
+
+    fn sample_wavelengths(&self, rngs: &mut [Rng; LANES]) -> Self::Wavelengths {
+        self.sampled.sample_wavelengths(rngs)
+    }
+
+    fn one(&self) -> Self::Spectra {
+        (self.fourier.one(), self.sampled.one())
+    }
+
+    fn zero(&self) -> Self::Spectra {
+        (self.fourier.zero(), self.sampled.zero())
+    }
+
+    fn gather(&self, scene: &Scene, wavelengths: &Self::Wavelengths, lanes: &[LaneSpectrum; LANES]) -> Self::Spectra {
+        (gather_fourier(scene, lanes), gather_sampled(scene, wavelengths, lanes))
+    }
+
+    fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        (self.fourier.mul(&a.0, &b.0), self.sampled.mul(&a.1, &b.1))
+    }
+
+    fn scale(&self, a: &Self::Spectra, weight: f32x8) -> Self::Spectra {
+        (self.fourier.scale(&a.0, weight), self.sampled.scale(&a.1, weight))
+    }
+
+    fn add(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        (self.fourier.add(&a.0, &b.0), self.sampled.add(&a.1, &b.1))
+    }
+
+    fn mean(&self, a: &Self::Spectra) -> f32x8 {
+        self.sampled.mean(&a.1)
+    }
+
+    fn samples(&self, radiance: &Self::Spectra, wavelengths: &Self::Wavelengths) -> [Self::Sample; LANES] {
+        let mu = self.fourier.converter.zeroth(&radiance.0);
+        core::array::from_fn(|lane| {
+            let w = &wavelengths[lane];
+            let y = sampled_lane(&radiance.1, lane).to_xyz(w);
+            let series: FourierSpectrum<f32, N> =
+                FourierSpectrum::from_coeffs(core::array::from_fn(|j| radiance.0.coeffs[j].to_array()[lane]));
+            let c = SampledSpectrum::from_fourier(&series, &self.range, w).to_xyz(w);
+            CvSample {
+                y: y.to_array().map(|v| v as f32),
+                c: c.to_array().map(|v| v as f32),
+                mu: core::array::from_fn(|r| mu[r].lane(lane) as f32),
+            }
+        })
+    }
+
+    fn sample_is_finite(sample: &Self::Sample) -> bool {
+        all_finite(&sample.y) && all_finite(&sample.c) && all_finite(&sample.mu)
+    }
+
+    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
+        for (r, channel) in pixel.channels.iter_mut().enumerate() {
+            channel.add(f64::from(sample.y[r]), f64::from(sample.c[r]), f64::from(sample.mu[r]));
+        }
+    }
+
+    fn pass_shared<'a>(&self, pixels: &mut dyn Iterator<Item = &'a Self::Pixel>) -> Self::PassShared
+    where
+        Self::Pixel: 'a,
+    {
+        match self.alpha {
+            AlphaMode::PerPixel => None,
+            AlphaMode::Shared => {
+                let mut pooled = [AlphaStatistics::default(); 3];
+                for pixel in pixels {
+                    for (p, channel) in pooled.iter_mut().zip(&pixel.channels) {
+                        p.merge(channel.statistics());
+                    }
+                }
+                Some(pooled.map(|p| p.alpha()))
+            }
+        }
+    }
+
+    fn end_pass(&self, pixel: &mut Self::Pixel, shared: &Self::PassShared) {
+        for (r, channel) in pixel.channels.iter_mut().enumerate() {
+            match shared {
+                Some(alpha) => channel.end_batch_with_alpha(alpha[r]),
+                None => channel.end_batch(),
+            }
+        }
+    }
+
+    fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
+        Xyz::from_array(core::array::from_fn(|r| pixel.channels[r].estimate()))
+    }
+}

@@ -1,0 +1,824 @@
+//! Oracle tests of `simd_tracer::bvh`: the 8-wide packet traversal against
+//! `obvhs`'s single-ray traversal (`Bvh::intersect` / `Bvh::occluded`), the
+//! BVH invariants, inactive lanes and degenerate triangles.
+
+use std::sync::OnceLock;
+
+use glam::Vec3;
+use proptest::prelude::*;
+use simd_tracer::bvh::{Bvh, Hit, NO_TRIANGLE};
+use simd_tracer::packet::{LANES, LaneMask, Ray, RayPacket};
+
+// ---------------------------------------------------------------------------
+// Scenes.
+
+/// SplitMix64, a tiny deterministic generator for scene and ray sets.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `[0, 1)`.
+    fn unit(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    /// Uniform in `[lo, hi)`.
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+
+    fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
+        Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+    }
+
+    fn index(&mut self, len: usize) -> usize {
+        (self.next_u64() % len.max(1) as u64) as usize
+    }
+}
+
+/// `count` random triangles with centres in `[-1, 1]³` and edges up to ~0.6.
+fn random_soup(count: usize, seed: u64) -> Vec<[Vec3; 3]> {
+    let mut rng = SplitMix(seed);
+    (0..count)
+        .map(|_| {
+            let centre = rng.vec(-1.0, 1.0);
+            [
+                centre + rng.vec(-0.3, 0.3),
+                centre + rng.vec(-0.3, 0.3),
+                centre + rng.vec(-0.3, 0.3),
+            ]
+        })
+        .collect()
+}
+
+/// A quad `a b c d` (counter-clockwise) as two triangles.
+fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> [[Vec3; 3]; 2] {
+    [[a, b, c], [a, c, d]]
+}
+
+/// A closed axis-aligned box: 6 quads, 12 triangles.
+fn closed_box(min: Vec3, max: Vec3) -> Vec<[Vec3; 3]> {
+    let c = |x: bool, y: bool, z: bool| {
+        Vec3::new(
+            if x { max.x } else { min.x },
+            if y { max.y } else { min.y },
+            if z { max.z } else { min.z },
+        )
+    };
+    let (f, t) = (false, true);
+    [
+        quad(c(f, f, f), c(f, t, f), c(f, t, t), c(f, f, t)),
+        quad(c(t, f, f), c(t, f, t), c(t, t, t), c(t, t, f)),
+        quad(c(f, f, f), c(f, f, t), c(t, f, t), c(t, f, f)),
+        quad(c(f, t, f), c(t, t, f), c(t, t, t), c(f, t, t)),
+        quad(c(f, f, f), c(t, f, f), c(t, t, f), c(f, t, f)),
+        quad(c(f, f, t), c(f, t, t), c(t, t, t), c(t, f, t)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// The Cornell box of `scenes/cornell` (Mitsuba 3's), 18 quads inlined.
+fn cornell_box() -> Vec<[Vec3; 3]> {
+    let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let q = |p: [[f32; 3]; 4]| {
+        let [a, b, c, d] = p.map(|[x, y, z]| v(x, y, z));
+        quad(a, b, c, d)
+    };
+    let (s0, s1, s2, s3) = (
+        [-0.039_603, 0.579_18],
+        [0.135_820_1, 0.005_397],
+        [0.709_603, 0.180_82],
+        [0.534_18, 0.754_603],
+    );
+    let (l0, l1, l2, l3) = (
+        [-0.520_960_6, 0.098_858_9],
+        [-0.708_858_9, -0.470_960_6],
+        [-0.139_039_4, -0.658_858_9],
+        [0.048_858_9, -0.089_039_4],
+    );
+    let side = |a: [f32; 2], b: [f32; 2], y0: f32, y1: f32| {
+        q([
+            [a[0], y0, a[1]],
+            [b[0], y0, b[1]],
+            [b[0], y1, b[1]],
+            [a[0], y1, a[1]],
+        ])
+    };
+    let cap = |p: [[f32; 2]; 4], y: f32| q(p.map(|[x, z]| [x, y, z]));
+    let mut quads = vec![
+        q([
+            [-1.0, -1.0, 1.0],
+            [1.0, -1.0, 1.0],
+            [1.0, -1.0, -1.0],
+            [-1.0, -1.0, -1.0],
+        ]),
+        q([
+            [-1.0, 1.0, -1.0],
+            [1.0, 1.0, -1.0],
+            [1.0, 1.0, 1.0],
+            [-1.0, 1.0, 1.0],
+        ]),
+        q([
+            [-1.0, -1.0, -1.0],
+            [1.0, -1.0, -1.0],
+            [1.0, 1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+        ]),
+        q([
+            [1.0, -1.0, -1.0],
+            [1.0, -1.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [1.0, 1.0, -1.0],
+        ]),
+        q([
+            [-1.0, -1.0, 1.0],
+            [-1.0, -1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, 1.0, 1.0],
+        ]),
+        q([
+            [-0.23, 0.99, -0.18],
+            [0.23, 0.99, -0.18],
+            [0.23, 0.99, 0.2],
+            [-0.23, 0.99, 0.2],
+        ]),
+    ];
+    for (a, b) in [(s0, s1), (s1, s2), (s2, s3), (s3, s0)] {
+        quads.push(side(a, b, -1.0, -0.4));
+    }
+    quads.push(cap([s1, s2, s3, s0], -1.0));
+    quads.push(cap([s0, s3, s2, s1], -0.4));
+    for (a, b) in [(l0, l1), (l1, l2), (l2, l3), (l3, l0)] {
+        quads.push(side(a, b, -1.01, 0.21));
+    }
+    quads.push(cap([l1, l2, l3, l0], -1.01));
+    quads.push(cap([l0, l3, l2, l1], 0.21));
+    quads.into_iter().flatten().collect()
+}
+
+struct Scene {
+    triangles: Vec<[Vec3; 3]>,
+    bvh: Bvh,
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Scene {
+    fn new(triangles: Vec<[Vec3; 3]>) -> Self {
+        let bvh = Bvh::build(&triangles);
+        let (lo, hi) = triangles.iter().flatten().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        Self {
+            triangles,
+            bvh,
+            lo,
+            hi,
+        }
+    }
+}
+
+fn soup_scene() -> &'static Scene {
+    static SCENE: OnceLock<Scene> = OnceLock::new();
+    SCENE.get_or_init(|| Scene::new(random_soup(200, 7)))
+}
+
+fn box_scene() -> &'static Scene {
+    static SCENE: OnceLock<Scene> = OnceLock::new();
+    SCENE.get_or_init(|| Scene::new(closed_box(Vec3::splat(-1.0), Vec3::splat(1.0))))
+}
+
+fn cornell_scene() -> &'static Scene {
+    static SCENE: OnceLock<Scene> = OnceLock::new();
+    SCENE.get_or_init(|| Scene::new(cornell_box()))
+}
+
+// ---------------------------------------------------------------------------
+// Rays.
+
+/// A ray recipe, decoded against a scene by [`make_ray`].
+#[derive(Debug, Clone)]
+struct RaySpec {
+    /// 0: origin inside the scene box; 1: outside, aimed at the scene;
+    /// 2: grazing, in the plane of a triangle; 3: aimed at a vertex or an
+    /// edge point of a triangle (shared edges: ties).
+    kind: u8,
+    a: [f32; 3],
+    b: [f32; 3],
+    /// Direction components to zero (bit i = axis i).
+    zero_axes: u8,
+    /// Direction scale exponent (the direction is not normalised).
+    scale_exp: f32,
+    triangle: usize,
+    /// 0: infinite; 1: moderate; 2: tiny.
+    t_max_kind: u8,
+    t_max: f32,
+}
+
+fn ray_spec() -> impl Strategy<Value = RaySpec> {
+    let unit3 = || prop::array::uniform3(-1.0f32..1.0);
+    (
+        0u8..4,
+        unit3(),
+        unit3(),
+        prop_oneof![3 => Just(0u8), 1 => 1u8..7],
+        -2.0f32..2.0,
+        any::<usize>(),
+        0u8..3,
+        0.0f32..1.0,
+    )
+        .prop_map(
+            |(kind, a, b, zero_axes, scale_exp, triangle, t_max_kind, t_max)| RaySpec {
+                kind,
+                a,
+                b,
+                zero_axes,
+                scale_exp,
+                triangle,
+                t_max_kind,
+                t_max,
+            },
+        )
+}
+
+fn make_ray(scene: &Scene, spec: &RaySpec) -> Ray {
+    let a = Vec3::from_array(spec.a);
+    let b = Vec3::from_array(spec.b);
+    let centre = (scene.lo + scene.hi) * 0.5;
+    let half = (scene.hi - scene.lo) * 0.5;
+    let tri = scene.triangles[spec.triangle % scene.triangles.len()];
+    let (e1, e2) = (tri[1] - tri[0], tri[2] - tri[0]);
+    let (origin, mut direction) = match spec.kind {
+        0 => (centre + a * half, b),
+        1 => {
+            let away = if a.length() > 1e-3 {
+                a.normalize()
+            } else {
+                Vec3::X
+            };
+            let origin = centre + away * half.length() * 2.5;
+            (origin, centre + b * half * 0.7 - origin)
+        }
+        2 => (
+            tri[0] + e1 * (1.5 * a.x) + e2 * (1.5 * a.y),
+            e1 * b.x + e2 * b.y,
+        ),
+        _ => {
+            // Aim at a vertex, an edge point, or from a vertex outwards.
+            let target = match spec.triangle % 3 {
+                0 => tri[0],
+                1 => tri[0] + e1 * (0.5 + 0.5 * b.x),
+                _ => tri[1] + (tri[2] - tri[1]) * (0.5 + 0.5 * b.y),
+            };
+            let origin = centre + a * half * 1.5;
+            (origin, target - origin)
+        }
+    };
+    for axis in 0..3 {
+        if spec.zero_axes & (1 << axis) != 0 {
+            direction[axis] = 0.0;
+        }
+    }
+    if direction == Vec3::ZERO || !direction.is_finite() {
+        direction = Vec3::new(b.x.signum(), 0.0, 0.0);
+    }
+    let scale = 10f32.powf(spec.scale_exp);
+    let t_unit = half.length().max(1e-3) / (direction.length() * scale);
+    let t_max = match spec.t_max_kind {
+        0 => f32::INFINITY,
+        1 => t_unit * 4.0 * spec.t_max,
+        _ => t_unit * 1e-4 * spec.t_max,
+    };
+    Ray {
+        origin,
+        direction: direction * scale,
+        t_max,
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Comparison.
+
+/// `f64` Möller–Trumbore with slack, for judging ties.
+fn hits_near(tri: &[Vec3; 3], ray: &Ray, t: f32) -> bool {
+    let [v0, v1, v2] = tri.map(Vec3::as_dvec3);
+    let (o, d) = (ray.origin.as_dvec3(), ray.direction.as_dvec3());
+    let (e1, e2) = (v1 - v0, v2 - v0);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return false;
+    }
+    let s = o - v0;
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = d.dot(q) / det;
+    let th = e2.dot(q) / det;
+    let slack = 1e-4;
+    u >= -slack
+        && v >= -slack
+        && u + v <= 1.0 + slack
+        && (th - f64::from(t)).abs() <= 1e-3 * th.abs().max(1e-6)
+}
+
+fn relative_close(a: f32, b: f32, tolerance: f32) -> bool {
+    (a - b).abs() <= tolerance * a.abs().max(b.abs()).max(f32::MIN_POSITIVE)
+}
+
+/// Packet hit `p` against the oracle hit `s` of the same ray.
+fn same_hit(scene: &Scene, ray: &Ray, s: &Hit, p: &Hit) -> Result<(), String> {
+    if !relative_close(s.t, p.t, 1e-4) {
+        return Err(format!(
+            "t differs: scalar {s:?}, packet {p:?}, ray {ray:?}"
+        ));
+    }
+    if s.triangle == p.triangle {
+        if (s.u - p.u).abs() > 1e-4 || (s.v - p.v).abs() > 1e-4 {
+            return Err(format!("barycentrics differ: {s:?} vs {p:?}"));
+        }
+        return Ok(());
+    }
+    let tri = |i: u32| {
+        scene
+            .triangles
+            .get(i as usize)
+            .ok_or(format!("bad index {i}"))
+    };
+    if hits_near(tri(s.triangle)?, ray, s.t) && hits_near(tri(p.triangle)?, ray, p.t) {
+        Ok(()) // a genuine tie
+    } else {
+        Err(format!(
+            "different triangles, not a tie: scalar {s:?}, packet {p:?}, ray {ray:?}"
+        ))
+    }
+}
+
+fn lane_hit(hits: &simd_tracer::packet::PacketHit, lane: usize) -> Hit {
+    Hit {
+        t: hits.t.to_array()[lane],
+        u: hits.u.to_array()[lane],
+        v: hits.v.to_array()[lane],
+        triangle: hits.triangle[lane],
+    }
+}
+
+#[derive(Debug, Default)]
+struct Tally {
+    rays: usize,
+    hits: usize,
+    ties: usize,
+}
+
+/// Checks every query on `packet` against the per-ray oracle.
+fn check_packet(scene: &Scene, packet: &RayPacket, tally: &mut Tally) -> Result<(), String> {
+    let bvh = &scene.bvh;
+    let packed = bvh.intersect_packet(packet);
+    let per_lane = bvh.intersect_lanes(packet);
+    let blocked = bvh.occluded_packet(packet);
+    let active = packet.active;
+    for (name, mask) in [
+        ("intersect_packet", packed.hit),
+        ("intersect_lanes", per_lane.hit),
+        ("occluded_packet", blocked),
+    ] {
+        if !mask.and_not(active).is_empty() {
+            return Err(format!(
+                "{name} reports inactive lanes: {mask:?} of {active:?}"
+            ));
+        }
+    }
+    for lane in 0..LANES {
+        if !active.contains(lane) {
+            if packed.triangle[lane] != NO_TRIANGLE || per_lane.triangle[lane] != NO_TRIANGLE {
+                return Err(format!("inactive lane {lane} carries a triangle"));
+            }
+            continue;
+        }
+        let ray = packet.ray(lane);
+        let scalar = bvh.intersect(&ray);
+        let occluded = bvh.occluded(&ray);
+        tally.rays += 1;
+        if occluded != scalar.is_some() {
+            return Err(format!(
+                "occluded {occluded} but intersect {scalar:?}, ray {ray:?}"
+            ));
+        }
+        if blocked.contains(lane) != occluded {
+            return Err(format!(
+                "occluded_packet lane {lane} != occluded, ray {ray:?}"
+            ));
+        }
+        if per_lane.hit.contains(lane) != scalar.is_some() {
+            return Err(format!(
+                "intersect_lanes lane {lane} disagrees, ray {ray:?}"
+            ));
+        }
+        match (scalar, packed.hit.contains(lane)) {
+            (None, false) => {
+                let t = packed.t.to_array()[lane];
+                if t.to_bits() != ray.t_max.to_bits() || packed.triangle[lane] != NO_TRIANGLE {
+                    return Err(format!("miss lane {lane} has t {t} / triangle"));
+                }
+            }
+            (Some(s), true) => {
+                tally.hits += 1;
+                let p = lane_hit(&packed, lane);
+                if p.triangle != s.triangle {
+                    tally.ties += 1;
+                }
+                if lane_hit(&per_lane, lane) != s {
+                    return Err(format!("intersect_lanes differs from intersect: {s:?}"));
+                }
+                if !(p.t > 0.0 && p.t < ray.t_max) {
+                    return Err(format!("packet t {} outside (0, {})", p.t, ray.t_max));
+                }
+                same_hit(scene, &ray, &s, &p)?;
+            }
+            (s, p) => {
+                return Err(format!(
+                    "hit/miss differ: scalar {s:?}, packet hit {p} (t {}, triangle {}), ray {ray:?}",
+                    packed.t.to_array()[lane],
+                    packed.triangle[lane]
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn packet_from_specs(scene: &Scene, specs: &[RaySpec], active: u8) -> RayPacket {
+    let rays: Vec<Ray> = specs.iter().map(|s| make_ray(scene, s)).collect();
+    let mut packet = RayPacket::from_rays(&rays);
+    packet.active = LaneMask(active).and(packet.active);
+    packet
+}
+
+// ---------------------------------------------------------------------------
+// Tests.
+
+#[test]
+fn validate_accepts_random_soups_and_the_cornell_box() {
+    for (count, seed) in [(1, 1), (2, 2), (3, 3), (17, 4), (200, 5), (2000, 6)] {
+        let bvh = Bvh::build(&random_soup(count, seed));
+        assert_eq!(bvh.skipped_triangles(), 0);
+        assert_eq!(bvh.input_triangles(), count);
+        bvh.validate().unwrap();
+    }
+    let cornell = cornell_box();
+    assert_eq!(cornell.len(), 36);
+    let bvh = Bvh::build(&cornell);
+    assert_eq!(bvh.skipped_triangles(), 0);
+    bvh.validate().unwrap();
+    let (lo, hi) = bvh.bounds().unwrap();
+    assert_eq!(
+        (lo, hi),
+        (Vec3::new(-1.0, -1.01, -1.0), Vec3::new(1.0, 1.0, 1.0))
+    );
+    box_scene().bvh.validate().unwrap();
+    Bvh::build(&[]).validate().unwrap();
+}
+
+#[test]
+fn cornell_camera_rays_hit_the_expected_surfaces() {
+    let scene = cornell_scene();
+    let ray = |dir: Vec3| Ray {
+        origin: Vec3::new(0.0, 0.0, 3.9),
+        direction: dir,
+        t_max: f32::INFINITY,
+    };
+    // Above the boxes to the back wall (quad 2 = triangles 4, 5) at z = -1.
+    let hit = scene
+        .bvh
+        .intersect(&ray(Vec3::new(0.0, 0.5, -4.9)))
+        .unwrap();
+    assert!(relative_close(hit.t, 1.0, 1e-6), "{hit:?}");
+    assert!(hit.triangle == 4 || hit.triangle == 5, "{hit:?}");
+    // Straight ahead: the front of the tall box (quads 12..=15).
+    let hit = scene.bvh.intersect(&ray(Vec3::NEG_Z)).unwrap();
+    assert!((24..32).contains(&hit.triangle), "{hit:?}");
+    // Down onto the short box's top face (quad 11 = triangles 22, 23).
+    let target = Vec3::new(0.335, -0.4, 0.38);
+    let hit = scene
+        .bvh
+        .intersect(&ray(target - Vec3::new(0.0, 0.0, 3.9)))
+        .unwrap();
+    assert!(hit.triangle == 22 || hit.triangle == 23, "{hit:?}");
+    assert!(relative_close(hit.t, 1.0, 1e-5), "{hit:?}");
+}
+
+#[test]
+fn closed_box_is_watertight_from_inside() {
+    // Every ray from inside a closed box must hit it (both paths).
+    let scene = box_scene();
+    let mut rng = SplitMix(11);
+    let mut misses = 0;
+    for _ in 0..2000 {
+        let rays: Vec<Ray> = (0..LANES)
+            .map(|_| Ray {
+                origin: rng.vec(-0.99, 0.99),
+                direction: rng.vec(-1.0, 1.0),
+                t_max: f32::INFINITY,
+            })
+            .collect();
+        let packet = RayPacket::from_rays(&rays);
+        misses += LANES - scene.bvh.intersect_packet(&packet).hit.count();
+        misses += rays
+            .iter()
+            .filter(|r| scene.bvh.intersect(r).is_none())
+            .count();
+    }
+    assert_eq!(misses, 0);
+}
+
+fn random_specs(rng: &mut SplitMix) -> Vec<RaySpec> {
+    (0..LANES)
+        .map(|_| RaySpec {
+            kind: (rng.next_u64() % 4) as u8,
+            a: [
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ],
+            b: [
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ],
+            zero_axes: if rng.unit() < 0.25 {
+                (rng.next_u64() % 7 + 1) as u8
+            } else {
+                0
+            },
+            scale_exp: rng.range(-2.0, 2.0),
+            triangle: rng.index(usize::MAX),
+            t_max_kind: (rng.next_u64() % 3) as u8,
+            t_max: rng.unit(),
+        })
+        .collect()
+}
+
+#[test]
+fn packet_agrees_with_scalar_on_many_random_packets() {
+    for (name, scene) in [
+        ("soup", soup_scene()),
+        ("box", box_scene()),
+        ("cornell", cornell_scene()),
+    ] {
+        let mut rng = SplitMix(99);
+        let mut tally = Tally::default();
+        for _ in 0..3000 {
+            let specs = random_specs(&mut rng);
+            let packet = packet_from_specs(scene, &specs, 0xff);
+            if let Err(e) = check_packet(scene, &packet, &mut tally) {
+                panic!("{name}: {e}");
+            }
+        }
+        // Not vacuous: a good share of hits and of misses.
+        let hit_rate = tally.hits as f64 / tally.rays as f64;
+        assert!((0.2..0.95).contains(&hit_rate), "{name}: {tally:?}");
+        println!("{name}: {tally:?}");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 1000,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn packet_matches_scalar_on_random_soup(
+        specs in prop::collection::vec(ray_spec(), LANES),
+        active in prop_oneof![Just(0xffu8), any::<u8>()],
+    ) {
+        let scene = soup_scene();
+        let packet = packet_from_specs(scene, &specs, active);
+        let result = check_packet(scene, &packet, &mut Tally::default());
+        prop_assert!(result.is_ok(), "{:?}", result);
+    }
+
+    #[test]
+    fn packet_matches_scalar_on_closed_box(
+        specs in prop::collection::vec(ray_spec(), LANES),
+        active in prop_oneof![Just(0xffu8), any::<u8>()],
+    ) {
+        let scene = box_scene();
+        let packet = packet_from_specs(scene, &specs, active);
+        let result = check_packet(scene, &packet, &mut Tally::default());
+        prop_assert!(result.is_ok(), "{:?}", result);
+    }
+}
+
+#[test]
+fn rays_through_shared_diagonals_do_not_leak() {
+    // Rays aimed at points of the shared diagonal of every quad of the
+    // closed box and of the Cornell box must hit one of its two triangles
+    // (plain Möller–Trumbore misses some of these).
+    let mut rng = SplitMix(17);
+    for scene in [box_scene(), cornell_scene()] {
+        let mut rays = Vec::new();
+        for pair in scene.triangles.chunks(2) {
+            let (a, c) = (pair[0][0], pair[0][2]);
+            for _ in 0..200 {
+                let target = a + (c - a) * rng.range(0.01, 0.99);
+                let origin = rng.vec(-0.95, 0.95);
+                rays.push(Ray {
+                    origin,
+                    direction: target - origin,
+                    t_max: f32::INFINITY,
+                });
+            }
+        }
+        let mut leaks = 0;
+        for chunk in rays.chunks(LANES) {
+            let packet = RayPacket::from_rays(chunk);
+            leaks += chunk.len() - scene.bvh.intersect_packet(&packet).hit.count();
+            leaks += chunk
+                .iter()
+                .filter(|r| scene.bvh.intersect(r).is_none())
+                .count();
+            check_packet(scene, &packet, &mut Tally::default()).unwrap();
+        }
+        assert_eq!(leaks, 0, "{} of {} rays leaked", leaks, 2 * rays.len());
+    }
+}
+
+#[test]
+fn grazing_rays_in_a_face_plane_agree() {
+    // Rays exactly in the plane z = 1 of the top face, axis-parallel and not.
+    let scene = box_scene();
+    let mut tally = Tally::default();
+    let mut rng = SplitMix(5);
+    for _ in 0..500 {
+        let rays: Vec<Ray> = (0..LANES)
+            .map(|lane| {
+                let mut direction = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0);
+                if lane % 2 == 0 {
+                    direction[lane % 4 / 2] = 0.0;
+                }
+                Ray {
+                    origin: Vec3::new(rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), 1.0),
+                    direction,
+                    t_max: f32::INFINITY,
+                }
+            })
+            .collect();
+        let packet = RayPacket::from_rays(&rays);
+        check_packet(scene, &packet, &mut tally).unwrap();
+    }
+    assert!(tally.hits > 0, "{tally:?}");
+}
+
+#[test]
+fn inactive_lanes_are_never_hit() {
+    let scene = cornell_scene();
+    let hitting = Ray {
+        origin: Vec3::new(0.0, 0.0, 3.9),
+        direction: Vec3::NEG_Z,
+        t_max: f32::INFINITY,
+    };
+    let garbage = Ray {
+        origin: Vec3::splat(f32::NAN),
+        direction: Vec3::new(f32::NAN, 0.0, f32::INFINITY),
+        t_max: f32::NAN,
+    };
+    let mut rays = [hitting; LANES];
+    rays[3] = garbage;
+    rays[6] = garbage;
+    for mask in [0u8, 0b1, 0b1010_0101, 0b1000_0000, 0b1011_0111, 0xff] {
+        let mut packet = RayPacket::from_rays(&rays);
+        packet.active = LaneMask(mask);
+        let expected = LaneMask(mask).and_not(LaneMask(0b0100_1000));
+        let packed = scene.bvh.intersect_packet(&packet);
+        assert_eq!(packed.hit, expected, "mask {mask:#010b}");
+        assert_eq!(scene.bvh.intersect_lanes(&packet).hit, expected);
+        assert_eq!(scene.bvh.occluded_packet(&packet), expected);
+        assert_eq!(scene.bvh.occluded_lanes(&packet), expected);
+        for lane in 0..LANES {
+            assert_eq!(
+                packed.triangle[lane] != NO_TRIANGLE,
+                expected.contains(lane)
+            );
+        }
+    }
+    // A partly filled packet: the missing lanes are inactive.
+    let packet = RayPacket::from_rays(&rays[..2]);
+    assert_eq!(scene.bvh.intersect_packet(&packet).hit, LaneMask::first(2));
+}
+
+#[test]
+fn degenerate_triangles_are_skipped_and_never_hit() {
+    let mut triangles = random_soup(60, 21);
+    let a = Vec3::new(0.1, 0.2, 0.3);
+    let b = Vec3::new(0.5, -0.25, 0.75);
+    let degenerate = [
+        [a, a, b],                                        // repeated vertex
+        [b, b, b],                                        // a point
+        [Vec3::ZERO, Vec3::splat(1.0), Vec3::splat(2.0)], // collinear
+        [
+            Vec3::new(-1.0, 0.5, 0.0),
+            Vec3::new(0.0, 0.0, 0.25),
+            Vec3::new(1.0, -0.5, 0.5),
+        ], // collinear
+        [a, Vec3::new(f32::NAN, 0.0, 0.0), b],            // NaN vertex
+        [a, b, Vec3::new(0.0, f32::INFINITY, 0.0)],       // infinite vertex
+        [
+            Vec3::splat(-1e30),
+            Vec3::new(1e30, -1e30, 0.0),
+            Vec3::new(0.0, 1e30, 1e30),
+        ], // overflows
+    ];
+    let mut degenerate_indices = Vec::new();
+    for (k, tri) in degenerate.iter().enumerate() {
+        let at = k * 9;
+        triangles.insert(at, *tri);
+        degenerate_indices.push(at as u32);
+    }
+    let bvh = Bvh::build(&triangles);
+    assert_eq!(bvh.skipped_triangles(), degenerate.len());
+    assert_eq!(bvh.input_triangles(), triangles.len());
+    bvh.validate().unwrap();
+
+    let mut rng = SplitMix(3);
+    let mut hits = 0;
+    let mut rays = Vec::new();
+    // Rays aimed at the degenerate triangles' finite vertices and along the
+    // collinear ones, plus random rays.
+    for tri in &degenerate {
+        for p in tri
+            .iter()
+            .filter(|p| p.is_finite() && p.abs().max_element() < 10.0)
+        {
+            for _ in 0..16 {
+                let origin = rng.vec(-3.0, 3.0);
+                rays.push(Ray {
+                    origin,
+                    direction: *p - origin,
+                    t_max: f32::INFINITY,
+                });
+            }
+        }
+        if tri.iter().all(|p| p.is_finite()) {
+            rays.push(Ray {
+                origin: tri[0] - (tri[2] - tri[0]),
+                direction: tri[2] - tri[0],
+                t_max: 10.0,
+            });
+        }
+    }
+    for _ in 0..800 {
+        rays.push(Ray {
+            origin: rng.vec(-2.0, 2.0),
+            direction: rng.vec(-1.0, 1.0),
+            t_max: f32::INFINITY,
+        });
+    }
+    for chunk in rays.chunks(LANES) {
+        let packet = RayPacket::from_rays(chunk);
+        let packed = bvh.intersect_packet(&packet);
+        for (lane, ray) in chunk.iter().enumerate() {
+            let scalar = bvh.intersect(ray);
+            for t in [
+                scalar.map(|h| h.triangle),
+                packed.hit.contains(lane).then_some(packed.triangle[lane]),
+            ]
+            .into_iter()
+            .flatten()
+            {
+                assert!(
+                    !degenerate_indices.contains(&t),
+                    "degenerate triangle {t} hit by {ray:?}"
+                );
+                assert!((t as usize) < triangles.len());
+            }
+            hits += usize::from(scalar.is_some());
+        }
+    }
+    assert!(hits > 100, "only {hits} hits");
+
+    // All-degenerate input: an empty tree.
+    let bvh = Bvh::build(&degenerate);
+    assert_eq!(bvh.skipped_triangles(), degenerate.len());
+    bvh.validate().unwrap();
+    let ray = Ray {
+        origin: Vec3::new(0.0, 0.0, -5.0),
+        direction: Vec3::Z,
+        t_max: f32::INFINITY,
+    };
+    assert!(bvh.intersect(&ray).is_none());
+    assert!(
+        bvh.occluded_packet(&RayPacket::from_rays(&[ray]))
+            .is_empty()
+    );
+}
