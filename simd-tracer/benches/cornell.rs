@@ -6,14 +6,14 @@
 //! render, so criterion's "time" is the render time. Rays per second are
 //! printed once per configuration.
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{Criterion, criterion_group, criterion_main};
 use simd_tracer::integrator::IntegratorSettings;
-use simd_tracer::render::{render, RenderSettings};
+use simd_tracer::render::{RenderSettings, render};
 use simd_tracer::scene::Scene;
 use simd_tracer::transport::{Buffer, FourierTransport, SampledTransport, Transport};
+use spectral_core::SpectralRange;
 use spectral_core::sampling::WavelengthStrategy;
 use spectral_core::xyz::XyzRoute;
-use spectral_core::SpectralRange;
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -22,7 +22,10 @@ fn settings() -> RenderSettings {
         width: 512,
         height: 512,
         spp: 64,
-        integrator: IntegratorSettings { max_depth: 5, rr_depth: 5 },
+        integrator: IntegratorSettings {
+            max_depth: 5,
+            rr_depth: 5,
+        },
         ..RenderSettings::default()
     }
 }

@@ -44,7 +44,12 @@ impl std::error::Error for CameraError {}
 
 impl Camera {
     /// A camera at `position` looking at `target`.
-    pub fn look_at(position: Vec3, target: Vec3, up: Vec3, fov_deg: f32) -> Result<Self, CameraError> {
+    pub fn look_at(
+        position: Vec3,
+        target: Vec3,
+        up: Vec3,
+        fov_deg: f32,
+    ) -> Result<Self, CameraError> {
         if !(position.is_finite() && target.is_finite() && up.is_finite()) || position == target {
             return Err(CameraError::Degenerate);
         }
@@ -98,10 +103,19 @@ mod tests {
         // fov 90° along the smaller axis: the left edge is at 45°.
         let d = cam.direction(0.0, 50.0, 100, 100).normalize();
         assert!((d.x + std::f32::consts::FRAC_1_SQRT_2).abs() < 1e-6);
-        let d = cam.direction(50.0, 0.0, 200, 100).normalize();
+        let d = cam.direction(100.0, 0.0, 200, 100).normalize();
         assert!((d.y - std::f32::consts::FRAC_1_SQRT_2).abs() < 1e-6, "{d}");
-        assert_eq!(Camera::look_at(Vec3::ZERO, Vec3::Y, Vec3::Y, 40.0), Err(CameraError::UpParallel));
-        assert_eq!(Camera::look_at(Vec3::ZERO, Vec3::ZERO, Vec3::Y, 40.0), Err(CameraError::Degenerate));
-        assert_eq!(Camera::look_at(Vec3::ZERO, Vec3::X, Vec3::Y, 180.0), Err(CameraError::FieldOfView));
+        assert_eq!(
+            Camera::look_at(Vec3::ZERO, Vec3::Y, Vec3::Y, 40.0),
+            Err(CameraError::UpParallel)
+        );
+        assert_eq!(
+            Camera::look_at(Vec3::ZERO, Vec3::ZERO, Vec3::Y, 40.0),
+            Err(CameraError::Degenerate)
+        );
+        assert_eq!(
+            Camera::look_at(Vec3::ZERO, Vec3::X, Vec3::Y, 180.0),
+            Err(CameraError::FieldOfView)
+        );
     }
 }

@@ -110,7 +110,11 @@ impl GaussianSampler {
         let (c0, c1) = (self.cdf[segment], self.cdf[segment + 1]);
         let (f0, f1) = (self.values[segment], self.values[segment + 1]);
         let mass = c1 - c0;
-        let target = if mass > 0.0 { ((u - c0) / mass).clamp(0.0, 1.0) } else { 0.5 };
+        let target = if mass > 0.0 {
+            ((u - c0) / mass).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
         // Within the segment the density is f0 + (f1 − f0) t, t ∈ [0, 1];
         // solve ∫0^t = target ∫0^1 for t.
         let t = if (f1 - f0).abs() < 1e-6 * (f0 + f1).max(1e-30) {
@@ -138,7 +142,9 @@ mod tests {
     fn gaussian_offsets_have_the_filter_distribution() {
         let g = GaussianSampler::new(GAUSSIAN_SIGMA_PX, GAUSSIAN_RADIUS_PX);
         let n = 200_000;
-        let samples: Vec<f32> = (0..n).map(|i| g.sample((i as f32 + 0.5) / n as f32)).collect();
+        let samples: Vec<f32> = (0..n)
+            .map(|i| g.sample((i as f32 + 0.5) / n as f32))
+            .collect();
         assert!(samples.iter().all(|x| x.abs() <= GAUSSIAN_RADIUS_PX));
         let mean: f64 = samples.iter().map(|&x| f64::from(x)).sum::<f64>() / n as f64;
         let var: f64 = samples.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / n as f64;

@@ -26,10 +26,11 @@
 //! `min(0.95, mean spectral throughput)`.
 
 use crate::light::{emits_towards, light_pdf_solid_angle};
-use crate::material::LaneSpectrum;
-use crate::packet::{LaneMask, Ray, RayPacket, LANES};
+use crate::material::{Bsdf, LaneSpectrum, Material};
+use crate::packet::{LANES, LaneMask, RayPacket};
 use crate::rng::Rng;
 use crate::scene::{Scene, SpectrumId};
+use crate::simd::Vec3x8;
 use crate::transport::Transport;
 use glam::Vec3;
 use wide::f32x8;
@@ -102,20 +103,30 @@ impl<S: Copy> EmissionSums<S> {
             if done[lane] || weight[lane] == 0.0 {
                 continue;
             }
-            let lane_weights: [f32; LANES] =
-                core::array::from_fn(|l| if emission[l] == Some(id) { weight[l] } else { 0.0 });
+            let lane_weights: [f32; LANES] = core::array::from_fn(|l| {
+                if emission[l] == Some(id) {
+                    weight[l]
+                } else {
+                    0.0
+                }
+            });
             for (l, d) in done.iter_mut().enumerate() {
                 *d |= emission[l] == Some(id);
             }
             let scaled = transport.scale(value, f32x8::new(lane_weights));
             let slot = match self.ids.iter().position(|&s| s == Some(id)) {
                 Some(slot) => Some(slot),
-                None => self.ids.iter().position(Option::is_none).inspect(|&slot| self.ids[slot] = Some(id)),
+                None => self
+                    .ids
+                    .iter()
+                    .position(Option::is_none)
+                    .inspect(|&slot| self.ids[slot] = Some(id)),
             };
             match slot {
                 Some(slot) => self.sums[slot] = transport.add(&self.sums[slot], &scaled),
                 None => {
-                    let le = transport.gather(scene, wavelengths, &[LaneSpectrum::Scene(id); LANES]);
+                    let le =
+                        transport.gather(scene, wavelengths, &[LaneSpectrum::Scene(id); LANES]);
                     self.direct = transport.add(&self.direct, &transport.mul(&scaled, &le));
                 }
             }
@@ -123,7 +134,12 @@ impl<S: Copy> EmissionSums<S> {
     }
 
     /// The total radiance.
-    fn finish<T: Transport<Spectra = S>>(&self, transport: &T, scene: &Scene, wavelengths: &T::Wavelengths) -> S {
+    fn finish<T: Transport<Spectra = S>>(
+        &self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+    ) -> S {
         let mut radiance = self.direct;
         for (id, sum) in self.ids.iter().zip(&self.sums) {
             if let Some(id) = *id {
@@ -133,10 +149,6 @@ impl<S: Copy> EmissionSums<S> {
         }
         radiance
     }
-}
-
-fn offset(p: Vec3, n: Vec3) -> Vec3 {
-    p + n * (RAY_EPSILON * p.abs().max_element().max(1.0))
 }
 
 fn power_heuristic(a: f32, b: f32) -> f32 {
@@ -161,6 +173,31 @@ impl RayCounts {
     }
 }
 
+/// Per-lane uniform numbers from the lanes' streams (0 in idle lanes).
+fn uniforms(rngs: &mut [Rng; LANES], active: LaneMask) -> [f32; LANES] {
+    core::array::from_fn(|lane| {
+        if active.contains(lane) {
+            rngs[lane].next_f32()
+        } else {
+            0.0
+        }
+    })
+}
+
+/// Ray origins moved off the surface along `n`, relative to the
+/// coordinates' magnitude.
+fn offset_x8(p: Vec3x8, n: Vec3x8) -> Vec3x8 {
+    let scale = p.max_abs().max(f32x8::ONE) * f32x8::splat(RAY_EPSILON);
+    n.mul_add(scale, p)
+}
+
+/// Power heuristic `a²/(a² + b²)`, 0 where both are 0.
+fn power_heuristic_x8(a: f32x8, b: f32x8) -> f32x8 {
+    let (a2, b2) = (a * a, b * b);
+    let sum = a2 + b2;
+    sum.simd_gt(f32x8::ZERO).select(a2 / sum, f32x8::ZERO)
+}
+
 /// Traces one packet and returns the radiance each lane carries back.
 /// `rngs` drive path decisions per lane; `wavelengths` were drawn before;
 /// the rays cast are added to `counts`.
@@ -175,162 +212,206 @@ pub fn trace<T: Transport>(
 ) -> T::Spectra {
     let mut emitted = EmissionSums::new(transport);
     let mut throughput = transport.one();
-    let mut lane_rays: [Ray; LANES] = core::array::from_fn(|lane| camera_rays.ray(lane));
     let mut rays = *camera_rays;
     let mut active = camera_rays.active;
     // Solid-angle pdf of the BSDF sample that produced each lane's ray (0: no MIS).
-    let mut previous_pdf = [0.0f32; LANES];
+    let mut previous_pdf = f32x8::ZERO;
     let mut depth = 1u32;
     while !active.is_empty() {
         rays.active = active;
         counts.closest += active.count() as u64;
         let hit = scene.bvh.intersect_packet(&rays);
-        let t = hit.t.to_array();
 
         // Escaped lanes see the environment (no NEE for it, so no MIS).
         let missed = active.and_not(hit.hit);
         if let (Some(env), false) = (scene.environment, missed.is_empty()) {
             let ids = core::array::from_fn(|lane| missed.contains(lane).then_some(env));
-            emitted.add(transport, scene, wavelengths, &throughput, &ids, &[1.0; LANES]);
+            emitted.add(
+                transport,
+                scene,
+                wavelengths,
+                &throughput,
+                &ids,
+                &[1.0; LANES],
+            );
         }
         active = active.and(hit.hit);
         if active.is_empty() {
             break;
         }
 
-        // Shading setup and emission at the hit points.
-        let mut position = [Vec3::ZERO; LANES];
-        let mut normal = [Vec3::ZERO; LANES];
-        let mut wo = [Vec3::ZERO; LANES];
+        // Shading frame, 8-wide.
+        let direction = Vec3x8::from_array(rays.direction);
+        let direction_length = direction.length();
+        let wo = -direction * (f32x8::ONE / direction_length);
+        let position = direction.mul_add(hit.t, Vec3x8::from_array(rays.origin));
+        let n_geometric = Vec3x8::from_fn(|lane| {
+            scene
+                .normals
+                .get(hit.triangle[lane] as usize)
+                .copied()
+                .unwrap_or(Vec3::Z)
+        });
+        let cos_o = n_geometric.dot(wo);
+        let normal = Vec3x8::select(cos_o.simd_ge(f32x8::ZERO), n_geometric, -n_geometric);
+        let materials: [Option<&Material>; LANES] = core::array::from_fn(|lane| {
+            if active.contains(lane) {
+                scene
+                    .triangle_material
+                    .get(hit.triangle[lane] as usize)
+                    .and_then(|&m| scene.materials.get(m as usize))
+            } else {
+                None
+            }
+        });
+
+        // Emission at the hit points, MIS-weighted against NEE.
         let mut emission = [None; LANES];
         let mut emission_weight = [0.0f32; LANES];
+        let (cos_o_lanes, t, length, previous) = (
+            cos_o.to_array(),
+            hit.t.to_array(),
+            direction_length.to_array(),
+            previous_pdf.to_array(),
+        );
         for lane in active.iter() {
-            let ray = &lane_rays[lane];
-            let triangle = hit.triangle[lane] as usize;
-            let direction_length = ray.direction.length();
-            let w = -ray.direction / direction_length;
-            let n_geometric = scene.normals[triangle];
-            let cos_o = n_geometric.dot(w);
-            position[lane] = ray.origin + ray.direction * t[lane];
-            wo[lane] = w;
-            normal[lane] = if cos_o >= 0.0 { n_geometric } else { -n_geometric };
-            let material = &scene.materials[scene.triangle_material[triangle] as usize];
-            if let Some(e) = material.emission {
-                if emits_towards(material.two_sided, cos_o) {
-                    emission[lane] = Some(e);
-                    emission_weight[lane] = if previous_pdf[lane] > 0.0 {
-                        let distance = t[lane] * direction_length;
-                        let p_light = light_pdf_solid_angle(
-                            scene.lights.pmf_of_triangle(triangle as u32),
-                            scene.area(triangle),
-                            distance * distance,
-                            cos_o,
-                        );
-                        power_heuristic(previous_pdf[lane], p_light)
-                    } else {
-                        1.0
-                    };
-                }
+            let Some(material) = materials[lane] else {
+                continue;
+            };
+            let Some(e) = material.emission else {
+                continue;
+            };
+            if !emits_towards(material.two_sided, cos_o_lanes[lane]) {
+                continue;
             }
+            let triangle = hit.triangle[lane];
+            emission[lane] = Some(e);
+            emission_weight[lane] = if previous[lane] > 0.0 {
+                let distance = t[lane] * length[lane];
+                let p_light = light_pdf_solid_angle(
+                    scene.lights.pmf_of_triangle(triangle),
+                    scene.area(triangle as usize),
+                    distance * distance,
+                    cos_o_lanes[lane],
+                );
+                power_heuristic(previous[lane], p_light)
+            } else {
+                1.0
+            };
         }
-        emitted.add(transport, scene, wavelengths, &throughput, &emission, &emission_weight);
+        emitted.add(
+            transport,
+            scene,
+            wavelengths,
+            &throughput,
+            &emission,
+            &emission_weight,
+        );
         if depth >= settings.max_depth {
             break;
         }
+        let bsdfs: [Option<&Bsdf>; LANES] = materials.map(|m| m.map(|m| &m.bsdf));
+        let origin = offset_x8(position, normal);
 
         // Next-event estimation: one light sample per lane, one shadow packet.
-        let mut shadow_rays = [Ray {
-            origin: Vec3::ZERO,
-            direction: Vec3::Z,
-            t_max: 0.0,
-        }; LANES];
-        let mut nee_lanes = LaneMask::NONE;
-        let mut nee_bsdf = [LaneSpectrum::Zero; LANES];
+        let u_light = uniforms(rngs, active);
+        let (u, v) = (
+            f32x8::new(uniforms(rngs, active)),
+            f32x8::new(uniforms(rngs, active)),
+        );
+        let light =
+            scene
+                .lights
+                .sample_packet(&scene.triangles, &scene.normals, active, &u_light, u, v);
+        let to_light = light.point - origin;
+        let distance_sq = to_light.length_squared();
+        let wi = to_light * (f32x8::ONE / distance_sq.sqrt());
+        let cos_light = -light.normal.dot(wi);
+        let eval = Bsdf::eval_packet(&bsdfs, light.valid, normal, wo, wi);
+        let p_light = light.pmf * distance_sq / (light.area * cos_light.abs());
         let mut nee_light = [None; LANES];
-        let mut nee_weight = [0.0f32; LANES];
-        for lane in active.iter() {
-            let rng = &mut rngs[lane];
-            let (u_light, u, v) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
-            let Some(sample) = scene.lights.sample(&scene.triangles, &scene.normals, u_light, u, v) else {
-                continue;
-            };
-            let light_material = &scene.materials[scene.triangle_material[sample.triangle as usize] as usize];
-            let Some(light_emission) = light_material.emission else {
-                continue;
-            };
-            let origin = offset(position[lane], normal[lane]);
-            let to_light = sample.point - origin;
-            let distance_sq = to_light.length_squared();
-            if !(distance_sq > 0.0) {
-                continue;
+        let mut emits = LaneMask::NONE;
+        for lane in light.valid.iter() {
+            let light_material = scene
+                .triangle_material
+                .get(light.triangle[lane] as usize)
+                .and_then(|&m| scene.materials.get(m as usize));
+            if let Some(m) = light_material {
+                if emits_towards(m.two_sided, cos_light.to_array()[lane]) {
+                    nee_light[lane] = m.emission;
+                    emits = emits.with(lane);
+                }
             }
-            let wi = to_light / distance_sq.sqrt();
-            let cos_light = -sample.normal.dot(wi);
-            if !emits_towards(light_material.two_sided, cos_light) {
-                continue;
-            }
-            let material = &scene.materials[scene.triangle_material[hit.triangle[lane] as usize] as usize];
-            let eval = material.bsdf.eval(normal[lane], wo[lane], wi);
-            let p_light = light_pdf_solid_angle(sample.pmf, sample.area, distance_sq, cos_light);
-            if eval.value <= 0.0 || !(p_light > 0.0) {
-                continue;
-            }
-            shadow_rays[lane] = Ray {
-                origin,
-                direction: to_light,
-                t_max: 1.0 - SHADOW_EPSILON,
-            };
-            nee_lanes = nee_lanes.with(lane);
-            nee_bsdf[lane] = eval.spectrum;
-            nee_light[lane] = Some(light_emission);
-            nee_weight[lane] = eval.value * power_heuristic(p_light, eval.pdf) / p_light;
         }
+        let usable = eval.value.simd_gt(f32x8::ZERO)
+            & p_light.simd_gt(f32x8::ZERO)
+            & distance_sq.simd_gt(f32x8::ZERO);
+        let nee_lanes = emits.and(LaneMask::from_simd(usable));
+        let mut nee_weight = nee_lanes
+            .to_simd()
+            .select(
+                eval.value * power_heuristic_x8(p_light, eval.pdf) / p_light,
+                f32x8::ZERO,
+            )
+            .to_array();
         if !nee_lanes.is_empty() {
-            let mut packet = RayPacket::from_rays(&shadow_rays);
-            packet.active = nee_lanes;
+            let shadow = RayPacket {
+                origin: origin.to_array(),
+                direction: to_light.to_array(),
+                t_max: f32x8::splat(1.0 - SHADOW_EPSILON),
+                active: nee_lanes,
+            };
             counts.shadow += nee_lanes.count() as u64;
-            for lane in scene.bvh.occluded_packet(&packet).iter() {
+            for lane in scene.bvh.occluded_packet(&shadow).iter() {
                 nee_weight[lane] = 0.0;
             }
         }
 
         // BSDF sampling for the continuation.
-        let mut sample_spectrum = [LaneSpectrum::Zero; LANES];
-        let mut sample_weight = [0.0f32; LANES];
-        for lane in active.iter() {
-            let rng = &mut rngs[lane];
-            let (u, v) = (rng.next_f32(), rng.next_f32());
-            let material = &scene.materials[scene.triangle_material[hit.triangle[lane] as usize] as usize];
-            match material.bsdf.sample(normal[lane], wo[lane], u, v) {
-                Some(s) if s.weight > 0.0 => {
-                    let side = if s.wi.dot(normal[lane]) >= 0.0 { normal[lane] } else { -normal[lane] };
-                    lane_rays[lane] = Ray {
-                        origin: offset(position[lane], side),
-                        direction: s.wi,
-                        t_max: f32::INFINITY,
-                    };
-                    previous_pdf[lane] = s.pdf;
-                    sample_spectrum[lane] = s.spectrum;
-                    sample_weight[lane] = s.weight;
-                }
-                _ => active = active.without(lane),
-            }
-        }
+        let (u, v) = (
+            f32x8::new(uniforms(rngs, active)),
+            f32x8::new(uniforms(rngs, active)),
+        );
+        let sample = Bsdf::sample_packet(&bsdfs, active, normal, wo, u, v);
+        active = active
+            .and(sample.valid)
+            .and(LaneMask::from_simd(sample.weight.simd_gt(f32x8::ZERO)));
+        let below = sample.wi.dot(normal).simd_lt(f32x8::ZERO);
+        let next_origin = Vec3x8::select(below, offset_x8(position, -normal), origin);
+        previous_pdf = sample.pdf;
 
         // The one truncated product of the bounce: T ⊛ f(sampled direction).
-        let throughput_bsdf = transport.mul(&throughput, &transport.gather(scene, wavelengths, &sample_spectrum));
+        let throughput_bsdf = transport.mul(
+            &throughput,
+            &transport.gather(scene, wavelengths, &sample.spectrum),
+        );
         if nee_weight.iter().any(|&w| w > 0.0) {
             // Angle-independent BSDFs (Lambert) have the same factor for the
             // NEE direction: reuse the product.
-            let shared = (0..LANES).all(|lane| nee_weight[lane] == 0.0 || nee_bsdf[lane] == sample_spectrum[lane]);
+            let shared = (0..LANES).all(|lane| {
+                nee_weight[lane] == 0.0 || eval.spectrum[lane] == sample.spectrum[lane]
+            });
             let through_bsdf = if shared {
                 throughput_bsdf
             } else {
-                transport.mul(&throughput, &transport.gather(scene, wavelengths, &nee_bsdf))
+                transport.mul(
+                    &throughput,
+                    &transport.gather(scene, wavelengths, &eval.spectrum),
+                )
             };
-            emitted.add(transport, scene, wavelengths, &through_bsdf, &nee_light, &nee_weight);
+            emitted.add(
+                transport,
+                scene,
+                wavelengths,
+                &through_bsdf,
+                &nee_light,
+                &nee_weight,
+            );
         }
-        throughput = transport.scale(&throughput_bsdf, f32x8::new(sample_weight));
+        throughput = transport.scale(
+            &throughput_bsdf,
+            active.to_simd().select(sample.weight, f32x8::ZERO),
+        );
         depth += 1;
 
         // Russian roulette.
@@ -347,7 +428,12 @@ pub fn trace<T: Transport>(
             }
             throughput = transport.scale(&throughput, f32x8::new(survival));
         }
-        rays = RayPacket::from_rays(&lane_rays);
+        rays = RayPacket {
+            origin: next_origin.to_array(),
+            direction: sample.wi.to_array(),
+            t_max: f32x8::splat(f32::INFINITY),
+            active,
+        };
     }
     emitted.finish(transport, scene, wavelengths)
 }

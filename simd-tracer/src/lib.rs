@@ -23,6 +23,7 @@ pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod scenes;
+pub mod simd;
 pub mod spectra;
 pub mod transport;
 

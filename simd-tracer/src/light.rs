@@ -7,9 +7,12 @@
 //! same expression MIS uses when a BSDF-sampled ray hits the light.
 
 use crate::material::Material;
+use crate::packet::{LANES, LaneMask};
+use crate::simd::Vec3x8;
 use crate::spectra::SceneSpectrum;
 use glam::Vec3;
 use std::f32::consts::PI;
+use wide::f32x8;
 
 /// No light on this triangle.
 const NOT_A_LIGHT: u32 = u32::MAX;
@@ -59,7 +62,9 @@ impl LightSet {
             let Some(emission) = material.emission else {
                 continue;
             };
-            let mean = spectra.get(emission as usize).map_or(0.0, SceneSpectrum::mean);
+            let mean = spectra
+                .get(emission as usize)
+                .map_or(0.0, SceneSpectrum::mean);
             let area = 0.5 * (tri[1] - tri[0]).cross(tri[2] - tri[0]).length();
             let sides = if material.two_sided { 2.0 } else { 1.0 };
             let power = f64::from(area) * PI as f64 * mean * sides;
@@ -102,11 +107,21 @@ impl LightSet {
     }
 
     /// Picks a light with `u_light` and a point on it with `(u, v)`.
-    pub fn sample(&self, triangles: &[[Vec3; 3]], normals: &[Vec3], u_light: f32, u: f32, v: f32) -> Option<LightSample> {
+    pub fn sample(
+        &self,
+        triangles: &[[Vec3; 3]],
+        normals: &[Vec3],
+        u_light: f32,
+        u: f32,
+        v: f32,
+    ) -> Option<LightSample> {
         if self.triangles.is_empty() {
             return None;
         }
-        let light = self.cdf.partition_point(|&c| c <= u_light).min(self.triangles.len() - 1);
+        let light = self
+            .cdf
+            .partition_point(|&c| c <= u_light)
+            .min(self.triangles.len() - 1);
         let triangle = self.triangles[light];
         let [a, b, c] = *triangles.get(triangle as usize)?;
         let su = u.sqrt();
@@ -119,6 +134,78 @@ impl LightSet {
             pmf: self.pmf[light],
             area: self.areas[light],
         })
+    }
+}
+
+/// Light samples for a packet.
+#[derive(Debug, Clone, Copy)]
+pub struct LightSamplePacket {
+    /// Points on the lights.
+    pub point: Vec3x8,
+    /// Unit normals there.
+    pub normal: Vec3x8,
+    /// Probabilities of the chosen lights.
+    pub pmf: f32x8,
+    /// Areas of the chosen triangles.
+    pub area: f32x8,
+    /// Chosen triangles.
+    pub triangle: [u32; LANES],
+    /// Lanes with a sample.
+    pub valid: LaneMask,
+}
+
+impl LightSet {
+    /// [`LightSet::sample`] for the active lanes of a packet: the light
+    /// choice per lane, the point on it 8-wide.
+    pub fn sample_packet(
+        &self,
+        triangles: &[[Vec3; 3]],
+        normals: &[Vec3],
+        active: LaneMask,
+        u_light: &[f32; LANES],
+        u: f32x8,
+        v: f32x8,
+    ) -> LightSamplePacket {
+        let mut corners = [[Vec3::ZERO; LANES]; 3];
+        let mut normal = [Vec3::Z; LANES];
+        let mut pmf = [0.0f32; LANES];
+        let mut area = [0.0f32; LANES];
+        let mut triangle = [0u32; LANES];
+        let mut valid = LaneMask::NONE;
+        if !self.triangles.is_empty() {
+            for lane in active.iter() {
+                let light = self
+                    .cdf
+                    .partition_point(|&c| c <= u_light[lane])
+                    .min(self.triangles.len() - 1);
+                let index = self.triangles[light];
+                if let (Some(tri), Some(&n)) =
+                    (triangles.get(index as usize), normals.get(index as usize))
+                {
+                    for (corner, &vertex) in corners.iter_mut().zip(tri) {
+                        corner[lane] = vertex;
+                    }
+                    normal[lane] = n;
+                    pmf[lane] = self.pmf[light];
+                    area[lane] = self.areas[light];
+                    triangle[lane] = index;
+                    valid = valid.with(lane);
+                }
+            }
+        }
+        let su = u.sqrt();
+        let b0 = f32x8::ONE - su;
+        let b1 = v * su;
+        let b2 = f32x8::ONE - b0 - b1;
+        let [a, b, c] = corners.map(|lanes| Vec3x8::from_lanes(&lanes));
+        LightSamplePacket {
+            point: a * b0 + b * b1 + c * b2,
+            normal: Vec3x8::from_lanes(&normal),
+            pmf: f32x8::new(pmf),
+            area: f32x8::new(area),
+            triangle,
+            valid,
+        }
     }
 }
 
@@ -157,9 +244,15 @@ mod tests {
         let mut bright = Material::lambert("bright", 0);
         bright.emission = Some(1);
         let grey = Material::lambert("grey", 0);
-        let tri = |x: f32| [Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 0.0, 0.0), Vec3::new(x, 1.0, 0.0)];
+        let tri = |x: f32| {
+            [
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 1.0, 0.0, 0.0),
+                Vec3::new(x, 1.0, 0.0),
+            ]
+        };
         let triangles = vec![tri(0.0), tri(2.0), tri(4.0)];
-        let set = LightSet::new(&triangles, &[0, 2, 1], &[dim, grey, bright], &spectra);
+        let set = LightSet::new(&triangles, &[0, 1, 2], &[dim, grey, bright], &spectra);
         assert_eq!(set.len(), 2);
         assert!((set.pmf_of_triangle(0) - 0.25).abs() < 1e-6);
         assert_eq!(set.pmf_of_triangle(1), 0.0);
@@ -170,6 +263,8 @@ mod tests {
         assert!(s.point.x >= 4.0 && s.point.x <= 5.0 && s.point.y >= 0.0);
         assert!((light_pdf_solid_angle(0.5, 2.0, 4.0, 0.5) - 2.0).abs() < 1e-6);
         assert_eq!(light_pdf_solid_angle(0.5, 2.0, 4.0, 0.0), 0.0);
-        assert!(emits_towards(false, 0.1) && !emits_towards(false, -0.1) && emits_towards(true, -0.1));
+        assert!(
+            emits_towards(false, 0.1) && !emits_towards(false, -0.1) && emits_towards(true, -0.1)
+        );
     }
 }

@@ -72,7 +72,6 @@ fn load_options() -> tobj::LoadOptions {
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     }
 }
 
@@ -99,7 +98,9 @@ pub fn load_obj(
         }
     };
     let (models, materials) = result.map_err(|e| ObjError::Load(label.clone(), describe(&e)))?;
-    let materials = materials.map_err(|e| ObjError::Load(label.clone(), format!("material library: {}", describe(&e))))?;
+    let materials = materials.map_err(|e| {
+        ObjError::Load(label.clone(), format!("material library: {}", describe(&e)))
+    })?;
     let mut loaded = LoadedObj::default();
     let mut ids: Vec<MaterialId> = Vec::with_capacity(materials.len());
     for m in &materials {
@@ -155,9 +156,16 @@ fn check_colour(name: &str, key: &str, rgb: [f32; 3]) -> Result<[f64; 3], ObjErr
 
 /// The material an MTL entry describes (module docs).
 fn mtl_material(builder: &mut SceneBuilder, m: &tobj::Material) -> Result<MaterialId, ObjError> {
-    let kd = check_colour(&m.name, "Kd", m.diffuse.unwrap_or([DEFAULT_ALBEDO as f32; 3]))?;
+    let kd = check_colour(
+        &m.name,
+        "Kd",
+        m.diffuse.unwrap_or([DEFAULT_ALBEDO as f32; 3]),
+    )?;
     let albedo = builder
-        .add_spectrum(&format!("{} Kd", m.name), SpectrumSource::RgbReflectance(kd))
+        .add_spectrum(
+            &format!("{} Kd", m.name),
+            SpectrumSource::RgbReflectance(kd),
+        )
         .map_err(ObjError::Scene)?;
     let mut material = Material::lambert(&m.name, albedo);
     if let Some(ke) = m.emissive {

@@ -82,8 +82,13 @@ impl LaneMask {
 
     /// As an `f32x8` mask (all bits set in selected lanes).
     pub fn to_simd(self) -> f32x8 {
-        let bits: [f32; LANES] =
-            core::array::from_fn(|lane| if self.contains(lane) { f32::from_bits(u32::MAX) } else { 0.0 });
+        let bits: [f32; LANES] = core::array::from_fn(|lane| {
+            if self.contains(lane) {
+                f32::from_bits(u32::MAX)
+            } else {
+                0.0
+            }
+        });
         f32x8::new(bits)
     }
 }
@@ -122,7 +127,11 @@ impl RayPacket {
             }))
         };
         Self {
-            origin: [pick(&|r| r.origin.x), pick(&|r| r.origin.y), pick(&|r| r.origin.z)],
+            origin: [
+                pick(&|r| r.origin.x),
+                pick(&|r| r.origin.y),
+                pick(&|r| r.origin.z),
+            ],
             direction: [
                 pick(&|r| r.direction.x),
                 pick(&|r| r.direction.y),

@@ -13,8 +13,8 @@
 //! [`RenderResult::rejected`].
 
 use crate::filter::Filter;
-use crate::integrator::{trace, IntegratorSettings, RayCounts};
-use crate::packet::{Ray, RayPacket, LANES};
+use crate::integrator::{IntegratorSettings, RayCounts, trace};
+use crate::packet::{LANES, Ray, RayPacket};
 use crate::rng::{Purpose, Rng};
 use crate::scene::Scene;
 use crate::transport::Transport;
@@ -133,12 +133,16 @@ struct Tile<P> {
 
 /// The camera ray of pixel `(x, y)` and the path random stream.
 fn camera_ray(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, rng: &mut Rng) -> Ray {
-    let (dx, dy) = settings.filter.sample_offset(rng.next_f32(), rng.next_f32());
+    let (dx, dy) = settings
+        .filter
+        .sample_offset(rng.next_f32(), rng.next_f32());
     let film_x = x as f32 + 0.5 + dx;
     let film_y = y as f32 + 0.5 + dy;
     Ray {
         origin: scene.camera.position(),
-        direction: scene.camera.direction(film_x, film_y, settings.width, settings.height),
+        direction: scene
+            .camera
+            .direction(film_x, film_y, settings.width, settings.height),
         t_max: f32::INFINITY,
     }
 }
@@ -154,13 +158,17 @@ fn render_tile<T: Transport>(
         for bx in (0..tile.width).step_by(PACKET_WIDTH as usize) {
             let mut lanes: [Option<(u32, u32)>; LANES] = [None; LANES];
             for (lane, slot) in lanes.iter_mut().enumerate() {
-                let (lx, ly) = (bx + lane as u32 % PACKET_WIDTH, by + lane as u32 / PACKET_WIDTH);
+                let (lx, ly) = (
+                    bx + lane as u32 % PACKET_WIDTH,
+                    by + lane as u32 / PACKET_WIDTH,
+                );
                 if lx < tile.width && ly < tile.height {
                     *slot = Some((lx, ly));
                 }
             }
-            let pixel_index =
-                |(lx, ly): (u32, u32)| u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx);
+            let pixel_index = |(lx, ly): (u32, u32)| {
+                u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx)
+            };
             let mut path_rngs: [Rng; LANES] = core::array::from_fn(|lane| {
                 let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
                 Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Path)
@@ -170,7 +178,13 @@ fn render_tile<T: Transport>(
                 Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Wavelengths)
             });
             let rays: [Ray; LANES] = core::array::from_fn(|lane| match lanes[lane] {
-                Some((lx, ly)) => camera_ray(scene, settings, tile.x0 + lx, tile.y0 + ly, &mut path_rngs[lane]),
+                Some((lx, ly)) => camera_ray(
+                    scene,
+                    settings,
+                    tile.x0 + lx,
+                    tile.y0 + ly,
+                    &mut path_rngs[lane],
+                ),
                 None => Ray {
                     origin: scene.camera.position(),
                     direction: glam::Vec3::Z,
@@ -178,9 +192,10 @@ fn render_tile<T: Transport>(
                 },
             });
             let mut packet = RayPacket::from_rays(&rays);
-            packet.active = crate::packet::LaneMask(
-                lanes.iter().enumerate().fold(0u8, |m, (lane, l)| if l.is_some() { m | (1 << lane) } else { m }),
-            );
+            packet.active =
+                crate::packet::LaneMask(lanes.iter().enumerate().fold(0u8, |m, (lane, l)| {
+                    if l.is_some() { m | (1 << lane) } else { m }
+                }));
             let wavelengths = transport.sample_wavelengths(&mut wavelength_rngs);
             let radiance = trace(
                 transport,
@@ -221,7 +236,9 @@ pub fn render<T: Transport>(
     if let Some(threads) = settings.threads {
         builder = builder.num_threads(threads.max(1));
     }
-    let pool = builder.build().map_err(|e| RenderError::Threads(e.to_string()))?;
+    let pool = builder
+        .build()
+        .map_err(|e| RenderError::Threads(e.to_string()))?;
     let start = Instant::now();
     let mut tiles = Vec::new();
     for y0 in (0..settings.height).step_by(TILE_SIZE as usize) {
@@ -278,7 +295,9 @@ pub fn render<T: Transport>(
                 let index = ((tile.y0 + ly) * settings.width + tile.x0 + lx) as usize;
                 xyz[index] = transport.resolve(pixel);
                 if let Some(c) = transport.coefficients(pixel) {
-                    let (n, data) = planes.get_or_insert_with(|| (c.len(), vec![0.0; pixel_count as usize * c.len()]));
+                    let (n, data) = planes.get_or_insert_with(|| {
+                        (c.len(), vec![0.0; pixel_count as usize * c.len()])
+                    });
                     for (j, &v) in c.iter().enumerate().take(*n) {
                         data[index * *n + j] = v as f32;
                     }

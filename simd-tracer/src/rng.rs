@@ -56,7 +56,9 @@ impl Rng {
     /// The next 32 random bits.
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
-        self.state = old.wrapping_mul(PCG_MULTIPLIER).wrapping_add(self.increment);
+        self.state = old
+            .wrapping_mul(PCG_MULTIPLIER)
+            .wrapping_add(self.increment);
         let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
         let rotation = (old >> 59) as u32;
         xorshifted.rotate_right(rotation)
@@ -77,7 +79,14 @@ mod tests {
         // pcg32-global demo, seed 42, stream 54: first outputs of the
         // reference implementation (pcg-c-basic).
         let mut rng = Rng::new(42, 54);
-        let expected = [0xa15c_02b7, 0x7b47_f409, 0xba1d_3330, 0x83d2_f293, 0xbfa4_784b, 0xcbed_606e];
+        let expected = [
+            0xa15c_02b7,
+            0x7b47_f409,
+            0xba1d_3330,
+            0x83d2_f293,
+            0xbfa4_784b,
+            0xcbed_606e,
+        ];
         for e in expected {
             assert_eq!(rng.next_u32(), e);
         }

@@ -71,6 +71,8 @@ pub struct Scene {
     pub triangles: Vec<[Vec3; 3]>,
     /// Unit geometric normal of each triangle (right-handed, CCW front).
     pub normals: Vec<Vec3>,
+    /// Area of each triangle.
+    pub areas: Vec<f32>,
     /// Material of each triangle.
     pub triangle_material: Vec<MaterialId>,
     /// The camera.
@@ -90,10 +92,9 @@ impl Scene {
         self.skipped_triangles
     }
 
-    /// Area of triangle `index`.
+    /// Area of triangle `index` (0 for an unknown index).
     pub fn area(&self, index: usize) -> f32 {
-        let [a, b, c] = self.triangles[index];
-        0.5 * (b - a).cross(c - a).length()
+        self.areas.get(index).copied().unwrap_or(0.0)
     }
 }
 
@@ -131,9 +132,13 @@ impl SceneBuilder {
     }
 
     /// Adds a spectrum; `name` appears in error messages.
-    pub fn add_spectrum(&mut self, name: &str, source: SpectrumSource) -> Result<SpectrumId, SceneError> {
-        let spectrum =
-            SceneSpectrum::new(source, self.range).map_err(|e| SceneError::Spectrum(name.to_string(), e))?;
+    pub fn add_spectrum(
+        &mut self,
+        name: &str,
+        source: SpectrumSource,
+    ) -> Result<SpectrumId, SceneError> {
+        let spectrum = SceneSpectrum::new(source, self.range)
+            .map_err(|e| SceneError::Spectrum(name.to_string(), e))?;
         self.spectra.push(spectrum);
         Ok((self.spectra.len() - 1) as SpectrumId)
     }
@@ -163,14 +168,21 @@ impl SceneBuilder {
     }
 
     /// Adds an indexed triangle mesh.
-    pub fn add_mesh(&mut self, positions: &[Vec3], indices: &[u32], material: MaterialId) -> Result<(), SceneError> {
+    pub fn add_mesh(
+        &mut self,
+        positions: &[Vec3],
+        indices: &[u32],
+        material: MaterialId,
+    ) -> Result<(), SceneError> {
         for tri in indices.chunks_exact(3) {
             let mut vertices = [Vec3::ZERO; 3];
             for (v, &index) in vertices.iter_mut().zip(tri) {
-                *v = *positions.get(index as usize).ok_or(SceneError::IndexOutOfRange {
-                    index,
-                    vertices: positions.len(),
-                })?;
+                *v = *positions
+                    .get(index as usize)
+                    .ok_or(SceneError::IndexOutOfRange {
+                        index,
+                        vertices: positions.len(),
+                    })?;
             }
             self.add_triangle(vertices, material);
         }
@@ -215,15 +227,26 @@ impl SceneBuilder {
             .iter()
             .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize())
             .collect();
+        let areas = self
+            .triangles
+            .iter()
+            .map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length())
+            .collect();
         let bvh = Bvh::build(&self.triangles);
         bvh.validate().map_err(SceneError::Bvh)?;
-        let lights = LightSet::new(&self.triangles, &self.triangle_material, &self.materials, &self.spectra);
+        let lights = LightSet::new(
+            &self.triangles,
+            &self.triangle_material,
+            &self.materials,
+            &self.spectra,
+        );
         Ok(Scene {
             range: self.range,
             spectra: self.spectra,
             materials: self.materials,
             triangles: self.triangles,
             normals,
+            areas,
             triangle_material: self.triangle_material,
             camera,
             environment: self.environment,

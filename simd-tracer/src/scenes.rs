@@ -6,7 +6,7 @@
 //!   sRGB `Kd` upsampled, `Ke` an RGB illuminant).
 
 use crate::camera::Camera;
-use crate::obj::{load_obj, ObjError, ObjSource};
+use crate::obj::{ObjError, ObjSource, load_obj};
 use crate::scene::{Scene, SceneBuilder, SceneError};
 use glam::Vec3;
 use spectral_core::SpectralRange;
@@ -20,8 +20,13 @@ pub const CORNELL_FOV_DEG: f32 = 39.3077;
 
 /// The Cornell box camera.
 pub fn cornell_camera() -> Result<Camera, SceneError> {
-    Camera::look_at(Vec3::new(0.0, 0.0, 3.9), Vec3::ZERO, Vec3::Y, CORNELL_FOV_DEG)
-        .map_err(|e| SceneError::Bvh(e.to_string()))
+    Camera::look_at(
+        Vec3::new(0.0, 0.0, 3.9),
+        Vec3::ZERO,
+        Vec3::Y,
+        CORNELL_FOV_DEG,
+    )
+    .map_err(|e| SceneError::Bvh(e.to_string()))
 }
 
 /// The Cornell box builder (before `build`), over `range`.

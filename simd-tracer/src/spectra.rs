@@ -63,9 +63,15 @@ pub struct SceneSpectrum {
 }
 
 /// The projection and a point evaluator of a source.
-type Prepared<'a> = (FourierSpectrum<f64, MAX_COEFFS>, Box<dyn Fn(f64) -> f64 + 'a>);
+type Prepared<'a> = (
+    FourierSpectrum<f64, MAX_COEFFS>,
+    Box<dyn Fn(f64) -> f64 + 'a>,
+);
 
-fn project_any<'a>(source: &'a SpectrumSource, range: &SpectralRange) -> Result<Prepared<'a>, SpectralError> {
+fn project_any<'a>(
+    source: &'a SpectrumSource,
+    range: &SpectralRange,
+) -> Result<Prepared<'a>, SpectralError> {
     Ok(match source {
         SpectrumSource::Builtin(b) => {
             let b = *b;
@@ -88,7 +94,10 @@ fn project_any<'a>(source: &'a SpectrumSource, range: &SpectralRange) -> Result<
             }
             let b = Blackbody::new(*temperature_k)?;
             let s = *scale;
-            (b.project::<MAX_COEFFS>(range).scale(s), Box::new(move |l| s * b.value(l)))
+            (
+                b.project::<MAX_COEFFS>(range).scale(s),
+                Box::new(move |l| s * b.value(l)),
+            )
         }
         SpectrumSource::RgbReflectance(rgb) => {
             let p: SigmoidPolynomial = spectral_core::upsample::srgb_reflectance(*rgb)?;
@@ -174,7 +183,7 @@ impl SceneSpectrum {
     #[inline]
     pub fn value(&self, lambda_nm: f32) -> f32 {
         let x = (f64::from(lambda_nm) - self.range.min_nm()) / DENSE_STEP_NM;
-        if !(x >= 0.0) {
+        if x.is_nan() || x < 0.0 {
             return 0.0;
         }
         let i = x as usize;
@@ -201,10 +210,18 @@ mod tests {
     #[test]
     fn dense_table_reproduces_tabulated_data() {
         let range = SpectralRange::VISIBLE;
-        let s = SceneSpectrum::new(SpectrumSource::Builtin(Builtin::lookup("fl11").unwrap()), range).unwrap();
+        let s = SceneSpectrum::new(
+            SpectrumSource::Builtin(Builtin::lookup("fl11").unwrap()),
+            range,
+        )
+        .unwrap();
         let b = Builtin::lookup("fl11").unwrap();
         for l in [380.0f32, 435.0, 436.25, 544.0, 611.5, 700.0] {
-            assert!((s.value(l) - b.value(f64::from(l)) as f32).abs() < 1e-4 * b.value(f64::from(l)) as f32 + 1e-6, "{l}");
+            assert!(
+                (s.value(l) - b.value(f64::from(l)) as f32).abs()
+                    < 1e-4 * b.value(f64::from(l)) as f32 + 1e-6,
+                "{l}"
+            );
         }
         assert_eq!(s.value(100.0), 0.0);
         let f = s.fourier_f64::<12>();
@@ -218,7 +235,10 @@ mod tests {
         assert!(SceneSpectrum::new(SpectrumSource::Constant(-1.0), range).is_err());
         assert!(SceneSpectrum::new(SpectrumSource::Fourier(vec![]), range).is_err());
         assert!(SceneSpectrum::new(SpectrumSource::Fourier(vec![f64::NAN]), range).is_err());
-        assert!(SceneSpectrum::new(SpectrumSource::RgbReflectance([f64::NAN, 0.0, 0.0]), range).is_err());
+        assert!(
+            SceneSpectrum::new(SpectrumSource::RgbReflectance([f64::NAN, 0.0, 0.0]), range)
+                .is_err()
+        );
         let t = SpectrumSource::Tabulated {
             lambda_nm: vec![500.0, 400.0],
             values: vec![1.0, 1.0],

@@ -62,7 +62,12 @@ pub trait Transport: Sync {
     /// 0 in every lane.
     fn zero(&self) -> Self::Spectra;
     /// The per-lane spectral factors as packet-wide values.
-    fn gather(&self, scene: &Scene, wavelengths: &Self::Wavelengths, lanes: &[LaneSpectrum; LANES]) -> Self::Spectra;
+    fn gather(
+        &self,
+        scene: &Scene,
+        wavelengths: &Self::Wavelengths,
+        lanes: &[LaneSpectrum; LANES],
+    ) -> Self::Spectra;
     /// Spectral product (truncated for Fourier).
     fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra;
     /// Multiplies each lane by a scalar.
@@ -72,14 +77,21 @@ pub trait Transport: Sync {
     /// Mean over wavelengths per lane (the Russian-roulette proxy).
     fn mean(&self, a: &Self::Spectra) -> f32x8;
     /// The finished samples of a packet.
-    fn samples(&self, radiance: &Self::Spectra, wavelengths: &Self::Wavelengths) -> [Self::Sample; LANES];
+    fn samples(
+        &self,
+        radiance: &Self::Spectra,
+        wavelengths: &Self::Wavelengths,
+    ) -> [Self::Sample; LANES];
     /// Whether a sample is free of NaN and infinity (else it is rejected).
     fn sample_is_finite(sample: &Self::Sample) -> bool;
     /// Adds a sample to a pixel.
     fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample);
     /// The shared state for ending the current pass, from every pixel
     /// before any of them ends it.
-    fn pass_shared<'a>(&self, pixels: &mut dyn Iterator<Item = &'a Self::Pixel>) -> Self::PassShared
+    fn pass_shared<'a>(
+        &self,
+        pixels: &mut dyn Iterator<Item = &'a Self::Pixel>,
+    ) -> Self::PassShared
     where
         Self::Pixel: 'a;
     /// Ends a pass (a control-variate batch).
@@ -108,7 +120,11 @@ pub struct FourierTransport<const N: usize> {
 
 impl<const N: usize> FourierTransport<N> {
     /// A Fourier transport over `range` converting by `route` in `buffer`.
-    pub fn new(range: SpectralRange, buffer: Buffer, route: XyzRoute) -> Result<Self, SpectralError> {
+    pub fn new(
+        range: SpectralRange,
+        buffer: Buffer,
+        route: XyzRoute,
+    ) -> Result<Self, SpectralError> {
         Ok(Self {
             converter: Box::new(XyzConverter::new(range)?),
             buffer,
@@ -139,7 +155,10 @@ pub struct FourierPixel<const N: usize> {
     count: f64,
 }
 
-fn gather_fourier<const N: usize>(scene: &Scene, lanes: &[LaneSpectrum; LANES]) -> FourierSpectrum<f32x8, N> {
+fn gather_fourier<const N: usize>(
+    scene: &Scene,
+    lanes: &[LaneSpectrum; LANES],
+) -> FourierSpectrum<f32x8, N> {
     let mut rows = [[0.0f32; N]; LANES];
     for (row, lane) in rows.iter_mut().zip(lanes) {
         match *lane {
@@ -152,7 +171,9 @@ fn gather_fourier<const N: usize>(scene: &Scene, lanes: &[LaneSpectrum; LANES]) 
             }
         }
     }
-    FourierSpectrum::from_coeffs(core::array::from_fn(|j| f32x8::new(core::array::from_fn(|lane| rows[lane][j]))))
+    FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
+        f32x8::new(core::array::from_fn(|lane| rows[lane][j]))
+    }))
 }
 
 impl<const N: usize> Transport for FourierTransport<N> {
@@ -184,7 +205,12 @@ impl<const N: usize> Transport for FourierTransport<N> {
         FourierSpectrum::zero()
     }
 
-    fn gather(&self, scene: &Scene, _wavelengths: &(), lanes: &[LaneSpectrum; LANES]) -> Self::Spectra {
+    fn gather(
+        &self,
+        scene: &Scene,
+        _wavelengths: &(),
+        lanes: &[LaneSpectrum; LANES],
+    ) -> Self::Spectra {
         gather_fourier(scene, lanes)
     }
 
@@ -205,8 +231,9 @@ impl<const N: usize> Transport for FourierTransport<N> {
     }
 
     fn samples(&self, radiance: &Self::Spectra, _wavelengths: &()) -> [Self::Sample; LANES] {
-        let coeffs: [[f32; N]; LANES] =
-            core::array::from_fn(|lane| core::array::from_fn(|j| radiance.coeffs[j].to_array()[lane]));
+        let coeffs: [[f32; N]; LANES] = core::array::from_fn(|lane| {
+            core::array::from_fn(|j| radiance.coeffs[j].to_array()[lane])
+        });
         let xyz: [[f32; 3]; LANES] = match (self.buffer, self.route) {
             (Buffer::Spectral, _) => [[0.0; 3]; LANES],
             (Buffer::Xyz, XyzRoute::Mese) => core::array::from_fn(|lane| {
@@ -248,7 +275,10 @@ impl<const N: usize> Transport for FourierTransport<N> {
         pixel.count += 1.0;
     }
 
-    fn pass_shared<'a>(&self, _pixels: &mut dyn Iterator<Item = &'a Self::Pixel>) -> Self::PassShared
+    fn pass_shared<'a>(
+        &self,
+        _pixels: &mut dyn Iterator<Item = &'a Self::Pixel>,
+    ) -> Self::PassShared
     where
         Self::Pixel: 'a,
     {
@@ -271,7 +301,9 @@ impl<const N: usize> Transport for FourierTransport<N> {
 
     fn coefficients(&self, pixel: &Self::Pixel) -> Option<Vec<f64>> {
         match self.buffer {
-            Buffer::Spectral if pixel.count > 0.0 => Some(pixel.coeffs.iter().map(|c| c / pixel.count).collect()),
+            Buffer::Spectral if pixel.count > 0.0 => {
+                Some(pixel.coeffs.iter().map(|c| c / pixel.count).collect())
+            }
             Buffer::Spectral => Some(vec![0.0; N]),
             Buffer::Xyz => None,
         }
@@ -363,7 +395,12 @@ impl<const C: usize> Transport for SampledTransport<C> {
         [f32x8::splat(0.0); C]
     }
 
-    fn gather(&self, scene: &Scene, wavelengths: &Self::Wavelengths, lanes: &[LaneSpectrum; LANES]) -> Self::Spectra {
+    fn gather(
+        &self,
+        scene: &Scene,
+        wavelengths: &Self::Wavelengths,
+        lanes: &[LaneSpectrum; LANES],
+    ) -> Self::Spectra {
         gather_sampled(scene, wavelengths, lanes)
     }
 
@@ -383,7 +420,11 @@ impl<const C: usize> Transport for SampledTransport<C> {
         a.iter().fold(f32x8::splat(0.0), |acc, &v| acc + v) * f32x8::splat(1.0 / C as f32)
     }
 
-    fn samples(&self, radiance: &Self::Spectra, wavelengths: &Self::Wavelengths) -> [Self::Sample; LANES] {
+    fn samples(
+        &self,
+        radiance: &Self::Spectra,
+        wavelengths: &Self::Wavelengths,
+    ) -> [Self::Sample; LANES] {
         core::array::from_fn(|lane| {
             sampled_lane(radiance, lane)
                 .to_xyz(&wavelengths[lane])
@@ -403,7 +444,10 @@ impl<const C: usize> Transport for SampledTransport<C> {
         pixel.count += 1.0;
     }
 
-    fn pass_shared<'a>(&self, _pixels: &mut dyn Iterator<Item = &'a Self::Pixel>) -> Self::PassShared
+    fn pass_shared<'a>(
+        &self,
+        _pixels: &mut dyn Iterator<Item = &'a Self::Pixel>,
+    ) -> Self::PassShared
     where
         Self::Pixel: 'a,
     {
@@ -441,7 +485,11 @@ pub struct ControlVariateTransport<const C: usize, const N: usize> {
 
 impl<const C: usize, const N: usize> ControlVariateTransport<C, N> {
     /// `C` wavelengths by `strategy` plus `N` coefficients over `range`.
-    pub fn new(range: SpectralRange, strategy: WavelengthStrategy, alpha: AlphaMode) -> Result<Self, SpectralError> {
+    pub fn new(
+        range: SpectralRange,
+        strategy: WavelengthStrategy,
+        alpha: AlphaMode,
+    ) -> Result<Self, SpectralError> {
         Ok(Self {
             fourier: FourierTransport::new(range, Buffer::Xyz, XyzRoute::Zeroth)?,
             sampled: SampledTransport::new(range, strategy),
@@ -495,8 +543,16 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
         (self.fourier.zero(), self.sampled.zero())
     }
 
-    fn gather(&self, scene: &Scene, wavelengths: &Self::Wavelengths, lanes: &[LaneSpectrum; LANES]) -> Self::Spectra {
-        (gather_fourier(scene, lanes), gather_sampled(scene, wavelengths, lanes))
+    fn gather(
+        &self,
+        scene: &Scene,
+        wavelengths: &Self::Wavelengths,
+        lanes: &[LaneSpectrum; LANES],
+    ) -> Self::Spectra {
+        (
+            gather_fourier(scene, lanes),
+            gather_sampled(scene, wavelengths, lanes),
+        )
     }
 
     fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
@@ -504,7 +560,10 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
     }
 
     fn scale(&self, a: &Self::Spectra, weight: f32x8) -> Self::Spectra {
-        (self.fourier.scale(&a.0, weight), self.sampled.scale(&a.1, weight))
+        (
+            self.fourier.scale(&a.0, weight),
+            self.sampled.scale(&a.1, weight),
+        )
     }
 
     fn add(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
@@ -515,13 +574,19 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
         self.sampled.mean(&a.1)
     }
 
-    fn samples(&self, radiance: &Self::Spectra, wavelengths: &Self::Wavelengths) -> [Self::Sample; LANES] {
+    fn samples(
+        &self,
+        radiance: &Self::Spectra,
+        wavelengths: &Self::Wavelengths,
+    ) -> [Self::Sample; LANES] {
         let mu = self.fourier.converter.zeroth(&radiance.0);
         core::array::from_fn(|lane| {
             let w = &wavelengths[lane];
             let y = sampled_lane(&radiance.1, lane).to_xyz(w);
             let series: FourierSpectrum<f32, N> =
-                FourierSpectrum::from_coeffs(core::array::from_fn(|j| radiance.0.coeffs[j].to_array()[lane]));
+                FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
+                    radiance.0.coeffs[j].to_array()[lane]
+                }));
             let c = SampledSpectrum::from_fourier(&series, &self.range, w).to_xyz(w);
             CvSample {
                 y: y.to_array().map(|v| v as f32),
@@ -537,7 +602,11 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
 
     fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
         for (r, channel) in pixel.channels.iter_mut().enumerate() {
-            channel.add(f64::from(sample.y[r]), f64::from(sample.c[r]), f64::from(sample.mu[r]));
+            channel.add(
+                f64::from(sample.y[r]),
+                f64::from(sample.c[r]),
+                f64::from(sample.mu[r]),
+            );
         }
     }
 

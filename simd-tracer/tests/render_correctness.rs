@@ -7,20 +7,22 @@
 use glam::Vec3;
 use simd_tracer::camera::Camera;
 use simd_tracer::filter::Filter;
-use simd_tracer::integrator::{trace, IntegratorSettings};
+use simd_tracer::integrator::{IntegratorSettings, trace};
 use simd_tracer::material::Material;
-use simd_tracer::packet::{Ray, RayPacket, LANES};
-use simd_tracer::render::{render, RenderResult, RenderSettings};
+use simd_tracer::packet::{LANES, Ray, RayPacket};
+use simd_tracer::render::{RenderResult, RenderSettings, render};
 use simd_tracer::rng::{Purpose, Rng};
 use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::spectra::SpectrumSource;
-use simd_tracer::transport::{AlphaMode, Buffer, ControlVariateTransport, FourierTransport, SampledTransport, Transport};
+use simd_tracer::transport::{
+    AlphaMode, Buffer, ControlVariateTransport, FourierTransport, SampledTransport, Transport,
+};
+use spectral_core::SpectralRange;
 use spectral_core::color::Xyz;
 use spectral_core::delta_e::delta_e2000;
 use spectral_core::registry::Builtin;
 use spectral_core::sampling::WavelengthStrategy;
 use spectral_core::xyz::XyzRoute;
-use spectral_core::SpectralRange;
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
@@ -28,28 +30,60 @@ type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 fn inward_sphere(r: f32, level: u32) -> Vec<[Vec3; 3]> {
     let t = (1.0 + 5f32.sqrt()) / 2.0;
     let v = [
-        [-1.0, t, 0.0], [1.0, t, 0.0], [-1.0, -t, 0.0], [1.0, -t, 0.0],
-        [0.0, -1.0, t], [0.0, 1.0, t], [0.0, -1.0, -t], [0.0, 1.0, -t],
-        [t, 0.0, -1.0], [t, 0.0, 1.0], [-t, 0.0, -1.0], [-t, 0.0, 1.0],
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
     ]
     .map(|p| Vec3::from(p).normalize());
     let faces = [
-        [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
-        [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
-        [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
     ];
     let mut tris: Vec<[Vec3; 3]> = faces.iter().map(|f| [v[f[0]], v[f[1]], v[f[2]]]).collect();
     for _ in 0..level {
         tris = tris
             .iter()
             .flat_map(|[a, b, c]| {
-                let (ab, bc, ca) = ((*a + *b).normalize(), (*b + *c).normalize(), (*c + *a).normalize());
+                let (ab, bc, ca) = (
+                    (*a + *b).normalize(),
+                    (*b + *c).normalize(),
+                    (*c + *a).normalize(),
+                );
                 [[*a, ab, ca], [ab, *b, bc], [ca, bc, *c], [ab, bc, ca]]
             })
             .collect();
     }
     // Outward CCW → reverse the winding so the front faces the centre.
-    tris.into_iter().map(|[a, b, c]| [a * r, c * r, b * r]).collect()
+    tris.into_iter()
+        .map(|[a, b, c]| [a * r, c * r, b * r])
+        .collect()
 }
 
 fn furnace(albedo: SpectrumSource, emission: SpectrumSource) -> TestResult<Scene> {
@@ -62,7 +96,12 @@ fn furnace(albedo: SpectrumSource, emission: SpectrumSource) -> TestResult<Scene
     for tri in inward_sphere(1.0, 2) {
         b.add_triangle(tri, m);
     }
-    b.set_camera(Camera::look_at(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 60.0)?);
+    b.set_camera(Camera::look_at(
+        Vec3::ZERO,
+        Vec3::new(0.0, 0.0, -1.0),
+        Vec3::Y,
+        60.0,
+    )?);
     Ok(b.build()?)
 }
 
@@ -71,7 +110,10 @@ fn settings(size: u32, spp: u32, max_depth: u32) -> RenderSettings {
         width: size,
         height: size,
         spp,
-        integrator: IntegratorSettings { max_depth, rr_depth: 3 },
+        integrator: IntegratorSettings {
+            max_depth,
+            rr_depth: 3,
+        },
         seed: 7,
         filter: Filter::Box,
         threads: Some(2),
@@ -79,7 +121,11 @@ fn settings(size: u32, spp: u32, max_depth: u32) -> RenderSettings {
     }
 }
 
-fn run<T: Transport>(transport: &T, scene: &Scene, settings: &RenderSettings) -> TestResult<RenderResult> {
+fn run<T: Transport>(
+    transport: &T,
+    scene: &Scene,
+    settings: &RenderSettings,
+) -> TestResult<RenderResult> {
     Ok(render(transport, scene, settings, &mut |_| true)?)
 }
 
@@ -92,18 +138,43 @@ fn mean_and_error(image: &[Xyz], channel: usize) -> (f64, f64) {
     (mean, (var / n).sqrt())
 }
 
-fn all_transports(range: SpectralRange) -> TestResult<Vec<(String, Box<dyn Fn(&Scene, &RenderSettings) -> TestResult<RenderResult>>)>> {
+/// A named way to render a scene.
+type Renderer = (
+    String,
+    Box<dyn Fn(&Scene, &RenderSettings) -> TestResult<RenderResult>>,
+);
+
+fn all_transports(range: SpectralRange) -> TestResult<Vec<Renderer>> {
     let f4 = FourierTransport::<4>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?;
     let f12 = FourierTransport::<12>::new(range, Buffer::Xyz, XyzRoute::Lut)?;
     let s4 = SampledTransport::<4>::new(range, WavelengthStrategy::Hero);
     let s32 = SampledTransport::<32>::new(range, WavelengthStrategy::Uniform);
-    let cv = ControlVariateTransport::<8, 4>::new(range, WavelengthStrategy::Stratified, AlphaMode::Shared)?;
+    let cv = ControlVariateTransport::<8, 4>::new(
+        range,
+        WavelengthStrategy::Stratified,
+        AlphaMode::Shared,
+    )?;
     Ok(vec![
-        ("fourier 4".into(), Box::new(move |s: &Scene, r: &RenderSettings| run(&f4, s, r))),
-        ("fourier 12 xyz-buffer".into(), Box::new(move |s: &Scene, r: &RenderSettings| run(&f12, s, r))),
-        ("sampled 4 hero".into(), Box::new(move |s: &Scene, r: &RenderSettings| run(&s4, s, r))),
-        ("sampled 32 uniform".into(), Box::new(move |s: &Scene, r: &RenderSettings| run(&s32, s, r))),
-        ("cv 8+4".into(), Box::new(move |s: &Scene, r: &RenderSettings| run(&cv, s, r))),
+        (
+            "fourier 4".into(),
+            Box::new(move |s: &Scene, r: &RenderSettings| run(&f4, s, r)),
+        ),
+        (
+            "fourier 12 xyz-buffer".into(),
+            Box::new(move |s: &Scene, r: &RenderSettings| run(&f12, s, r)),
+        ),
+        (
+            "sampled 4 hero".into(),
+            Box::new(move |s: &Scene, r: &RenderSettings| run(&s4, s, r)),
+        ),
+        (
+            "sampled 32 uniform".into(),
+            Box::new(move |s: &Scene, r: &RenderSettings| run(&s32, s, r)),
+        ),
+        (
+            "cv 8+4".into(),
+            Box::new(move |s: &Scene, r: &RenderSettings| run(&cv, s, r)),
+        ),
     ])
 }
 
@@ -111,7 +182,10 @@ fn all_transports(range: SpectralRange) -> TestResult<Vec<(String, Box<dyn Fn(&S
 fn white_furnace_in_every_transport() -> TestResult {
     let rho = 0.6;
     let emission = 0.8;
-    let scene = furnace(SpectrumSource::Constant(rho), SpectrumSource::Constant(emission))?;
+    let scene = furnace(
+        SpectrumSource::Constant(rho),
+        SpectrumSource::Constant(emission),
+    )?;
     for max_depth in [1, 3, u32::MAX] {
         // L = Le Σ_{k<D} ρ^k.
         let expected = if max_depth == u32::MAX {
@@ -126,7 +200,10 @@ fn white_furnace_in_every_transport() -> TestResult {
             // Sampled transports estimate the colour of a flat spectrum with
             // wavelength noise too, so the 3σ band is taken from the pixels.
             let tolerance = 3.0 * error + 1e-4 * expected;
-            assert!((mean - expected).abs() < tolerance, "{name}, depth {max_depth}: {mean} vs {expected} ± {tolerance}");
+            assert!(
+                (mean - expected).abs() < tolerance,
+                "{name}, depth {max_depth}: {mean} vs {expected} ± {tolerance}"
+            );
         }
     }
     Ok(())
@@ -137,7 +214,10 @@ fn spectral_white_furnace_is_unbiased_for_sampled_and_close_for_fourier() -> Tes
     let range = SpectralRange::VISIBLE;
     let albedo = Builtin::lookup("colorchecker-12")?;
     let emission = Builtin::lookup("d65")?;
-    let scene = furnace(SpectrumSource::Builtin(albedo), SpectrumSource::Builtin(emission))?;
+    let scene = furnace(
+        SpectrumSource::Builtin(albedo),
+        SpectrumSource::Builtin(emission),
+    )?;
     let depth = 3;
     // Exact: ∫ Le(λ) Σ_{k<3} ρ(λ)^k cmf(λ) dλ / ∫ȳ on a 0.05 nm grid.
     let exact: [f64; 3] = {
@@ -157,9 +237,12 @@ fn spectral_white_furnace_is_unbiased_for_sampled_and_close_for_fourier() -> Tes
     };
     let s = SampledTransport::<8>::new(range, WavelengthStrategy::Stratified);
     let result = run(&s, &scene, &settings(16, 64, depth))?;
-    for channel in 0..3 {
+    for (channel, &exact_value) in exact.iter().enumerate() {
         let (mean, error) = mean_and_error(&result.xyz, channel);
-        assert!((mean - exact[channel]).abs() < 3.0 * error, "sampled channel {channel}: {mean} vs {}", exact[channel]);
+        assert!(
+            (mean - exact_value).abs() < 3.0 * error,
+            "sampled channel {channel}: {mean} vs {exact_value}"
+        );
     }
     // Fourier: the render converges to the deterministic value of the
     // truncated products the integrator forms, Le + ρ⊛Le + (ρ⊛ρ)⊛Le; its
@@ -186,12 +269,18 @@ fn check_fourier_furnace<const N: usize>(
     let deterministic = le + rho.product(&le) + rho.product(&rho).product(&le);
     let expected = transport.converter().zeroth(&deterministic).map(f64::from);
     let result = run(&transport, scene, &settings(16, 16, 3))?;
-    for channel in 0..3 {
+    for (channel, &expected_value) in expected.iter().enumerate() {
         let (mean, error) = mean_and_error(&result.xyz, channel);
-        let tolerance = 3.0 * error + 1e-4 * expected[channel];
-        assert!((mean - expected[channel]).abs() < tolerance, "N = {N}, channel {channel}: {mean} vs {}", expected[channel]);
+        let tolerance = 3.0 * error + 1e-4 * expected_value;
+        assert!(
+            (mean - expected_value).abs() < tolerance,
+            "N = {N}, channel {channel}: {mean} vs {expected_value}"
+        );
     }
-    let de = delta_e2000(Xyz::from_array(exact).to_lab(white), Xyz::from_array(expected).to_lab(white));
+    let de = delta_e2000(
+        Xyz::from_array(exact).to_lab(white),
+        Xyz::from_array(expected).to_lab(white),
+    );
     println!("spectral furnace, Fourier N = {N}: truncation bias ΔE2000 {de:.3}");
     assert!(de < max_bias_delta_e, "N = {N}: ΔE {de}");
     Ok(())
@@ -217,23 +306,42 @@ fn direct_illumination_of_a_quad_matches_lamberts_formula() -> TestResult {
     light.emission = Some(emission);
     let light = b.add_material(light);
     b.add_quad(
-        [Vec3::new(-10.0, 0.0, 10.0), Vec3::new(10.0, 0.0, 10.0), Vec3::new(10.0, 0.0, -10.0), Vec3::new(-10.0, 0.0, -10.0)],
+        [
+            Vec3::new(-10.0, 0.0, 10.0),
+            Vec3::new(10.0, 0.0, 10.0),
+            Vec3::new(10.0, 0.0, -10.0),
+            Vec3::new(-10.0, 0.0, -10.0),
+        ],
         floor,
     );
     let h = side / 2.0;
     // Facing down (CCW seen from below).
     b.add_quad(
-        [Vec3::new(-h, height, -h), Vec3::new(h, height, -h), Vec3::new(h, height, h), Vec3::new(-h, height, h)],
+        [
+            Vec3::new(-h, height, -h),
+            Vec3::new(h, height, -h),
+            Vec3::new(h, height, h),
+            Vec3::new(-h, height, h),
+        ],
         light,
     );
     // Looking down at the origin from the side, through a very narrow view.
-    b.set_camera(Camera::look_at(Vec3::new(0.0, 0.5, 2.0), Vec3::ZERO, Vec3::Y, 0.05)?);
+    b.set_camera(Camera::look_at(
+        Vec3::new(0.0, 0.5, 2.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        0.05,
+    )?);
     let scene = b.build()?;
-    let expected = rho * le * 4.0 * corner_form_factor(f64::from(h), f64::from(h), f64::from(height));
+    let expected =
+        rho * le * 4.0 * corner_form_factor(f64::from(h), f64::from(h), f64::from(height));
     let f = FourierTransport::<4>::new(SpectralRange::VISIBLE, Buffer::Spectral, XyzRoute::Zeroth)?;
     let result = run(&f, &scene, &settings(4, 256, 2))?;
     let (mean, error) = mean_and_error(&result.xyz, 1);
-    assert!((mean - expected).abs() < 3.0 * error + 1e-3 * expected, "{mean} vs {expected} (σ {error})");
+    assert!(
+        (mean - expected).abs() < 3.0 * error + 1e-3 * expected,
+        "{mean} vs {expected} (σ {error})"
+    );
     Ok(())
 }
 
@@ -253,15 +361,26 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
     let lamp = b.add_material(lamp);
     let scene_template = simd_tracer::scenes::cornell_box(range)?;
     for (i, tri) in scene_template.triangles.iter().enumerate() {
-        let is_light = scene_template.materials[scene_template.triangle_material[i] as usize].emission.is_some();
-        let m = if is_light { lamp } else if tri[0].x > 0.99 { side } else { walls };
+        let is_light = scene_template.materials[scene_template.triangle_material[i] as usize]
+            .emission
+            .is_some();
+        let m = if is_light {
+            lamp
+        } else if tri[0].x > 0.99 {
+            side
+        } else {
+            walls
+        };
         b.add_triangle(*tri, m);
     }
     b.set_camera(scene_template.camera);
     let scene = b.build()?;
     let fourier = FourierTransport::<8>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?;
     let sampled = SampledTransport::<4>::new(range, WavelengthStrategy::Uniform);
-    let integrator = IntegratorSettings { max_depth: 6, rr_depth: 2 };
+    let integrator = IntegratorSettings {
+        max_depth: 6,
+        rr_depth: 2,
+    };
     let mut compared = 0;
     for packet_index in 0..64u64 {
         let rays: Vec<Ray> = (0..LANES)
@@ -270,29 +389,57 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
                 let y = (packet_index * 8 + lane as u64) / 32;
                 Ray {
                     origin: scene.camera.position(),
-                    direction: scene.camera.direction(x as f32 + 0.5, y as f32 + 0.5, 32, 16),
+                    direction: scene
+                        .camera
+                        .direction(x as f32 + 0.5, y as f32 + 0.5, 32, 16),
                     t_max: f32::INFINITY,
                 }
             })
             .collect();
         let packet = RayPacket::from_rays(&rays);
-        let seeds: [Rng; LANES] = core::array::from_fn(|lane| Rng::for_sample(3, packet_index * 8 + lane as u64, 0, Purpose::Path));
-        let mut wavelength_rngs: [Rng; LANES] =
-            core::array::from_fn(|lane| Rng::for_sample(3, packet_index * 8 + lane as u64, 0, Purpose::Wavelengths));
+        let seeds: [Rng; LANES] = core::array::from_fn(|lane| {
+            Rng::for_sample(3, packet_index * 8 + lane as u64, 0, Purpose::Path)
+        });
+        let mut wavelength_rngs: [Rng; LANES] = core::array::from_fn(|lane| {
+            Rng::for_sample(3, packet_index * 8 + lane as u64, 0, Purpose::Wavelengths)
+        });
         let mut rngs = seeds;
         let mut counts = Default::default();
-        let f = trace(&fourier, &scene, &integrator, &packet, &mut rngs, &(), &mut counts);
+        let f = trace(
+            &fourier,
+            &scene,
+            &integrator,
+            &packet,
+            &mut rngs,
+            &(),
+            &mut counts,
+        );
         let mut rngs = seeds;
         let w = sampled.sample_wavelengths(&mut wavelength_rngs);
-        let s = trace(&sampled, &scene, &integrator, &packet, &mut rngs, &w, &mut counts);
+        let s = trace(
+            &sampled,
+            &scene,
+            &integrator,
+            &packet,
+            &mut rngs,
+            &w,
+            &mut counts,
+        );
         for lane in 0..LANES {
             let fourier_mean = f.coeffs[0].to_array()[lane];
             for j in 1..8 {
-                assert_eq!(f.coeffs[j].to_array()[lane], 0.0, "constant spectra stay constant");
+                assert_eq!(
+                    f.coeffs[j].to_array()[lane],
+                    0.0,
+                    "constant spectra stay constant"
+                );
             }
-            for i in 0..4 {
-                let v = s[i].to_array()[lane];
-                assert!((v - fourier_mean).abs() <= 1e-5 * fourier_mean.abs().max(1e-3), "lane {lane}: {v} vs {fourier_mean}");
+            for wavelength in &s {
+                let v = wavelength.to_array()[lane];
+                assert!(
+                    (v - fourier_mean).abs() <= 1e-5 * fourier_mean.abs().max(1e-3),
+                    "lane {lane}: {v} vs {fourier_mean}"
+                );
             }
             compared += 1;
         }
@@ -306,8 +453,16 @@ fn cornell_box_fourier_and_sampled_converge_to_the_same_colours() -> TestResult 
     let range = SpectralRange::VISIBLE;
     let scene = simd_tracer::scenes::cornell_box(range)?;
     let s = settings(24, 512, 5);
-    let fourier = run(&FourierTransport::<16>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?, &scene, &s)?;
-    let sampled = run(&SampledTransport::<32>::new(range, WavelengthStrategy::Hero), &scene, &s)?;
+    let fourier = run(
+        &FourierTransport::<16>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?,
+        &scene,
+        &s,
+    )?;
+    let sampled = run(
+        &SampledTransport::<32>::new(range, WavelengthStrategy::Hero),
+        &scene,
+        &s,
+    )?;
     // Compare 4 × 4 block means (less pixel noise), in Lab with a white of Y = 1.
     let white = spectral_core::xyz::white_point(&Builtin::lookup("d65")?)?;
     let block = |img: &[Xyz], bx: usize, by: usize| -> Xyz {
@@ -325,7 +480,10 @@ fn cornell_box_fourier_and_sampled_converge_to_the_same_colours() -> TestResult 
     let mut total = 0.0;
     for by in 0..6 {
         for bx in 0..6 {
-            total += delta_e2000(block(&fourier.xyz, bx, by).to_lab(white), block(&sampled.xyz, bx, by).to_lab(white));
+            total += delta_e2000(
+                block(&fourier.xyz, bx, by).to_lab(white),
+                block(&sampled.xyz, bx, by).to_lab(white),
+            );
         }
     }
     let mean = total / 36.0;
@@ -347,7 +505,13 @@ fn degenerate_triangles_render_clean_and_nothing_non_finite_reaches_the_film() -
     assert_eq!(scene.skipped_triangles(), 3);
     for (name, render) in all_transports(range)? {
         let result = render(&scene, &settings(16, 4, 5))?;
-        assert!(result.xyz.iter().all(|x| x.to_array().iter().all(|v| v.is_finite())), "{name}");
+        assert!(
+            result
+                .xyz
+                .iter()
+                .all(|x| x.to_array().iter().all(|v| v.is_finite())),
+            "{name}"
+        );
         assert_eq!(result.rejected, 0, "{name}");
     }
     Ok(())
@@ -358,7 +522,8 @@ fn images_do_not_depend_on_the_thread_count() -> TestResult {
     let range = SpectralRange::VISIBLE;
     let scene = simd_tracer::scenes::cornell_box(range)?;
     let f = FourierTransport::<12>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?;
-    let cv = ControlVariateTransport::<8, 4>::new(range, WavelengthStrategy::Hero, AlphaMode::Shared)?;
+    let cv =
+        ControlVariateTransport::<8, 4>::new(range, WavelengthStrategy::Hero, AlphaMode::Shared)?;
     let mut one = settings(40, 3, 5);
     one.threads = Some(1);
     one.filter = Filter::gaussian();
@@ -369,6 +534,9 @@ fn images_do_not_depend_on_the_thread_count() -> TestResult {
     assert_eq!(run(&f, &scene, &one)?.xyz, run(&f, &scene, &one)?.xyz);
     let mut other_seed = one.clone();
     other_seed.seed = 8;
-    assert_ne!(run(&f, &scene, &one)?.xyz, run(&f, &scene, &other_seed)?.xyz);
+    assert_ne!(
+        run(&f, &scene, &one)?.xyz,
+        run(&f, &scene, &other_seed)?.xyz
+    );
     Ok(())
 }
