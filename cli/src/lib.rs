@@ -3,6 +3,7 @@
 
 pub mod coeffs;
 pub mod error;
+pub mod image_out;
 pub mod spectrum_cmd;
 pub mod spectrum_file;
 

@@ -26,13 +26,13 @@
 //! `min(0.95, mean spectral throughput)`.
 
 use crate::light::{emits_towards, light_pdf_solid_angle};
-use crate::material::{Bsdf, LaneSpectrum, Material};
+use crate::material::{Bsdf, LaneSpectrum, Material, ShadingPoint};
 use crate::packet::{LANES, LaneMask, RayPacket};
 use crate::rng::Rng;
 use crate::scene::{Scene, SpectrumId};
 use crate::simd::Vec3x8;
 use crate::transport::Transport;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use wide::f32x8;
 
 /// Depth and roulette settings.
@@ -126,7 +126,7 @@ impl<S: Copy> EmissionSums<S> {
                 Some(slot) => self.sums[slot] = transport.add(&self.sums[slot], &scaled),
                 None => {
                     let le =
-                        transport.gather(scene, wavelengths, &[LaneSpectrum::Scene(id); LANES]);
+                        transport.gather(scene, wavelengths, &[LaneSpectrum::scene(id); LANES]);
                     self.direct = transport.add(&self.direct, &transport.mul(&scaled, &le));
                 }
             }
@@ -143,7 +143,7 @@ impl<S: Copy> EmissionSums<S> {
         let mut radiance = self.direct;
         for (id, sum) in self.ids.iter().zip(&self.sums) {
             if let Some(id) = *id {
-                let le = transport.gather(scene, wavelengths, &[LaneSpectrum::Scene(id); LANES]);
+                let le = transport.gather(scene, wavelengths, &[LaneSpectrum::scene(id); LANES]);
                 radiance = transport.add(&radiance, &transport.mul(sum, &le));
             }
         }
@@ -207,7 +207,7 @@ pub fn trace<T: Transport>(
     settings: &IntegratorSettings,
     camera_rays: &RayPacket,
     rngs: &mut [Rng; LANES],
-    wavelengths: &T::Wavelengths,
+    wavelengths: &mut T::Wavelengths,
     counts: &mut RayCounts,
 ) -> T::Spectra {
     let mut emitted = EmissionSums::new(transport);
@@ -312,6 +312,22 @@ pub fn trace<T: Transport>(
         }
         let bsdfs: [Option<&Bsdf>; LANES] = materials.map(|m| m.map(|m| &m.bsdf));
         let origin = offset_x8(position, normal);
+        let (normal_lanes, front) = (normal.to_lanes(), cos_o.simd_ge(f32x8::ZERO).to_bitmask());
+        let (hit_u, hit_v) = (hit.u.to_array(), hit.v.to_array());
+        let points: [ShadingPoint; LANES] = core::array::from_fn(|lane| {
+            let uv = scene
+                .uvs
+                .get(hit.triangle[lane] as usize)
+                .map_or(Vec2::ZERO, |[a, b, c]| {
+                    *a * (1.0 - hit_u[lane] - hit_v[lane]) + *b * hit_u[lane] + *c * hit_v[lane]
+                });
+            ShadingPoint {
+                n: normal_lanes[lane],
+                front: front & (1 << lane) != 0,
+                uv,
+                hero_nm: transport.hero_wavelength(wavelengths, lane),
+            }
+        });
 
         // Next-event estimation: one light sample per lane, one shadow packet.
         let u_light = uniforms(rngs, active);
@@ -327,7 +343,7 @@ pub fn trace<T: Transport>(
         let distance_sq = to_light.length_squared();
         let wi = to_light * (f32x8::ONE / distance_sq.sqrt());
         let cos_light = -light.normal.dot(wi);
-        let eval = Bsdf::eval_packet(&bsdfs, light.valid, normal, wo, wi);
+        let eval = Bsdf::eval_packet(scene, &bsdfs, &points, light.valid, normal, wo, wi);
         let p_light = light.pmf * distance_sq / (light.area * cos_light.abs());
         let mut nee_light = [None; LANES];
         let mut emits = LaneMask::NONE;
@@ -372,10 +388,14 @@ pub fn trace<T: Transport>(
             f32x8::new(uniforms(rngs, active)),
             f32x8::new(uniforms(rngs, active)),
         );
-        let sample = Bsdf::sample_packet(&bsdfs, active, normal, wo, u, v);
+        let u_lobe = uniforms(rngs, active);
+        let sample = Bsdf::sample_packet(scene, &bsdfs, &points, active, normal, wo, &u_lobe, u, v);
         active = active
             .and(sample.valid)
             .and(LaneMask::from_simd(sample.weight.simd_gt(f32x8::ZERO)));
+        for lane in sample.terminate_secondary.and(active).iter() {
+            transport.terminate_secondary(wavelengths, lane);
+        }
         let below = sample.wi.dot(normal).simd_lt(f32x8::ZERO);
         let next_origin = Vec3x8::select(below, offset_x8(position, -normal), origin);
         previous_pdf = sample.pdf;

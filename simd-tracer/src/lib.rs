@@ -11,12 +11,14 @@
 //!   -> NEE + MIS -> Film (coefficients or XYZ per pixel) -> XYZ image
 //! ```
 
+pub mod angular;
 pub mod bvh;
 pub mod camera;
 pub mod filter;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod microfacet;
 pub mod obj;
 pub mod packet;
 pub mod render;
@@ -25,6 +27,7 @@ pub mod scene;
 pub mod scenes;
 pub mod simd;
 pub mod spectra;
+pub mod texture;
 pub mod transport;
 
 pub use spectral_core;

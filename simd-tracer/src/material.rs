@@ -1,40 +1,175 @@
 //! Materials: a BSDF, an optional emission, evaluated and sampled per lane.
 //!
-//! The interface splits every BSDF quantity into a scalar part (geometry,
-//! pdfs, MIS) computed per ray lane in f32, and a spectral part
-//! ([`LaneSpectrum`]) that the transport turns into Fourier coefficients or
-//! sampled values and multiplies across the 8 lanes. For a Lambertian
-//! surface of albedo `ρ(λ)`: `f = ρ/π`; cosine-weighted sampling with
-//! `p(ω) = cos θ/π` (Shirley–Chiu concentric disk), so the sampled weight
-//! `f cos θ/p` is exactly `ρ` (scalar part 1).
+//! Every BSDF quantity is split into a scalar part (geometry, pdfs, MIS),
+//! computed per ray lane in f32, and a spectral part ([`LaneSpectrum`]:
+//! `constant + scale · X` for a spectral factor `X`) that the transport turns
+//! into Fourier coefficients or sampled values and multiplies across the 8
+//! lanes. Directions point away from the surface; `wo` towards the previous
+//! vertex; the shading normal `n` is on the side of `wo`.
 //!
-//! Directions point away from the surface; `wo` towards the previous vertex.
+//! | BSDF | model |
+//! | --- | --- |
+//! | Lambert | `f = ρ/π`, cosine sampling (Shirley–Chiu), weight `ρ` |
+//! | Conductor | GGX (see [`crate::microfacet`]) with visible-normal sampling, `f = D G2 F/(4 cos θo cos θi)`, weight `F G2/G1`; `α < 10⁻³` is a mirror (delta); `F` from an angular spectrum (Fourier table / exact) |
+//! | Dielectric | smooth (delta) or GGX (Walter et al. 2007) reflection and transmission; the lobe is chosen with the mean Fresnel `c_0` of the table (Fourier mode, and sampled mode without dispersion) and the throughput carries the spectral `F` or `1 − F`; transmitted radiance is scaled by `1/η²`; with a dispersive IOR and a hero wavelength, refraction follows the hero's IOR and terminates the secondary wavelengths |
+//! | Coated | a smooth or GGX dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic): specular `F(θo)` plus diffuse `ρ (1 − F_i)(1 − F_o)/(π η² (1 − F_dr,int))`, which conserves energy exactly for `ρ = 1` (the coat's Fresnel is achromatic, so it rides in the scalar part) |
+//! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
 
+use crate::angular::{Ior, REFERENCE_WAVELENGTH_NM};
+use crate::microfacet::{self, SMOOTH_ALPHA};
 use crate::packet::{LANES, LaneMask};
-use crate::scene::SpectrumId;
+use crate::scene::{AngularId, Scene, SpectrumId, TextureId};
 use crate::simd::{self, Vec3x8};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+use spectral_core::optics::fresnel_dielectric;
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 use wide::f32x8;
 
-/// The spectral factor of a lane's BSDF or emission value.
+/// Where a lane's spectral factor comes from.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum LaneSpectrum {
-    /// Zero (no contribution).
-    Zero,
-    /// One (a spectrally flat factor).
-    One,
+pub enum SpectralRef {
     /// A scene spectrum.
     Scene(SpectrumId),
+    /// A spectral texture at `(u, v)`.
+    Texture {
+        /// Texture.
+        texture: TextureId,
+        /// Coordinate u.
+        u: f32,
+        /// Coordinate v.
+        v: f32,
+    },
+    /// An angular spectrum at `cos θ` (and a film thickness in [0, 1]).
+    Angular {
+        /// Angular spectrum.
+        id: AngularId,
+        /// `cos θ`.
+        cos: f32,
+        /// Film thickness within its range (0 otherwise).
+        thickness: f32,
+    },
+}
+
+/// A lane's spectral factor: `constant + scale · of`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LaneSpectrum {
+    /// Spectrally flat part.
+    pub constant: f32,
+    /// Weight of `of`.
+    pub scale: f32,
+    /// The spectral part.
+    pub of: Option<SpectralRef>,
+}
+
+impl LaneSpectrum {
+    /// Zero.
+    pub const ZERO: Self = Self {
+        constant: 0.0,
+        scale: 0.0,
+        of: None,
+    };
+    /// One.
+    pub const ONE: Self = Self {
+        constant: 1.0,
+        scale: 0.0,
+        of: None,
+    };
+
+    /// `X`.
+    pub fn of(x: SpectralRef) -> Self {
+        Self {
+            constant: 0.0,
+            scale: 1.0,
+            of: Some(x),
+        }
+    }
+
+    /// `1 − X`.
+    pub fn complement(x: SpectralRef) -> Self {
+        Self {
+            constant: 1.0,
+            scale: -1.0,
+            of: Some(x),
+        }
+    }
+
+    /// A scene spectrum.
+    pub fn scene(id: SpectrumId) -> Self {
+        Self::of(SpectralRef::Scene(id))
+    }
+}
+
+/// A reflectance that is a spectrum or a texture.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Albedo {
+    /// A scene spectrum.
+    Spectrum(SpectrumId),
+    /// A spectral texture.
+    Texture(TextureId),
+}
+
+impl Albedo {
+    fn at(self, uv: Vec2) -> SpectralRef {
+        match self {
+            Self::Spectrum(id) => SpectralRef::Scene(id),
+            Self::Texture(texture) => SpectralRef::Texture {
+                texture,
+                u: uv.x,
+                v: uv.y,
+            },
+        }
+    }
 }
 
 /// The BSDF of a material.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Bsdf {
-    /// Lambertian reflection with a spectral albedo.
+    /// Lambertian reflection.
     Lambert {
-        /// Albedo spectrum (values in [0, 1]).
-        albedo: SpectrumId,
+        /// Albedo (values in [0, 1]).
+        albedo: Albedo,
+    },
+    /// A (rough) conductor.
+    Conductor {
+        /// Fresnel reflectance from outside.
+        fresnel: AngularId,
+        /// GGX `α` (below 10⁻³: a mirror).
+        roughness: f32,
+    },
+    /// A (rough) dielectric interface.
+    Dielectric {
+        /// Fresnel reflectance lit from outside.
+        outside: AngularId,
+        /// Fresnel reflectance lit from inside.
+        inside: AngularId,
+        /// `n_inside / n_outside`.
+        ior: Ior,
+        /// GGX `α` (below 10⁻³: smooth).
+        roughness: f32,
+    },
+    /// A dielectric coat over a Lambertian base.
+    Coated {
+        /// Base albedo.
+        albedo: Albedo,
+        /// Coat index (constant).
+        ior: f32,
+        /// Coat GGX `α` (below 10⁻³: smooth).
+        roughness: f32,
+        /// Diffuse Fresnel reflectance of the coat seen from inside.
+        fdr_inside: f32,
+    },
+    /// A smooth thin-film stack.
+    ThinFilm {
+        /// Reflectance from the front.
+        front_reflectance: AngularId,
+        /// Transmittance from the front (`None`: opaque base).
+        front_transmittance: Option<AngularId>,
+        /// Reflectance and transmittance from the back (transparent base).
+        back: Option<(AngularId, AngularId)>,
+        /// Substrate index relative to the incident medium (refraction).
+        substrate_ior: f32,
+        /// Film thickness in [0, 1] of its range, from a scalar texture.
+        thickness: Option<TextureId>,
     },
 }
 
@@ -51,25 +186,82 @@ pub struct Material {
     pub two_sided: bool,
 }
 
+/// Ids a material refers to, for validation.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct References {
+    /// Scene spectra.
+    pub spectra: Vec<SpectrumId>,
+    /// Angular spectra.
+    pub angular: Vec<AngularId>,
+    /// Textures.
+    pub textures: Vec<TextureId>,
+}
+
 impl Material {
     /// A non-emissive Lambertian material.
     pub fn lambert(name: &str, albedo: SpectrumId) -> Self {
+        Self::new(
+            name,
+            Bsdf::Lambert {
+                albedo: Albedo::Spectrum(albedo),
+            },
+        )
+    }
+
+    /// A non-emissive material.
+    pub fn new(name: &str, bsdf: Bsdf) -> Self {
         Self {
             name: name.to_string(),
-            bsdf: Bsdf::Lambert { albedo },
+            bsdf,
             emission: None,
             two_sided: false,
         }
     }
 
-    /// Every spectrum id the material refers to.
-    pub fn spectra(&self) -> Vec<SpectrumId> {
-        let mut ids = match self.bsdf {
-            Bsdf::Lambert { albedo } => vec![albedo],
+    /// Every id the material refers to.
+    pub fn references(&self) -> References {
+        let mut r = References::default();
+        let albedo = |a: &Albedo, r: &mut References| match a {
+            Albedo::Spectrum(id) => r.spectra.push(*id),
+            Albedo::Texture(id) => r.textures.push(*id),
         };
-        ids.extend(self.emission);
-        ids
+        match &self.bsdf {
+            Bsdf::Lambert { albedo: a } | Bsdf::Coated { albedo: a, .. } => albedo(a, &mut r),
+            Bsdf::Conductor { fresnel, .. } => r.angular.push(*fresnel),
+            Bsdf::Dielectric {
+                outside, inside, ..
+            } => r.angular.extend([*outside, *inside]),
+            Bsdf::ThinFilm {
+                front_reflectance,
+                front_transmittance,
+                back,
+                thickness,
+                ..
+            } => {
+                r.angular.push(*front_reflectance);
+                r.angular.extend(*front_transmittance);
+                if let Some((br, bt)) = back {
+                    r.angular.extend([*br, *bt]);
+                }
+                r.textures.extend(*thickness);
+            }
+        }
+        r.spectra.extend(self.emission);
+        r
     }
+}
+
+/// Per-lane shading inputs beyond the directions.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadingPoint {
+    /// Unit shading normal on the side of `wo`.
+    pub n: Vec3,
+    /// Whether `wo` is on the front (outside) of the surface.
+    pub front: bool,
+    /// Texture coordinates.
+    pub uv: Vec2,
+    /// The hero wavelength of sampled transports (`None` for Fourier).
+    pub hero_nm: Option<f32>,
 }
 
 /// A sampled scattering direction.
@@ -77,12 +269,14 @@ impl Material {
 pub struct BsdfSample {
     /// Incident direction (unit, away from the surface).
     pub wi: Vec3,
-    /// Solid-angle pdf of `wi` (0 for a delta lobe: no MIS).
+    /// Solid-angle pdf of `wi`; 0 for a delta lobe (no MIS).
     pub pdf: f32,
     /// Scalar part of `f cos θ / p`.
     pub weight: f32,
     /// Spectral part of `f cos θ / p`.
     pub spectrum: LaneSpectrum,
+    /// The direction depends on the hero wavelength: drop the others.
+    pub terminate_secondary: bool,
 }
 
 /// A BSDF evaluated for a given pair of directions.
@@ -94,6 +288,14 @@ pub struct BsdfEval {
     pub spectrum: LaneSpectrum,
     /// Solid-angle pdf with which [`Bsdf::sample`] picks `wi`.
     pub pdf: f32,
+}
+
+impl BsdfEval {
+    const ZERO: Self = Self {
+        value: 0.0,
+        spectrum: LaneSpectrum::ZERO,
+        pdf: 0.0,
+    };
 }
 
 /// An orthonormal basis around a unit normal (Duff et al., "Building an
@@ -108,6 +310,29 @@ pub fn basis(n: Vec3) -> (Vec3, Vec3) {
     )
 }
 
+/// A local frame around `n`.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    t: Vec3,
+    s: Vec3,
+    n: Vec3,
+}
+
+impl Frame {
+    fn new(n: Vec3) -> Self {
+        let (t, s) = basis(n);
+        Self { t, s, n }
+    }
+
+    fn to_local(self, w: Vec3) -> Vec3 {
+        Vec3::new(w.dot(self.t), w.dot(self.s), w.dot(self.n))
+    }
+
+    fn to_world(self, w: Vec3) -> Vec3 {
+        w.x * self.t + w.y * self.s + w.z * self.n
+    }
+}
+
 /// Cosine-weighted direction around `n` (unit) from `(u, v) ∈ [0, 1)²`.
 pub fn sample_cosine(n: Vec3, u: f32, v: f32) -> Vec3 {
     let (a, b) = (2.0 * u - 1.0, 2.0 * v - 1.0);
@@ -120,49 +345,510 @@ pub fn sample_cosine(n: Vec3, u: f32, v: f32) -> Vec3 {
     };
     let (x, y) = (r * phi.cos(), r * phi.sin());
     let z = (1.0 - x * x - y * y).max(0.0).sqrt();
-    let (t, s) = basis(n);
-    (x * t + y * s + z * n).normalize()
+    Frame::new(n).to_world(Vec3::new(x, y, z)).normalize()
+}
+
+/// Diffuse (hemispherical-cosine-weighted) Fresnel reflectance of a
+/// dielectric boundary with relative index `eta`:
+/// `F_dr = 2 ∫_0^1 F(μ, η) μ dμ` (midpoint rule, 1000 steps).
+pub fn diffuse_fresnel(eta: f64) -> f64 {
+    let steps = 1000;
+    (0..steps)
+        .map(|i| {
+            let mu = (i as f64 + 0.5) / steps as f64;
+            2.0 * fresnel_dielectric(mu, eta) * mu / steps as f64
+        })
+        .sum()
+}
+
+fn angular_mean(scene: &Scene, id: AngularId, cos: f32, thickness: f32) -> f32 {
+    scene
+        .angular
+        .get(id as usize)
+        .map_or(0.0, |a| a.mean(cos, thickness))
+}
+
+fn angular_ref(id: AngularId, cos: f32, thickness: f32) -> SpectralRef {
+    SpectralRef::Angular { id, cos, thickness }
+}
+
+/// The dielectric's relative index for directions: the hero wavelength's
+/// with dispersion in sampled mode, else the reference wavelength's.
+fn direction_ior(ior: &Ior, hero_nm: Option<f32>) -> (f32, bool) {
+    match hero_nm {
+        Some(l) if ior.is_dispersive() => (ior.at(f64::from(l)) as f32, true),
+        _ => (ior.at(REFERENCE_WAVELENGTH_NM) as f32, false),
+    }
 }
 
 impl Bsdf {
-    /// Samples `wi` given the shading normal `n` (on the side of `wo`).
-    pub fn sample(&self, n: Vec3, _wo: Vec3, u: f32, v: f32) -> Option<BsdfSample> {
-        match *self {
+    /// Samples `wi` for `wo`; `u_lobe` picks the lobe, `(u, v)` the direction.
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        p: &ShadingPoint,
+        wo: Vec3,
+        u_lobe: f32,
+        u: f32,
+        v: f32,
+    ) -> Option<BsdfSample> {
+        let frame = Frame::new(p.n);
+        let wo_local = frame.to_local(wo);
+        if wo_local.z <= 0.0 {
+            return None;
+        }
+        match self {
             Self::Lambert { albedo } => {
-                let wi = sample_cosine(n, u, v);
-                let cos = wi.dot(n);
-                if cos <= 0.0 {
-                    return None;
-                }
-                Some(BsdfSample {
+                let wi = sample_cosine(p.n, u, v);
+                let cos = wi.dot(p.n);
+                (cos > 0.0).then(|| BsdfSample {
                     wi,
                     pdf: cos * FRAC_1_PI,
                     weight: 1.0,
-                    spectrum: LaneSpectrum::Scene(albedo),
+                    spectrum: LaneSpectrum::of(albedo.at(p.uv)),
+                    terminate_secondary: false,
                 })
+            }
+            Self::Conductor { fresnel, roughness } => {
+                if *roughness < SMOOTH_ALPHA {
+                    let wi = microfacet::reflect(wo, p.n);
+                    return Some(BsdfSample {
+                        wi,
+                        pdf: 0.0,
+                        weight: 1.0,
+                        spectrum: LaneSpectrum::of(angular_ref(*fresnel, wo_local.z, 0.0)),
+                        terminate_secondary: false,
+                    });
+                }
+                let alpha = *roughness;
+                let m = microfacet::sample_visible_normal(wo_local, alpha, u, v);
+                let wi_local = microfacet::reflect(wo_local, m);
+                if wi_local.z <= 0.0 {
+                    return None;
+                }
+                let cos_om = wo_local.dot(m);
+                Some(BsdfSample {
+                    wi: frame.to_world(wi_local),
+                    pdf: microfacet::visible_normal_pdf(wo_local, m, alpha) / (4.0 * cos_om),
+                    weight: microfacet::g2(wo_local, wi_local, alpha)
+                        / microfacet::g1(wo_local, alpha),
+                    spectrum: LaneSpectrum::of(angular_ref(*fresnel, cos_om, 0.0)),
+                    terminate_secondary: false,
+                })
+            }
+            Self::Dielectric {
+                outside,
+                inside,
+                ior,
+                roughness,
+            } => {
+                let (ior_value, dispersed) = direction_ior(ior, p.hero_nm);
+                let (table, eta) = if p.front {
+                    (*outside, ior_value)
+                } else {
+                    (*inside, 1.0 / ior_value)
+                };
+                if *roughness < SMOOTH_ALPHA {
+                    return sample_smooth_interface(
+                        scene, p.n, wo, wo_local.z, u_lobe, table, None, eta, dispersed, 0.0,
+                    );
+                }
+                let alpha = *roughness;
+                let m = microfacet::sample_visible_normal(wo_local, alpha, u, v);
+                let cos_om = wo_local.dot(m);
+                if cos_om <= 0.0 {
+                    return None;
+                }
+                let p_reflect = reflect_probability(scene, table, None, cos_om, 0.0);
+                let fresnel = angular_ref(table, cos_om, 0.0);
+                let pdf_m = microfacet::visible_normal_pdf(wo_local, m, alpha);
+                if u_lobe < p_reflect {
+                    let wi_local = microfacet::reflect(wo_local, m);
+                    if wi_local.z <= 0.0 {
+                        return None;
+                    }
+                    Some(BsdfSample {
+                        wi: frame.to_world(wi_local),
+                        pdf: p_reflect * pdf_m / (4.0 * cos_om),
+                        weight: microfacet::g2(wo_local, wi_local, alpha)
+                            / microfacet::g1(wo_local, alpha)
+                            / p_reflect,
+                        spectrum: LaneSpectrum::of(fresnel),
+                        terminate_secondary: false,
+                    })
+                } else {
+                    let wi_local = microfacet::refract(wo_local, m, eta)?;
+                    if wi_local.z >= 0.0 {
+                        return None;
+                    }
+                    let cos_im = wi_local.dot(m);
+                    let denominator = (cos_im + cos_om / eta).powi(2);
+                    let p_transmit = 1.0 - p_reflect;
+                    Some(BsdfSample {
+                        wi: frame.to_world(wi_local),
+                        pdf: p_transmit * pdf_m * cos_im.abs() / denominator,
+                        weight: microfacet::g2(wo_local, wi_local, alpha)
+                            / (microfacet::g1(wo_local, alpha) * eta * eta * p_transmit),
+                        spectrum: LaneSpectrum::complement(fresnel),
+                        terminate_secondary: dispersed,
+                    })
+                }
+            }
+            Self::Coated {
+                albedo,
+                ior,
+                roughness,
+                fdr_inside,
+            } => {
+                let coat = CoatLobes::new(scene, albedo, *ior, *roughness, *fdr_inside, p.uv);
+                coat.sample(frame, wo_local, u_lobe, u, v)
+            }
+            Self::ThinFilm {
+                front_reflectance,
+                front_transmittance,
+                back,
+                substrate_ior,
+                thickness,
+            } => {
+                let t = thickness
+                    .and_then(|id| scene.textures.get(id as usize))
+                    .map_or(0.0, |tex| tex.scalar_at(p.uv.x, p.uv.y));
+                let (r, tr, eta) = match (p.front, back) {
+                    (false, Some((br, bt))) => (*br, Some(*bt), 1.0 / substrate_ior),
+                    _ => (*front_reflectance, *front_transmittance, *substrate_ior),
+                };
+                sample_smooth_interface(scene, p.n, wo, wo_local.z, u_lobe, r, tr, eta, false, t)
             }
         }
     }
 
-    /// `f cos θ_i` and the sampling pdf for `wi` (`n` on the side of `wo`).
-    pub fn eval(&self, n: Vec3, _wo: Vec3, wi: Vec3) -> BsdfEval {
-        match *self {
+    /// `f cos θ_i` and the sampling pdf for `wi`.
+    pub fn eval(&self, scene: &Scene, p: &ShadingPoint, wo: Vec3, wi: Vec3) -> BsdfEval {
+        let frame = Frame::new(p.n);
+        let (wo_local, wi_local) = (frame.to_local(wo), frame.to_local(wi));
+        if wo_local.z <= 0.0 {
+            return BsdfEval::ZERO;
+        }
+        match self {
             Self::Lambert { albedo } => {
-                let cos = wi.dot(n);
-                if cos <= 0.0 {
-                    return BsdfEval {
-                        value: 0.0,
-                        spectrum: LaneSpectrum::Zero,
-                        pdf: 0.0,
-                    };
+                if wi_local.z <= 0.0 {
+                    return BsdfEval::ZERO;
                 }
                 BsdfEval {
-                    value: cos * FRAC_1_PI,
-                    spectrum: LaneSpectrum::Scene(albedo),
-                    pdf: cos * FRAC_1_PI,
+                    value: wi_local.z * FRAC_1_PI,
+                    spectrum: LaneSpectrum::of(albedo.at(p.uv)),
+                    pdf: wi_local.z * FRAC_1_PI,
                 }
             }
+            Self::Conductor { fresnel, roughness } => {
+                if *roughness < SMOOTH_ALPHA || wi_local.z <= 0.0 {
+                    return BsdfEval::ZERO;
+                }
+                let alpha = *roughness;
+                let m = (wo_local + wi_local).normalize();
+                let cos_om = wo_local.dot(m);
+                if cos_om.is_nan() || cos_om <= 0.0 {
+                    return BsdfEval::ZERO;
+                }
+                let d = microfacet::distribution(m, alpha);
+                BsdfEval {
+                    value: d * microfacet::g2(wo_local, wi_local, alpha) / (4.0 * wo_local.z),
+                    spectrum: LaneSpectrum::of(angular_ref(*fresnel, cos_om, 0.0)),
+                    pdf: microfacet::visible_normal_pdf(wo_local, m, alpha) / (4.0 * cos_om),
+                }
+            }
+            Self::Dielectric {
+                outside,
+                inside,
+                ior,
+                roughness,
+            } => {
+                if *roughness < SMOOTH_ALPHA || wi_local.z == 0.0 {
+                    return BsdfEval::ZERO;
+                }
+                let (ior_value, _) = direction_ior(ior, p.hero_nm);
+                let (table, eta) = if p.front {
+                    (*outside, ior_value)
+                } else {
+                    (*inside, 1.0 / ior_value)
+                };
+                eval_rough_dielectric(scene, wo_local, wi_local, *roughness, table, eta)
+            }
+            Self::Coated {
+                albedo,
+                ior,
+                roughness,
+                fdr_inside,
+            } => CoatLobes::new(scene, albedo, *ior, *roughness, *fdr_inside, p.uv)
+                .eval(wo_local, wi_local),
+            Self::ThinFilm { .. } => BsdfEval::ZERO,
         }
+    }
+}
+
+/// The probability of reflecting at a (film or bare) smooth interface:
+/// `c_0(R)` or `c_0(R)/(c_0(R) + c_0(T))` when a transmittance table is given.
+fn reflect_probability(
+    scene: &Scene,
+    r: AngularId,
+    t: Option<AngularId>,
+    cos: f32,
+    thickness: f32,
+) -> f32 {
+    let mean_r = angular_mean(scene, r, cos, thickness).clamp(0.0, 1.0);
+    match t {
+        None => mean_r,
+        Some(t) => {
+            let mean_t = angular_mean(scene, t, cos, thickness).max(0.0);
+            if mean_r + mean_t > 0.0 {
+                mean_r / (mean_r + mean_t)
+            } else {
+                1.0
+            }
+        }
+    }
+}
+
+/// A smooth interface (bare dielectric: `t = None`, the transmittance is
+/// `1 − R`; film: `R` and `T` tables). Reflection or refraction by `u_lobe`.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one helper shared by dielectric and film"
+)]
+fn sample_smooth_interface(
+    scene: &Scene,
+    n: Vec3,
+    wo: Vec3,
+    cos_o: f32,
+    u_lobe: f32,
+    r: AngularId,
+    t: Option<AngularId>,
+    eta: f32,
+    dispersed: bool,
+    thickness: f32,
+) -> Option<BsdfSample> {
+    let p_reflect = reflect_probability(scene, r, t, cos_o, thickness);
+    let reflectance = angular_ref(r, cos_o, thickness);
+    let refracted = if u_lobe < p_reflect {
+        None
+    } else {
+        microfacet::refract(wo, n, eta)
+    };
+    match (refracted, t) {
+        (None, _) => {
+            // Reflection (also where a rounding of p_reflect meets total
+            // internal reflection: then R = 1 and the weight stays right).
+            let p = if u_lobe < p_reflect { p_reflect } else { 1.0 };
+            (p > 0.0).then(|| BsdfSample {
+                wi: microfacet::reflect(wo, n),
+                pdf: 0.0,
+                weight: 1.0 / p,
+                spectrum: LaneSpectrum::of(reflectance),
+                terminate_secondary: false,
+            })
+        }
+        (Some(wi), transmittance) => {
+            let p_transmit = 1.0 - p_reflect;
+            let spectrum = match transmittance {
+                Some(t) => LaneSpectrum::of(angular_ref(t, cos_o, thickness)),
+                None => LaneSpectrum::complement(reflectance),
+            };
+            Some(BsdfSample {
+                wi,
+                pdf: 0.0,
+                weight: 1.0 / (p_transmit * eta * eta),
+                spectrum,
+                terminate_secondary: dispersed,
+            })
+        }
+    }
+}
+
+/// Rough dielectric `f cos θ_i` and pdf (Walter et al. 2007, pbrt-v4's
+/// generalised half vector `m ∝ wo + η' wi`).
+fn eval_rough_dielectric(
+    scene: &Scene,
+    wo: Vec3,
+    wi: Vec3,
+    alpha: f32,
+    table: AngularId,
+    eta: f32,
+) -> BsdfEval {
+    let reflection = wi.z > 0.0;
+    let etap = if reflection { 1.0 } else { eta };
+    let mut m = wi * etap + wo;
+    if m.length_squared() == 0.0 {
+        return BsdfEval::ZERO;
+    }
+    m = m.normalize();
+    if m.z < 0.0 {
+        m = -m;
+    }
+    let (cos_om, cos_im) = (wo.dot(m), wi.dot(m));
+    if cos_om <= 0.0 || cos_im * wi.z <= 0.0 {
+        return BsdfEval::ZERO;
+    }
+    let p_reflect = reflect_probability(scene, table, None, cos_om, 0.0);
+    let fresnel = angular_ref(table, cos_om, 0.0);
+    let d = microfacet::distribution(m, alpha);
+    let g = microfacet::g2(wo, wi, alpha);
+    let pdf_m = microfacet::visible_normal_pdf(wo, m, alpha);
+    if reflection {
+        BsdfEval {
+            value: d * g / (4.0 * wo.z),
+            spectrum: LaneSpectrum::of(fresnel),
+            pdf: p_reflect * pdf_m / (4.0 * cos_om),
+        }
+    } else {
+        let denominator = (cos_im + cos_om / eta).powi(2);
+        BsdfEval {
+            value: d * g * cos_im.abs() * cos_om / (wo.z * denominator * eta * eta),
+            spectrum: LaneSpectrum::complement(fresnel),
+            pdf: (1.0 - p_reflect) * pdf_m * cos_im.abs() / denominator,
+        }
+    }
+}
+
+/// The two lobes of a coated material at one point.
+struct CoatLobes {
+    base: SpectralRef,
+    eta: f32,
+    alpha: f32,
+    diffuse_scale: f32,
+    specular_weight_of_base: f32,
+}
+
+impl CoatLobes {
+    fn new(
+        scene: &Scene,
+        albedo: &Albedo,
+        eta: f32,
+        alpha: f32,
+        fdr_inside: f32,
+        uv: Vec2,
+    ) -> Self {
+        let base = albedo.at(uv);
+        let mean_albedo = match base {
+            SpectralRef::Scene(id) => scene
+                .spectra
+                .get(id as usize)
+                .map_or(0.5, |s| s.mean() as f32),
+            SpectralRef::Texture { texture, u, v } => scene
+                .textures
+                .get(texture as usize)
+                .map_or(0.5, |t| t.scalar_at(u, v)),
+            SpectralRef::Angular { .. } => 0.5,
+        };
+        Self {
+            base,
+            eta,
+            alpha,
+            diffuse_scale: 1.0 / (eta * eta * (1.0 - fdr_inside)),
+            specular_weight_of_base: mean_albedo.clamp(0.0, 1.0),
+        }
+    }
+
+    fn fresnel(&self, cos: f32) -> f32 {
+        fresnel_dielectric(f64::from(cos), f64::from(self.eta)) as f32
+    }
+
+    /// Probability of sampling the specular lobe.
+    fn specular_probability(&self, cos_o: f32) -> f32 {
+        let f = self.fresnel(cos_o);
+        let diffuse = (1.0 - f) * self.specular_weight_of_base;
+        if f + diffuse > 0.0 {
+            (f / (f + diffuse)).clamp(0.05, 0.95)
+        } else {
+            0.5
+        }
+    }
+
+    /// Diffuse `f cos θ_i` without the albedo.
+    fn diffuse(&self, wo: Vec3, wi: Vec3) -> f32 {
+        (1.0 - self.fresnel(wi.z))
+            * (1.0 - self.fresnel(wo.z))
+            * self.diffuse_scale
+            * wi.z
+            * FRAC_1_PI
+    }
+
+    fn smooth(&self) -> bool {
+        self.alpha < SMOOTH_ALPHA
+    }
+
+    /// Rough specular `f cos θ_i` and its sampling pdf.
+    fn rough_specular(&self, wo: Vec3, wi: Vec3) -> (f32, f32) {
+        let m = (wo + wi).normalize();
+        let cos_om = wo.dot(m);
+        if self.smooth() || cos_om.is_nan() || cos_om <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let value = microfacet::distribution(m, self.alpha)
+            * microfacet::g2(wo, wi, self.alpha)
+            * self.fresnel(cos_om)
+            / (4.0 * wo.z);
+        let pdf = microfacet::visible_normal_pdf(wo, m, self.alpha) / (4.0 * cos_om);
+        (value, pdf)
+    }
+
+    fn eval(&self, wo: Vec3, wi: Vec3) -> BsdfEval {
+        if wi.z <= 0.0 {
+            return BsdfEval::ZERO;
+        }
+        let p_specular = self.specular_probability(wo.z);
+        let diffuse = self.diffuse(wo, wi);
+        let (specular, specular_pdf) = self.rough_specular(wo, wi);
+        let value = diffuse + specular;
+        if value.is_nan() || value <= 0.0 {
+            return BsdfEval::ZERO;
+        }
+        BsdfEval {
+            value,
+            spectrum: LaneSpectrum {
+                constant: specular / value,
+                scale: diffuse / value,
+                of: Some(self.base),
+            },
+            pdf: p_specular * specular_pdf + (1.0 - p_specular) * wi.z * FRAC_1_PI,
+        }
+    }
+
+    fn sample(&self, frame: Frame, wo: Vec3, u_lobe: f32, u: f32, v: f32) -> Option<BsdfSample> {
+        let p_specular = self.specular_probability(wo.z);
+        if self.smooth() {
+            if u_lobe < p_specular {
+                return Some(BsdfSample {
+                    wi: frame.to_world(microfacet::reflect(wo, Vec3::Z)),
+                    pdf: 0.0,
+                    weight: self.fresnel(wo.z) / p_specular,
+                    spectrum: LaneSpectrum::ONE,
+                    terminate_secondary: false,
+                });
+            }
+            let wi = sample_cosine(Vec3::Z, u, v);
+            let pdf = (1.0 - p_specular) * wi.z * FRAC_1_PI;
+            return (pdf > 0.0).then(|| BsdfSample {
+                wi: frame.to_world(wi),
+                pdf,
+                weight: self.diffuse(wo, wi) / pdf,
+                spectrum: LaneSpectrum::of(self.base),
+                terminate_secondary: false,
+            });
+        }
+        let wi = if u_lobe < p_specular {
+            let m = microfacet::sample_visible_normal(wo, self.alpha, u, v);
+            microfacet::reflect(wo, m)
+        } else {
+            sample_cosine(Vec3::Z, u, v)
+        };
+        let e = self.eval(wo, wi);
+        (e.pdf > 0.0 && e.value > 0.0).then(|| BsdfSample {
+            wi: frame.to_world(wi),
+            pdf: e.pdf,
+            weight: e.value / e.pdf,
+            spectrum: e.spectrum,
+            terminate_secondary: false,
+        })
     }
 }
 
@@ -171,7 +857,7 @@ impl Bsdf {
 pub struct BsdfSamplePacket {
     /// Incident directions (unit).
     pub wi: Vec3x8,
-    /// Solid-angle pdfs.
+    /// Solid-angle pdfs (0 for delta lobes).
     pub pdf: f32x8,
     /// Scalar parts of `f cos θ / p`.
     pub weight: f32x8,
@@ -179,6 +865,8 @@ pub struct BsdfSamplePacket {
     pub spectrum: [LaneSpectrum; LANES],
     /// Lanes that produced a sample.
     pub valid: LaneMask,
+    /// Lanes whose secondary wavelengths must be terminated.
+    pub terminate_secondary: LaneMask,
 }
 
 /// BSDF values of a packet for given directions.
@@ -192,13 +880,19 @@ pub struct BsdfEvalPacket {
     pub spectrum: [LaneSpectrum; LANES],
 }
 
-/// The albedo of lane `lane` if every active lane is Lambertian.
-fn all_lambert(bsdfs: &[Option<&Bsdf>; LANES], active: LaneMask) -> Option<[LaneSpectrum; LANES]> {
-    let mut spectra = [LaneSpectrum::Zero; LANES];
+/// The per-lane albedos if every active lane is Lambertian.
+fn all_lambert(
+    bsdfs: &[Option<&Bsdf>; LANES],
+    points: &[ShadingPoint; LANES],
+    active: LaneMask,
+) -> Option<[LaneSpectrum; LANES]> {
+    let mut spectra = [LaneSpectrum::ZERO; LANES];
     for lane in active.iter() {
         match bsdfs[lane] {
-            Some(Bsdf::Lambert { albedo }) => spectra[lane] = LaneSpectrum::Scene(*albedo),
-            None => return None,
+            Some(Bsdf::Lambert { albedo }) => {
+                spectra[lane] = LaneSpectrum::of(albedo.at(points[lane].uv))
+            }
+            _ => return None,
         }
     }
     Some(spectra)
@@ -228,15 +922,19 @@ impl Bsdf {
     /// Samples every active lane: 8-wide when all are Lambertian, else lane
     /// by lane through [`Bsdf::sample`]. `bsdfs[lane]` is `None` only for
     /// inactive lanes.
+    #[allow(clippy::too_many_arguments, reason = "the packet twin of `sample`")]
     pub fn sample_packet(
+        scene: &Scene,
         bsdfs: &[Option<&Bsdf>; LANES],
+        points: &[ShadingPoint; LANES],
         active: LaneMask,
         n: Vec3x8,
         wo: Vec3x8,
+        u_lobe: &[f32; LANES],
         u: f32x8,
         v: f32x8,
     ) -> BsdfSamplePacket {
-        if let Some(spectrum) = all_lambert(bsdfs, active) {
+        if let Some(spectrum) = all_lambert(bsdfs, points, active) {
             let wi = sample_cosine_x8(n, u, v);
             let cos = wi.dot(n);
             let valid = LaneMask::from_simd(cos.simd_gt(f32x8::ZERO)).and(active);
@@ -246,23 +944,36 @@ impl Bsdf {
                 weight: valid.to_simd().select(f32x8::ONE, f32x8::ZERO),
                 spectrum,
                 valid,
+                terminate_secondary: LaneMask::NONE,
             };
         }
-        let (nl, wol, ul, vl) = (n.to_lanes(), wo.to_lanes(), u.to_array(), v.to_array());
+        let (wol, ul, vl) = (wo.to_lanes(), u.to_array(), v.to_array());
         let mut wi = [Vec3::Z; LANES];
         let mut pdf = [0.0f32; LANES];
         let mut weight = [0.0f32; LANES];
-        let mut spectrum = [LaneSpectrum::Zero; LANES];
+        let mut spectrum = [LaneSpectrum::ZERO; LANES];
         let mut valid = LaneMask::NONE;
+        let mut terminate = LaneMask::NONE;
         for lane in active.iter() {
-            if let Some(s) =
-                bsdfs[lane].and_then(|b| b.sample(nl[lane], wol[lane], ul[lane], vl[lane]))
-            {
+            let sample = bsdfs[lane].and_then(|b| {
+                b.sample(
+                    scene,
+                    &points[lane],
+                    wol[lane],
+                    u_lobe[lane],
+                    ul[lane],
+                    vl[lane],
+                )
+            });
+            if let Some(s) = sample.filter(|s| s.weight.is_finite() && s.weight > 0.0) {
                 wi[lane] = s.wi;
                 pdf[lane] = s.pdf;
                 weight[lane] = s.weight;
                 spectrum[lane] = s.spectrum;
                 valid = valid.with(lane);
+                if s.terminate_secondary {
+                    terminate = terminate.with(lane);
+                }
             }
         }
         BsdfSamplePacket {
@@ -271,19 +982,22 @@ impl Bsdf {
             weight: f32x8::new(weight),
             spectrum,
             valid,
+            terminate_secondary: terminate,
         }
     }
 
     /// Evaluates every active lane: 8-wide when all are Lambertian, else
     /// lane by lane through [`Bsdf::eval`].
     pub fn eval_packet(
+        scene: &Scene,
         bsdfs: &[Option<&Bsdf>; LANES],
+        points: &[ShadingPoint; LANES],
         active: LaneMask,
         n: Vec3x8,
         wo: Vec3x8,
         wi: Vec3x8,
     ) -> BsdfEvalPacket {
-        if let Some(spectrum) = all_lambert(bsdfs, active) {
+        if let Some(spectrum) = all_lambert(bsdfs, points, active) {
             let value = wi.dot(n).max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI);
             return BsdfEvalPacket {
                 value,
@@ -291,16 +1005,18 @@ impl Bsdf {
                 spectrum,
             };
         }
-        let (nl, wol, wil) = (n.to_lanes(), wo.to_lanes(), wi.to_lanes());
+        let (wol, wil) = (wo.to_lanes(), wi.to_lanes());
         let mut value = [0.0f32; LANES];
         let mut pdf = [0.0f32; LANES];
-        let mut spectrum = [LaneSpectrum::Zero; LANES];
+        let mut spectrum = [LaneSpectrum::ZERO; LANES];
         for lane in active.iter() {
             if let Some(b) = bsdfs[lane] {
-                let e = b.eval(nl[lane], wol[lane], wil[lane]);
-                value[lane] = e.value;
-                pdf[lane] = e.pdf;
-                spectrum[lane] = e.spectrum;
+                let e = b.eval(scene, &points[lane], wol[lane], wil[lane]);
+                if e.value.is_finite() && e.pdf.is_finite() {
+                    value[lane] = e.value;
+                    pdf[lane] = e.pdf;
+                    spectrum[lane] = e.spectrum;
+                }
             }
         }
         BsdfEvalPacket {
@@ -308,84 +1024,5 @@ impl Bsdf {
             pdf: f32x8::new(pdf),
             spectrum,
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn packet_lambert_matches_scalar_lane_by_lane() {
-        let bsdf = Bsdf::Lambert { albedo: 3 };
-        let bsdfs = [Some(&bsdf); LANES];
-        let normals: [Vec3; LANES] =
-            core::array::from_fn(|i| Vec3::new(i as f32 - 3.0, 1.0, -0.5 * i as f32).normalize());
-        let n = Vec3x8::from_lanes(&normals);
-        let u = f32x8::new(core::array::from_fn(|i| (i as f32 * 0.37 + 0.05) % 1.0));
-        let v = f32x8::new(core::array::from_fn(|i| (i as f32 * 0.61 + 0.5) % 1.0));
-        let packet = Bsdf::sample_packet(&bsdfs, LaneMask::ALL, n, n, u, v);
-        for (lane, &normal) in normals.iter().enumerate() {
-            let s = bsdf
-                .sample(normal, normal, u.to_array()[lane], v.to_array()[lane])
-                .unwrap();
-            assert!((packet.wi.lane(lane) - s.wi).length() < 1e-5, "lane {lane}");
-            assert!((packet.pdf.to_array()[lane] - s.pdf).abs() < 1e-5);
-            assert_eq!(packet.weight.to_array()[lane], s.weight);
-            assert_eq!(packet.spectrum[lane], s.spectrum);
-        }
-        let eval = Bsdf::eval_packet(&bsdfs, LaneMask::ALL, n, n, packet.wi);
-        for (lane, &normal) in normals.iter().enumerate() {
-            let e = bsdf.eval(normal, normal, packet.wi.lane(lane));
-            assert!((eval.value.to_array()[lane] - e.value).abs() < 1e-5);
-            assert!((eval.pdf.to_array()[lane] - e.pdf).abs() < 1e-5);
-        }
-        // The centre of the square maps to the normal; no NaN.
-        let centre = sample_cosine_x8(n, f32x8::splat(0.5), f32x8::splat(0.5));
-        assert!((centre.lane(2) - normals[2]).length() < 1e-6);
-    }
-
-    #[test]
-    fn basis_is_orthonormal() {
-        for n in [
-            Vec3::X,
-            Vec3::Y,
-            Vec3::Z,
-            -Vec3::Z,
-            Vec3::new(0.3, -0.4, 0.5).normalize(),
-        ] {
-            let (t, s) = basis(n);
-            assert!(t.dot(n).abs() < 1e-6 && s.dot(n).abs() < 1e-6 && t.dot(s).abs() < 1e-6);
-            assert!((t.length() - 1.0).abs() < 1e-6 && (s.length() - 1.0).abs() < 1e-6);
-        }
-    }
-
-    #[test]
-    fn lambert_sampling_matches_its_pdf() {
-        // Estimate ∫ cos/π over the hemisphere by sampling: E[f cos/p] = ρ·1.
-        let n = Vec3::new(0.2, 0.9, -0.1).normalize();
-        let bsdf = Bsdf::Lambert { albedo: 0 };
-        let m = 200;
-        let mut mean_cos = 0.0;
-        for i in 0..m {
-            for j in 0..m {
-                let s = bsdf
-                    .sample(
-                        n,
-                        n,
-                        (i as f32 + 0.5) / m as f32,
-                        (j as f32 + 0.5) / m as f32,
-                    )
-                    .unwrap();
-                assert!((s.pdf - s.wi.dot(n) / PI).abs() < 1e-5);
-                assert_eq!(s.weight, 1.0);
-                mean_cos += s.wi.dot(n);
-                let e = bsdf.eval(n, n, s.wi);
-                assert!((e.pdf - s.pdf).abs() < 1e-6);
-            }
-        }
-        // E[cos θ] under p = cos/π is 2/3 (midpoint grid error ~ 1/m²).
-        assert!((mean_cos / (m * m) as f32 - 2.0 / 3.0).abs() < 3e-4);
-        assert_eq!(bsdf.eval(n, n, -n).value, 0.0);
     }
 }

@@ -196,14 +196,14 @@ fn render_tile<T: Transport>(
                 crate::packet::LaneMask(lanes.iter().enumerate().fold(0u8, |m, (lane, l)| {
                     if l.is_some() { m | (1 << lane) } else { m }
                 }));
-            let wavelengths = transport.sample_wavelengths(&mut wavelength_rngs);
+            let mut wavelengths = transport.sample_wavelengths(&mut wavelength_rngs);
             let radiance = trace(
                 transport,
                 scene,
                 &settings.integrator,
                 &packet,
                 &mut path_rngs,
-                &wavelengths,
+                &mut wavelengths,
                 &mut tile.rays,
             );
             let samples = transport.samples(&radiance, &wavelengths);

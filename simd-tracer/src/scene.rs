@@ -6,24 +6,32 @@
 //! material is two-sided. Degenerate triangles (zero area, non-finite) are
 //! dropped at build time and counted in [`Scene::skipped_triangles`].
 
+use crate::angular::{AngularFunction, AngularSpectrum};
 use crate::bvh::Bvh;
 use crate::camera::Camera;
 use crate::light::LightSet;
 use crate::material::Material;
 use crate::spectra::{SceneSpectrum, SpectrumSource};
-use glam::Vec3;
+use crate::texture::Texture;
+use glam::{Vec2, Vec3};
 use spectral_core::{SpectralError, SpectralRange};
 
 /// Index of a spectrum in [`Scene::spectra`].
 pub type SpectrumId = u32;
 /// Index of a material in [`Scene::materials`].
 pub type MaterialId = u32;
+/// Index of an angular spectrum in [`Scene::angular`].
+pub type AngularId = u32;
+/// Index of a texture in [`Scene::textures`].
+pub type TextureId = u32;
 
 /// Why a scene could not be built.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SceneError {
     /// A spectrum (named in the message) is invalid.
     Spectrum(String, SpectralError),
+    /// A material (named) refers to something that does not exist.
+    Reference(String, &'static str, u32),
     /// A triangle refers to a material that does not exist.
     UnknownMaterial(MaterialId),
     /// A mesh index refers to a vertex that does not exist.
@@ -45,6 +53,10 @@ impl core::fmt::Display for SceneError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Self::Spectrum(name, e) => write!(f, "spectrum `{name}`: {e}"),
+            Self::Reference(name, kind, id) => write!(
+                f,
+                "material `{name}` refers to {kind} {id}, which does not exist"
+            ),
             Self::UnknownMaterial(id) => write!(f, "material {id} does not exist"),
             Self::IndexOutOfRange { index, vertices } => {
                 write!(f, "vertex index {index} out of range ({vertices} vertices)")
@@ -65,6 +77,10 @@ pub struct Scene {
     pub range: SpectralRange,
     /// Prepared spectra.
     pub spectra: Vec<SceneSpectrum>,
+    /// Angle-dependent spectra (Fresnel, films) with their Fourier tables.
+    pub angular: Vec<AngularSpectrum>,
+    /// Textures.
+    pub textures: Vec<Texture>,
     /// Materials.
     pub materials: Vec<Material>,
     /// Triangle vertices (non-degenerate ones only).
@@ -75,6 +91,8 @@ pub struct Scene {
     pub areas: Vec<f32>,
     /// Material of each triangle.
     pub triangle_material: Vec<MaterialId>,
+    /// Texture coordinates of each triangle's vertices (zero if none).
+    pub uvs: Vec<[Vec2; 3]>,
     /// The camera.
     pub camera: Camera,
     /// Radiance arriving from every direction that escapes the scene.
@@ -103,9 +121,12 @@ impl Scene {
 pub struct SceneBuilder {
     range: SpectralRange,
     spectra: Vec<SceneSpectrum>,
+    angular: Vec<AngularSpectrum>,
+    textures: Vec<Texture>,
     materials: Vec<Material>,
     triangles: Vec<[Vec3; 3]>,
     triangle_material: Vec<MaterialId>,
+    uvs: Vec<[Vec2; 3]>,
     camera: Option<Camera>,
     environment: Option<SpectrumId>,
     skipped: usize,
@@ -117,9 +138,12 @@ impl SceneBuilder {
         Self {
             range,
             spectra: Vec::new(),
+            angular: Vec::new(),
+            textures: Vec::new(),
             materials: Vec::new(),
             triangles: Vec::new(),
             triangle_material: Vec::new(),
+            uvs: Vec::new(),
             camera: None,
             environment: None,
             skipped: 0,
@@ -143,6 +167,29 @@ impl SceneBuilder {
         Ok((self.spectra.len() - 1) as SpectrumId)
     }
 
+    /// Adds an angle-dependent spectrum (builds its Fourier tables).
+    pub fn add_angular(
+        &mut self,
+        name: &str,
+        function: AngularFunction,
+    ) -> Result<AngularId, SceneError> {
+        let angular = AngularSpectrum::new(function, &self.range)
+            .map_err(|e| SceneError::Spectrum(name.to_string(), e))?;
+        self.angular.push(angular);
+        Ok((self.angular.len() - 1) as AngularId)
+    }
+
+    /// A prepared spectrum added so far (e.g. to build an angular function).
+    pub fn spectrum(&self, id: SpectrumId) -> Option<&SceneSpectrum> {
+        self.spectra.get(id as usize)
+    }
+
+    /// Adds a texture.
+    pub fn add_texture(&mut self, texture: Texture) -> TextureId {
+        self.textures.push(texture);
+        (self.textures.len() - 1) as TextureId
+    }
+
     /// Adds a material.
     pub fn add_material(&mut self, material: Material) -> MaterialId {
         self.materials.push(material);
@@ -151,11 +198,18 @@ impl SceneBuilder {
 
     /// Adds one triangle (counter-clockwise seen from its front).
     pub fn add_triangle(&mut self, vertices: [Vec3; 3], material: MaterialId) {
+        self.add_triangle_uv(vertices, [Vec2::ZERO; 3], material);
+    }
+
+    /// Adds one triangle with texture coordinates.
+    pub fn add_triangle_uv(&mut self, vertices: [Vec3; 3], uvs: [Vec2; 3], material: MaterialId) {
         let [a, b, c] = vertices;
         let area2 = (b - a).cross(c - a).length_squared();
-        if vertices.iter().all(|v| v.is_finite()) && area2.is_finite() && area2 > 0.0 {
+        let finite = vertices.iter().all(|v| v.is_finite()) && uvs.iter().all(|t| t.is_finite());
+        if finite && area2.is_finite() && area2 > 0.0 {
             self.triangles.push(vertices);
             self.triangle_material.push(material);
+            self.uvs.push(uvs);
         } else {
             self.skipped += 1;
         }
@@ -213,14 +267,23 @@ impl SceneBuilder {
             return Err(SceneError::UnknownMaterial(bad));
         }
         for material in &self.materials {
-            for id in material.spectra() {
-                if id as usize >= self.spectra.len() {
-                    return Err(SceneError::Spectrum(
-                        format!("#{id}"),
-                        SpectralError::InvalidParameter("spectrum id"),
-                    ));
+            let references = material.references();
+            let checks = [
+                ("spectrum", &references.spectra, self.spectra.len()),
+                ("angular spectrum", &references.angular, self.angular.len()),
+                ("texture", &references.textures, self.textures.len()),
+            ];
+            for (kind, ids, available) in checks {
+                if let Some(&id) = ids.iter().find(|&&id| id as usize >= available) {
+                    return Err(SceneError::Reference(material.name.clone(), kind, id));
                 }
             }
+        }
+        if let Some(env) = self
+            .environment
+            .filter(|&e| e as usize >= self.spectra.len())
+        {
+            return Err(SceneError::Reference("environment".into(), "spectrum", env));
         }
         let normals = self
             .triangles
@@ -243,11 +306,14 @@ impl SceneBuilder {
         Ok(Scene {
             range: self.range,
             spectra: self.spectra,
+            angular: self.angular,
+            textures: self.textures,
             materials: self.materials,
             triangles: self.triangles,
             normals,
             areas,
             triangle_material: self.triangle_material,
+            uvs: self.uvs,
             camera,
             environment: self.environment,
             bvh,

@@ -18,10 +18,11 @@
 //!   the default: a single pixel's tens of samples give a noisy `α`) or per
 //!   pixel ([`AlphaMode::PerPixel`]).
 
-use crate::material::LaneSpectrum;
+use crate::material::{LaneSpectrum, SpectralRef};
 use crate::packet::LANES;
 use crate::rng::Rng;
 use crate::scene::Scene;
+use crate::spectra::MAX_COEFFS;
 use spectral_core::color::Xyz;
 use spectral_core::control_variate::{AlphaStatistics, ControlVariate};
 use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy};
@@ -57,6 +58,12 @@ pub trait Transport: Sync {
     fn empty_pixel(&self) -> Self::Pixel;
     /// Draws the wavelengths of a packet from per-lane wavelength streams.
     fn sample_wavelengths(&self, rngs: &mut [Rng; LANES]) -> Self::Wavelengths;
+    /// The hero wavelength of a lane (`None` where light is not sampled).
+    fn hero_wavelength(&self, _wavelengths: &Self::Wavelengths, _lane: usize) -> Option<f32> {
+        None
+    }
+    /// Keeps only the hero wavelength of a lane (dispersion).
+    fn terminate_secondary(&self, _wavelengths: &mut Self::Wavelengths, _lane: usize) {}
     /// 1 in every lane.
     fn one(&self) -> Self::Spectra;
     /// 0 in every lane.
@@ -155,21 +162,55 @@ pub struct FourierPixel<const N: usize> {
     count: f64,
 }
 
+/// The Fourier coefficients of a spectral reference (zero if it dangles).
+fn reference_fourier(scene: &Scene, reference: &SpectralRef) -> [f32; MAX_COEFFS] {
+    match *reference {
+        SpectralRef::Scene(id) => scene
+            .spectra
+            .get(id as usize)
+            .map_or([0.0; MAX_COEFFS], |s| *s.coefficients_f32()),
+        SpectralRef::Texture { texture, u, v } => scene
+            .textures
+            .get(texture as usize)
+            .map_or([0.0; MAX_COEFFS], |t| t.fourier_at(u, v)),
+        SpectralRef::Angular { id, cos, thickness } => scene
+            .angular
+            .get(id as usize)
+            .map_or([0.0; MAX_COEFFS], |a| a.fourier(cos, thickness)),
+    }
+}
+
+/// The exact value of a spectral reference at a wavelength.
+fn reference_value(scene: &Scene, reference: &SpectralRef, lambda_nm: f32) -> f32 {
+    match *reference {
+        SpectralRef::Scene(id) => scene
+            .spectra
+            .get(id as usize)
+            .map_or(0.0, |s| s.value(lambda_nm)),
+        SpectralRef::Texture { texture, u, v } => scene
+            .textures
+            .get(texture as usize)
+            .map_or(0.0, |t| t.value_at(u, v, lambda_nm)),
+        SpectralRef::Angular { id, cos, thickness } => scene
+            .angular
+            .get(id as usize)
+            .map_or(0.0, |a| a.eval(cos, lambda_nm, thickness)),
+    }
+}
+
 fn gather_fourier<const N: usize>(
     scene: &Scene,
     lanes: &[LaneSpectrum; LANES],
 ) -> FourierSpectrum<f32x8, N> {
     let mut rows = [[0.0f32; N]; LANES];
     for (row, lane) in rows.iter_mut().zip(lanes) {
-        match *lane {
-            LaneSpectrum::Zero => {}
-            LaneSpectrum::One => row[0] = 1.0,
-            LaneSpectrum::Scene(id) => {
-                if let Some(s) = scene.spectra.get(id as usize) {
-                    row.copy_from_slice(&s.coefficients_f32()[..N]);
-                }
+        if let Some(reference) = &lane.of {
+            let c = reference_fourier(scene, reference);
+            for (r, &value) in row.iter_mut().zip(&c) {
+                *r = lane.scale * value;
             }
         }
+        row[0] += lane.constant;
     }
     FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
         f32x8::new(core::array::from_fn(|lane| rows[lane][j]))
@@ -340,20 +381,20 @@ fn gather_sampled<const C: usize>(
 ) -> [f32x8; C] {
     let mut values = [[0.0f32; LANES]; C];
     for (lane, spectrum) in lanes.iter().enumerate() {
-        match *spectrum {
-            LaneSpectrum::Zero => {}
-            LaneSpectrum::One => {
-                for v in values.iter_mut() {
-                    v[lane] = 1.0;
-                }
+        let terminated = wavelengths[lane].secondary_terminated();
+        for (i, (v, &l)) in values
+            .iter_mut()
+            .zip(wavelengths[lane].lambda_nm())
+            .enumerate()
+        {
+            if terminated && i > 0 {
+                continue;
             }
-            LaneSpectrum::Scene(id) => {
-                if let Some(s) = scene.spectra.get(id as usize) {
-                    for (v, &l) in values.iter_mut().zip(wavelengths[lane].lambda_nm()) {
-                        v[lane] = s.value(l);
-                    }
-                }
-            }
+            let x = spectrum
+                .of
+                .as_ref()
+                .map_or(0.0, |r| reference_value(scene, r, l));
+            v[lane] = spectrum.constant + spectrum.scale * x;
         }
     }
     values.map(f32x8::new)
@@ -385,6 +426,16 @@ impl<const C: usize> Transport for SampledTransport<C> {
             let u: [f32; C] = core::array::from_fn(|_| rngs[lane].next_f32());
             SampledWavelengths::sample(self.strategy, &self.range, u)
         })
+    }
+
+    fn hero_wavelength(&self, wavelengths: &Self::Wavelengths, lane: usize) -> Option<f32> {
+        wavelengths.get(lane).map(|w| w.lambda_nm()[0])
+    }
+
+    fn terminate_secondary(&self, wavelengths: &mut Self::Wavelengths, lane: usize) {
+        if let Some(w) = wavelengths.get_mut(lane) {
+            w.terminate_secondary();
+        }
     }
 
     fn one(&self) -> Self::Spectra {
@@ -533,6 +584,14 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
 
     fn sample_wavelengths(&self, rngs: &mut [Rng; LANES]) -> Self::Wavelengths {
         self.sampled.sample_wavelengths(rngs)
+    }
+
+    fn hero_wavelength(&self, wavelengths: &Self::Wavelengths, lane: usize) -> Option<f32> {
+        self.sampled.hero_wavelength(wavelengths, lane)
+    }
+
+    fn terminate_secondary(&self, wavelengths: &mut Self::Wavelengths, lane: usize) {
+        self.sampled.terminate_secondary(wavelengths, lane);
     }
 
     fn one(&self) -> Self::Spectra {

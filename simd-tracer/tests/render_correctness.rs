@@ -411,18 +411,18 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
             &integrator,
             &packet,
             &mut rngs,
-            &(),
+            &mut (),
             &mut counts,
         );
         let mut rngs = seeds;
-        let w = sampled.sample_wavelengths(&mut wavelength_rngs);
+        let mut w = sampled.sample_wavelengths(&mut wavelength_rngs);
         let s = trace(
             &sampled,
             &scene,
             &integrator,
             &packet,
             &mut rngs,
-            &w,
+            &mut w,
             &mut counts,
         );
         for lane in 0..LANES {

@@ -48,6 +48,18 @@ pub fn project_function<const N: usize>(
     f: impl Fn(f64) -> f64,
 ) -> FourierSpectrum<f64, N> {
     let panels = libm::ceil(range.width_nm() / FUNCTION_PROJECTION_PANEL_NM).max(1.0) as usize;
+    project_function_panels(range, panels, f)
+}
+
+/// [`project_function`] with `panels` Gauss–Legendre panels over the range:
+/// fewer panels for very smooth functions (e.g. 94 for sigmoid
+/// polynomials, see `upsample`), more for wiggly ones.
+pub fn project_function_panels<const N: usize>(
+    range: &SpectralRange,
+    panels: usize,
+    f: impl Fn(f64) -> f64,
+) -> FourierSpectrum<f64, N> {
+    let panels = panels.max(1);
     let panel_nm = range.width_nm() / panels as f64;
     let mut sums = [0.0; N];
     for panel in 0..panels {

@@ -25,8 +25,11 @@ use crate::cmf;
 use crate::fourier::FourierSpectrum;
 use crate::range::SpectralRange;
 use crate::registry::Builtin;
-use crate::spectrum::{Spectrum, project_function};
+use crate::spectrum::{Spectrum, project_function, project_function_panels};
 use crate::xyz::xyz_of;
+
+/// Panel width of the projection of sigmoid polynomials, nm.
+pub const SIGMOID_PROJECTION_PANEL_NM: f64 = 5.0;
 
 /// Grid points per axis of the embedded table.
 pub const SRGB_TABLE_RESOLUTION: usize = 32;
@@ -113,11 +116,15 @@ impl Spectrum for SigmoidPolynomial {
         sigmoid((c0 * t + c1) * t + c2)
     }
 
+    /// Gauss–Legendre on [`SIGMOID_PROJECTION_PANELS`] panels: sigmoid
+    /// polynomials are so smooth that 5 nm panels agree with 1 nm panels to
+    /// 1e-7 (tested), at a fifth of the cost (textures project every texel).
     fn project<const N: usize>(&self, range: &SpectralRange) -> FourierSpectrum<f64, N> {
         if self.coeffs[0] == 0.0 && self.coeffs[1] == 0.0 {
             return FourierSpectrum::constant(sigmoid(self.coeffs[2]));
         }
-        project_function(range, |l| self.value(l))
+        let panels = libm::ceil(range.width_nm() / SIGMOID_PROJECTION_PANEL_NM) as usize;
+        project_function_panels(range, panels, |l| self.value(l))
     }
 }
 
@@ -251,6 +258,27 @@ mod tests {
         validate_table().unwrap();
         assert_eq!(Z_GRID[0], 0.0);
         assert_eq!(Z_GRID[SRGB_TABLE_RESOLUTION - 1], 1.0);
+    }
+
+    #[test]
+    fn coarse_sigmoid_projection_matches_the_fine_one() {
+        let range = SpectralRange::VISIBLE;
+        for rgb in [
+            [0.9, 0.1, 0.2],
+            [0.05, 0.8, 0.3],
+            [0.2, 0.3, 0.95],
+            [0.99, 0.98, 0.01],
+        ] {
+            let s = srgb_reflectance(rgb).unwrap();
+            let coarse = s.project::<32>(&range);
+            let fine: FourierSpectrum<f64, 32> = project_function(&range, |l| s.value(l));
+            for j in 0..32 {
+                assert!(
+                    (coarse.coeffs[j] - fine.coeffs[j]).abs() < 1e-7,
+                    "{rgb:?} j = {j}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -1,0 +1,412 @@
+//! Every BSDF: sampling matches evaluation (χ² of sampled directions against
+//! the pdf, and per-sample weights against f cos/p), the pdf integrates to at
+//! most 1, reciprocity where it holds, energy ≤ 1 (= 1 for a lossless smooth
+//! dielectric), and the spectral factors against the core's optics.
+
+use glam::{Vec2, Vec3};
+use simd_tracer::angular::{AngularFunction, FilmLayer, Ior};
+use simd_tracer::camera::Camera;
+use simd_tracer::material::{
+    Albedo, Bsdf, LaneSpectrum, Material, ShadingPoint, SpectralRef, diffuse_fresnel,
+};
+use simd_tracer::scene::{Scene, SceneBuilder};
+use simd_tracer::spectra::SpectrumSource;
+use spectral_core::SpectralRange;
+use spectral_core::complex::Complex;
+use spectral_core::optics::{Layer, airy_film, fresnel_conductor};
+use spectral_core::registry::Builtin;
+use spectral_core::table::{FilmQuantity, FilmSide};
+use std::f64::consts::PI;
+
+type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
+
+struct Fixture {
+    scene: Scene,
+    bsdfs: Vec<(&'static str, Bsdf)>,
+}
+
+/// A scene holding every angular spectrum the BSDFs refer to.
+fn fixture() -> TestResult<Fixture> {
+    let range = SpectralRange::VISIBLE;
+    let mut b = SceneBuilder::new(range);
+    let white = b.add_spectrum("white", SpectrumSource::Constant(1.0))?;
+    let grey = b.add_spectrum("grey", SpectrumSource::Constant(0.5))?;
+    let n = b.add_spectrum(
+        "gold n",
+        SpectrumSource::Builtin(Builtin::lookup("gold-n")?),
+    )?;
+    let k = b.add_spectrum(
+        "gold k",
+        SpectrumSource::Builtin(Builtin::lookup("gold-k")?),
+    )?;
+    let (n, k) = (
+        b.spectrum(n).cloned().ok_or("n")?,
+        b.spectrum(k).cloned().ok_or("k")?,
+    );
+    let gold = b.add_angular(
+        "gold",
+        AngularFunction::Conductor {
+            n: Box::new(n),
+            k: Box::new(k),
+            outside: 1.0,
+        },
+    )?;
+    let glass = Ior::Constant(1.5);
+    let outside = b.add_angular(
+        "glass out",
+        AngularFunction::Dielectric {
+            ior: glass,
+            from_inside: false,
+        },
+    )?;
+    let inside = b.add_angular(
+        "glass in",
+        AngularFunction::Dielectric {
+            ior: glass,
+            from_inside: true,
+        },
+    )?;
+    let film = |quantity, side| AngularFunction::Film {
+        layers: vec![FilmLayer {
+            ior: Ior::Constant(2.0),
+            k: 0.0,
+            thickness_nm: 400.0,
+        }],
+        substrate: Ior::Constant(1.5),
+        substrate_k: 0.0,
+        incident: 1.0,
+        quantity,
+        side,
+        thickness_range_nm: None,
+    };
+    let fr = b.add_angular("film R", film(FilmQuantity::Reflectance, FilmSide::Front))?;
+    let ft = b.add_angular("film T", film(FilmQuantity::Transmittance, FilmSide::Front))?;
+    let br = b.add_angular(
+        "film back R",
+        film(FilmQuantity::Reflectance, FilmSide::Back),
+    )?;
+    let bt = b.add_angular(
+        "film back T",
+        film(FilmQuantity::Transmittance, FilmSide::Back),
+    )?;
+    let m = b.add_material(Material::lambert("white", white));
+    b.add_triangle([Vec3::ZERO, Vec3::X, Vec3::Y], m);
+    b.set_camera(Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0)?);
+    let scene = b.build()?;
+    let fdr = diffuse_fresnel(1.0 / 1.5) as f32;
+    let bsdfs = vec![
+        (
+            "lambert",
+            Bsdf::Lambert {
+                albedo: Albedo::Spectrum(grey),
+            },
+        ),
+        (
+            "rough gold",
+            Bsdf::Conductor {
+                fresnel: gold,
+                roughness: 0.3,
+            },
+        ),
+        (
+            "rough glass",
+            Bsdf::Dielectric {
+                outside,
+                inside,
+                ior: glass,
+                roughness: 0.3,
+            },
+        ),
+        (
+            "rough coated",
+            Bsdf::Coated {
+                albedo: Albedo::Spectrum(white),
+                ior: 1.5,
+                roughness: 0.2,
+                fdr_inside: fdr,
+            },
+        ),
+        (
+            "smooth coated",
+            Bsdf::Coated {
+                albedo: Albedo::Spectrum(white),
+                ior: 1.5,
+                roughness: 0.0,
+                fdr_inside: fdr,
+            },
+        ),
+        (
+            "smooth glass",
+            Bsdf::Dielectric {
+                outside,
+                inside,
+                ior: glass,
+                roughness: 0.0,
+            },
+        ),
+        (
+            "smooth gold",
+            Bsdf::Conductor {
+                fresnel: gold,
+                roughness: 0.0,
+            },
+        ),
+        (
+            "film on glass",
+            Bsdf::ThinFilm {
+                front_reflectance: fr,
+                front_transmittance: Some(ft),
+                back: Some((br, bt)),
+                substrate_ior: 1.5,
+                thickness: None,
+            },
+        ),
+    ];
+    Ok(Fixture { scene, bsdfs })
+}
+
+fn point(front: bool) -> ShadingPoint {
+    ShadingPoint {
+        n: Vec3::Z,
+        front,
+        uv: Vec2::ZERO,
+        hero_nm: None,
+    }
+}
+
+/// The spectral factor's value at 550 nm (what the sampled transport uses).
+fn spectral_value(scene: &Scene, s: &LaneSpectrum) -> f64 {
+    let x = match s.of {
+        None => 0.0,
+        Some(SpectralRef::Scene(id)) => f64::from(scene.spectra[id as usize].value(550.0)),
+        Some(SpectralRef::Angular { id, cos, thickness }) => {
+            f64::from(scene.angular[id as usize].eval(cos, 550.0, thickness))
+        }
+        Some(SpectralRef::Texture { .. }) => 0.0,
+    };
+    f64::from(s.constant) + f64::from(s.scale) * x
+}
+
+/// xorshift64*.
+struct Rng(u64);
+impl Rng {
+    fn f(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32) / (1u64 << 24) as f32
+    }
+}
+
+const THETA_BINS: usize = 16;
+const PHI_BINS: usize = 24;
+
+fn bin_of(w: Vec3) -> usize {
+    let t = (((1.0 - w.z.clamp(-1.0, 1.0)) * 0.5) * THETA_BINS as f32) as usize;
+    let phi = w.y.atan2(w.x) + std::f32::consts::PI;
+    let p = (phi / std::f32::consts::TAU * PHI_BINS as f32) as usize;
+    t.min(THETA_BINS - 1) * PHI_BINS + p.min(PHI_BINS - 1)
+}
+
+/// ∫ pdf over each (cos θ, φ) bin, by a 12 × 12 midpoint grid per bin.
+fn expected_bins(bsdf: &Bsdf, scene: &Scene, p: &ShadingPoint, wo: Vec3) -> Vec<f64> {
+    let sub = 12;
+    let mut bins = vec![0.0f64; THETA_BINS * PHI_BINS];
+    for (index, bin) in bins.iter_mut().enumerate() {
+        let (t, ph) = (index / PHI_BINS, index % PHI_BINS);
+        for i in 0..sub {
+            for j in 0..sub {
+                let z = 1.0 - 2.0 * (t as f64 + (i as f64 + 0.5) / sub as f64) / THETA_BINS as f64;
+                let phi =
+                    (ph as f64 + (j as f64 + 0.5) / sub as f64) / PHI_BINS as f64 * 2.0 * PI - PI;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let wi = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+                let d_omega =
+                    2.0 / THETA_BINS as f64 * 2.0 * PI / PHI_BINS as f64 / (sub * sub) as f64;
+                *bin += f64::from(bsdf.eval(scene, p, wo, wi).pdf) * d_omega;
+            }
+        }
+    }
+    bins
+}
+
+#[test]
+fn sampling_matches_evaluation_chi_squared() -> TestResult {
+    let f = fixture()?;
+    for (name, bsdf) in &f.bsdfs {
+        if name.starts_with("smooth glass")
+            || name.starts_with("smooth gold")
+            || name.starts_with("film")
+        {
+            continue; // pure delta lobes: no density to compare
+        }
+        for front in [true, false] {
+            if !front && !name.contains("glass") {
+                continue;
+            }
+            let p = point(front);
+            let wo = Vec3::new(0.5, 0.2, 0.7).normalize();
+            let expected = expected_bins(bsdf, &f.scene, &p, wo);
+            let mut rng = Rng(99);
+            let draws = 200_000;
+            let mut counts = vec![0u32; THETA_BINS * PHI_BINS];
+            let mut weight_errors = 0;
+            for _ in 0..draws {
+                let (ul, u, v) = (rng.f(), rng.f(), rng.f());
+                let Some(s) = bsdf.sample(&f.scene, &p, wo, ul, u, v) else {
+                    continue;
+                };
+                if s.pdf == 0.0 {
+                    continue; // a delta lobe (smooth coat): not in the density
+                }
+                counts[bin_of(s.wi)] += 1;
+                // The weight is f cos/p of the same direction.
+                let e = bsdf.eval(&f.scene, &p, wo, s.wi);
+                let from_eval =
+                    f64::from(e.value) / f64::from(e.pdf) * spectral_value(&f.scene, &e.spectrum);
+                let from_sample = f64::from(s.weight) * spectral_value(&f.scene, &s.spectrum);
+                if (from_eval - from_sample).abs() > 1e-3 * from_eval.abs().max(1.0)
+                    || (e.pdf - s.pdf).abs() > 1e-3 * e.pdf
+                {
+                    weight_errors += 1;
+                }
+            }
+            assert_eq!(weight_errors, 0, "{name}, front {front}");
+            let (mut chi2, mut dof) = (0.0, 0);
+            let (mut pooled_expected, mut pooled_count) = (0.0, 0.0);
+            for (e, &c) in expected.iter().zip(&counts) {
+                let e = e * f64::from(draws);
+                if e < 5.0 {
+                    pooled_expected += e;
+                    pooled_count += f64::from(c);
+                } else {
+                    chi2 += (f64::from(c) - e).powi(2) / e;
+                    dof += 1;
+                }
+            }
+            if pooled_expected >= 5.0 {
+                chi2 += (pooled_count - pooled_expected).powi(2) / pooled_expected;
+                dof += 1;
+            }
+            // Wilson–Hilferty 0.1 % critical value of χ² with `dof − 1` degrees of freedom.
+            let k = f64::from(dof - 1);
+            let critical = k * (1.0 - 2.0 / (9.0 * k) + 3.09 * (2.0 / (9.0 * k)).sqrt()).powi(3);
+            assert!(
+                chi2 < critical,
+                "{name}, front {front}: χ² = {chi2:.1} > {critical:.1} (dof {k})"
+            );
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn pdfs_integrate_to_at_most_one_and_energy_is_conserved() -> TestResult {
+    let f = fixture()?;
+    for (name, bsdf) in &f.bsdfs {
+        for front in [true, false] {
+            let p = point(front);
+            for wo in [
+                Vec3::new(0.1, 0.0, 0.99).normalize(),
+                Vec3::new(0.8, 0.1, 0.3).normalize(),
+            ] {
+                let total: f64 = expected_bins(bsdf, &f.scene, &p, wo).iter().sum();
+                assert!(total <= 1.0 + 2e-3, "{name}: ∫pdf = {total}");
+                // Albedo (flux): E[weight · spectrum], transmitted weights
+                // times η² (radiance scaling undone).
+                let mut rng = Rng(5);
+                let draws = 100_000;
+                let mut albedo = 0.0;
+                for _ in 0..draws {
+                    let (ul, u, v) = (rng.f(), rng.f(), rng.f());
+                    if let Some(s) = bsdf.sample(&f.scene, &p, wo, ul, u, v) {
+                        let mut w = f64::from(s.weight) * spectral_value(&f.scene, &s.spectrum);
+                        if s.wi.z < 0.0 {
+                            let eta: f64 = if front { 1.5 } else { 1.0 / 1.5 };
+                            w *= eta * eta;
+                        }
+                        albedo += w / f64::from(draws);
+                    }
+                }
+                let lossless = name.contains("glass") && !name.contains("film");
+                if lossless && name.starts_with("smooth") {
+                    assert!(
+                        (albedo - 1.0).abs() < 5e-3,
+                        "{name} front {front}: albedo {albedo}"
+                    );
+                } else {
+                    assert!(
+                        albedo <= 1.0 + 5e-3,
+                        "{name} front {front}: albedo {albedo}"
+                    );
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn reflection_lobes_are_reciprocal() -> TestResult {
+    let f = fixture()?;
+    let p = point(true);
+    let (a, b) = (
+        Vec3::new(0.3, -0.2, 0.9).normalize(),
+        Vec3::new(-0.5, 0.4, 0.6).normalize(),
+    );
+    for (name, bsdf) in &f.bsdfs {
+        let (ab, ba) = (bsdf.eval(&f.scene, &p, a, b), bsdf.eval(&f.scene, &p, b, a));
+        // f(a→b) = f(b→a): value/cos of the incident side, spectral at 550 nm.
+        let fab = f64::from(ab.value) / f64::from(b.z) * spectral_value(&f.scene, &ab.spectrum);
+        let fba = f64::from(ba.value) / f64::from(a.z) * spectral_value(&f.scene, &ba.spectrum);
+        assert!(
+            (fab - fba).abs() <= 1e-4 * fab.abs().max(1e-6),
+            "{name}: {fab} vs {fba}"
+        );
+    }
+    Ok(())
+}
+
+#[test]
+fn spectral_factors_equal_the_core_optics() -> TestResult {
+    let f = fixture()?;
+    let gold_n = Builtin::lookup("gold-n")?;
+    let gold_k = Builtin::lookup("gold-k")?;
+    let (_, gold) = f
+        .bsdfs
+        .iter()
+        .find(|(n, _)| *n == "smooth gold")
+        .ok_or("gold")?;
+    let s = gold
+        .sample(&f.scene, &point(true), Vec3::Z, 0.5, 0.5, 0.5)
+        .ok_or("sample")?;
+    let Some(SpectralRef::Angular { id, cos, .. }) = s.spectrum.of else {
+        return Err("angular".into());
+    };
+    use spectral_core::Spectrum;
+    let exact = fresnel_conductor(1.0, Complex::new(gold_n.value(551.0), gold_k.value(551.0)));
+    let got = f64::from(f.scene.angular[id as usize].eval(cos, 551.0, 0.0));
+    // The scene's n, k come from a 0.25 nm dense table of the same data.
+    assert!((got - exact).abs() < 1e-5, "{got} vs {exact}");
+    let (_, film) = f
+        .bsdfs
+        .iter()
+        .find(|(n, _)| *n == "film on glass")
+        .ok_or("film")?;
+    let s = film
+        .sample(&f.scene, &point(true), Vec3::Z, 0.0, 0.5, 0.5)
+        .ok_or("film sample")?;
+    let Some(SpectralRef::Angular { id, cos, .. }) = s.spectrum.of else {
+        return Err("angular".into());
+    };
+    for lambda in [420.0, 550.0, 680.0] {
+        let layer = Layer {
+            index: Complex::real(2.0),
+            thickness_nm: 400.0,
+        };
+        let airy = airy_film(lambda, 1.0, layer, Complex::real(1.5), 1.0).reflectance();
+        let got = f64::from(f.scene.angular[id as usize].eval(cos, lambda as f32, 0.0));
+        assert!((got - airy).abs() < 1e-5, "{lambda}: {got} vs {airy}");
+    }
+    Ok(())
+}
