@@ -25,6 +25,7 @@ pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod scenes;
+pub mod shapes;
 pub mod simd;
 pub mod spectra;
 pub mod texture;

@@ -517,7 +517,19 @@ impl Bsdf {
                     (false, Some((br, bt))) => (*br, Some(*bt), 1.0 / substrate_ior),
                     _ => (*front_reflectance, *front_transmittance, *substrate_ior),
                 };
-                sample_smooth_interface(scene, p.n, wo, wo_local.z, u_lobe, r, tr, eta, false, t)
+                match tr {
+                    Some(_) => sample_smooth_interface(
+                        scene, p.n, wo, wo_local.z, u_lobe, r, tr, eta, false, t,
+                    ),
+                    // Opaque base: everything not reflected is absorbed.
+                    None => Some(BsdfSample {
+                        wi: microfacet::reflect(wo, p.n),
+                        pdf: 0.0,
+                        weight: 1.0,
+                        spectrum: LaneSpectrum::of(angular_ref(r, wo_local.z, t)),
+                        terminate_secondary: false,
+                    }),
+                }
             }
         }
     }
