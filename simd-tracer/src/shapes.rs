@@ -104,8 +104,13 @@ pub fn add_sphere(
             let (c, d) = ((ring + 1, segment + 1), (ring, segment + 1));
             let p = [a, b, c, d].map(|(r, s)| point(r, s));
             let t = [a, b, c, d].map(|(r, s)| uv(r, s));
-            builder.add_triangle_uv([p[0], p[1], p[2]], [t[0], t[1], t[2]], material);
-            builder.add_triangle_uv([p[0], p[2], p[3]], [t[0], t[2], t[3]], material);
+            // The pole rings are fans: one of each quad's triangles would be degenerate.
+            if ring + 1 < rings {
+                builder.add_triangle_uv([p[0], p[1], p[2]], [t[0], t[1], t[2]], material);
+            }
+            if ring > 0 {
+                builder.add_triangle_uv([p[0], p[2], p[3]], [t[0], t[2], t[3]], material);
+            }
         }
     }
 }
@@ -129,8 +134,8 @@ mod tests {
         add_sphere(&mut b, Vec3::new(5.0, 0.0, 0.0), 1.0, 12, 24, m);
         b.set_camera(Camera::look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 40.0).unwrap());
         let scene = b.build().unwrap();
-        // Degenerate pole triangles of the sphere are dropped.
-        assert_eq!(scene.skipped_triangles(), 2 * 24);
+        assert_eq!(scene.skipped_triangles(), 0);
+        assert_eq!(scene.triangles.len(), 12 + 2 * 12 * 24 - 2 * 24);
         for (tri, n) in scene.triangles.iter().zip(&scene.normals) {
             let centroid = (tri[0] + tri[1] + tri[2]) / 3.0;
             let centre = if centroid.x > 2.5 {
