@@ -48,6 +48,8 @@ pub trait Lane:
     fn lt(self, other: Self) -> Self::Mask;
     /// Lane-wise `if mask { if_true } else { if_false }`.
     fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
+    /// Lane-wise sine (radians).
+    fn sin(self) -> Self;
     /// Lane `index` as `f64` (`index < LANES`).
     fn lane(self, index: usize) -> f64;
     /// A value whose lane `i` is `f(i)`.
@@ -81,6 +83,10 @@ impl Lane for f64 {
     #[inline(always)]
     fn select(mask: bool, if_true: Self, if_false: Self) -> Self {
         if mask { if_true } else { if_false }
+    }
+    #[inline(always)]
+    fn sin(self) -> Self {
+        libm::sin(self)
     }
     #[inline(always)]
     fn lane(self, index: usize) -> f64 {
@@ -120,6 +126,10 @@ impl Lane for f32 {
     #[inline(always)]
     fn select(mask: bool, if_true: Self, if_false: Self) -> Self {
         if mask { if_true } else { if_false }
+    }
+    #[inline(always)]
+    fn sin(self) -> Self {
+        libm::sinf(self)
     }
     #[inline(always)]
     fn lane(self, index: usize) -> f64 {
@@ -164,6 +174,10 @@ mod wide_lane {
         #[inline(always)]
         fn select(mask: f32x8, if_true: Self, if_false: Self) -> Self {
             mask.select(if_true, if_false)
+        }
+        #[inline(always)]
+        fn sin(self) -> Self {
+            f32x8::sin(self)
         }
         #[inline(always)]
         fn lane(self, index: usize) -> f64 {

@@ -54,6 +54,7 @@ mod error;
 pub mod fourier;
 pub mod lane;
 pub mod mese;
+pub mod neural;
 pub mod optics;
 pub mod range;
 pub mod registry;

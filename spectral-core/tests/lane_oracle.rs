@@ -144,3 +144,33 @@ fn xyz_routes_per_lane() {
         }
     }
 }
+
+#[test]
+fn sine_mlp_per_lane() {
+    use spectral_core::SpectralRange;
+    use spectral_core::neural::SineMlp;
+    let f = |i: usize| ((i * 7919) % 97) as f32 / 48.5 - 1.0;
+    let net: SineMlp<2, 10, 10> = SineMlp {
+        range: SpectralRange::VISIBLE,
+        normalisation: [(0.5, 2.0), (400.0, 0.01)],
+        w1: core::array::from_fn(|r| core::array::from_fn(|c| 3.0 * f(r * 2 + c))),
+        b1: core::array::from_fn(|k| f(100 + k)),
+        w2: core::array::from_fn(|r| core::array::from_fn(|c| f(200 + r * 10 + c))),
+        b2: core::array::from_fn(|k| f(400 + k)),
+        w3: core::array::from_fn(|r| core::array::from_fn(|c| f(500 + r * 10 + c))),
+        b3: core::array::from_fn(|k| f(700 + k)),
+    };
+    let inputs: [[f32; 2]; 8] =
+        core::array::from_fn(|lane| [lane as f32 / 7.0, 100.0 + 100.0 * lane as f32]);
+    let packet = net.eval([
+        f32x8::new(core::array::from_fn(|lane| inputs[lane][0])),
+        f32x8::new(core::array::from_fn(|lane| inputs[lane][1])),
+    ]);
+    for (lane, input) in inputs.iter().enumerate() {
+        let scalar = net.eval::<f32>(*input);
+        for j in 0..10 {
+            let (s, e) = (packet.coeffs[j].lane(lane), f64::from(scalar.coeffs[j]));
+            assert!((s - e).abs() < 1e-4, "lane {lane} j {j}: {s} vs {e}");
+        }
+    }
+}
