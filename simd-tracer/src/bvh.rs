@@ -132,13 +132,20 @@ pub struct Hit {
     pub triangle: u32,
 }
 
-/// A triangle prepared for the edge-function test.
+/// A triangle prepared for the edge-function test: the Plücker
+/// coordinates of its edges and its plane.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct PreparedTriangle {
     /// Vertices 0, 1, 2.
     vertices: [[f32; 3]; 3],
+    /// `p × q` of the edges `(v1, v2)`, `(v2, v0)`, `(v0, v1)`.
+    edge_moment: [[f32; 3]; 3],
+    /// `p − q` of the same edges.
+    edge_direction: [[f32; 3]; 3],
     /// Geometric normal `(v1 − v0) × (v2 − v0)` (not normalised).
     normal: [f32; 3],
+    /// `n · v0`.
+    plane: f32,
     /// `GRAZING · |normal|`: the grazing threshold before the `|d|` factor.
     grazing: f32,
 }
@@ -147,9 +154,13 @@ impl PreparedTriangle {
     fn new(vertices: &[Vec3; 3]) -> Self {
         let [a, b, c] = vertices.map(|v| v.to_array());
         let normal = cross(sub3(b, a), sub3(c, a));
+        let edges = [(b, c), (c, a), (a, b)];
         Self {
             vertices: [a, b, c],
+            edge_moment: edges.map(|(p, q)| cross(p, q)),
+            edge_direction: edges.map(|(p, q)| sub3(p, q)),
             normal,
+            plane: dot(normal, a),
             grazing: GRAZING * dot(normal, normal).sqrt(),
         }
     }
@@ -220,8 +231,8 @@ fn dot<T: Arith>(a: [T; 3], b: [T; 3]) -> T {
 /// The edge functions and plane terms of one ray/triangle pair.
 #[derive(Clone, Copy)]
 struct EdgeTerms<T> {
-    /// `w_i = d · (v_j' × v_k')` for the edge opposite vertex `i`, where
-    /// `v' = v − o`; proportional to the barycentric weight of vertex `i`.
+    /// `w_i = d · ((p − o) × (q − o))` for the edge `(p, q)` opposite vertex
+    /// `i`; proportional to the barycentric weight of vertex `i`.
     w: [T; 3],
     /// `n · (v0 − o)`.
     num: T,
@@ -229,28 +240,28 @@ struct EdgeTerms<T> {
     den: T,
 }
 
-/// Edge functions in ray-origin-translated space. The function of the edge
-/// `(p, q)` is `d · ((p − o) × (q − o))`; for the edge taken the other way,
-/// `(q, p)`, every operation sees swapped operands and the result is the
-/// exact negation (IEEE `a − b = −(b − a)`, `ab = ba`), so two triangles
-/// sharing an edge always classify a ray consistently against it.
+/// Edge functions from Plücker coordinates: with the ray moment
+/// `m = d × o`, `d · ((p − o) × (q − o)) = d · (p × q) + (p − q) · m`, so a
+/// triangle costs two dot products per edge with its precomputed `p × q`
+/// and `p − q`. For the edge taken the other way, `(q, p)`, both are exact
+/// negations (IEEE `a − b = −(b − a)`, `ab = ba`) and so is the result: two
+/// triangles sharing an edge always classify a ray consistently against it.
 #[inline(always)]
 fn edge_terms<T: Arith>(
     origin: [T; 3],
     direction: [T; 3],
-    vertices: [[T; 3]; 3],
-    normal: [T; 3],
+    moment: [T; 3],
+    triangle: &PreparedTriangle,
+    splat: impl Fn(f32) -> T,
 ) -> EdgeTerms<T> {
-    let a = sub3(vertices[0], origin);
-    let b = sub3(vertices[1], origin);
-    let c = sub3(vertices[2], origin);
+    let w = core::array::from_fn(|k| {
+        dot(direction, triangle.edge_moment[k].map(&splat))
+            + dot(triangle.edge_direction[k].map(&splat), moment)
+    });
+    let normal = triangle.normal.map(&splat);
     EdgeTerms {
-        w: [
-            dot(direction, cross(b, c)),
-            dot(direction, cross(c, a)),
-            dot(direction, cross(a, b)),
-        ],
-        num: dot(normal, a),
+        w,
+        num: splat(triangle.plane) - dot(normal, origin),
         den: dot(normal, direction),
     }
 }
@@ -339,6 +350,8 @@ struct PacketRays {
     direction: [f32x8; 3],
     inv_direction: [f32x8; 3],
     direction_length: f32x8,
+    /// `d × o`, the rays' Plücker moments.
+    moment: [f32x8; 3],
 }
 
 impl PacketRays {
@@ -348,6 +361,7 @@ impl PacketRays {
             direction: packet.direction,
             inv_direction: packet.direction.map(safe_inverse_x8),
             direction_length: dot(packet.direction, packet.direction).sqrt(),
+            moment: cross(packet.direction, packet.origin),
         }
     }
 
@@ -382,8 +396,9 @@ impl PacketRays {
         let e = edge_terms(
             self.origin,
             self.direction,
-            triangle.vertices.map(|v| v.map(f32x8::splat)),
-            triangle.normal.map(f32x8::splat),
+            self.moment,
+            triangle,
+            f32x8::splat,
         );
         let [w0, w1, w2] = e.w;
         let zero = f32x8::ZERO;
@@ -691,12 +706,8 @@ impl Bvh {
         t_max: f32,
     ) -> Option<ScalarHit> {
         let triangle = self.triangles.get(slot)?;
-        let e = edge_terms(
-            ray.origin.to_array(),
-            ray.direction.to_array(),
-            triangle.vertices,
-            triangle.normal,
-        );
+        let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
+        let e = edge_terms(o, d, cross(d, o), triangle, |v| v);
         accept_scalar(&e, triangle, direction_length, t_max)
     }
 

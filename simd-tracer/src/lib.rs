@@ -15,6 +15,7 @@ pub mod angular;
 pub mod bvh;
 pub mod camera;
 pub mod filter;
+pub mod fuzzing;
 pub mod integrator;
 pub mod light;
 pub mod material;

@@ -52,6 +52,7 @@ pub mod data;
 pub mod delta_e;
 mod error;
 pub mod fourier;
+pub mod fuzzing;
 pub mod lane;
 pub mod mese;
 pub mod neural;

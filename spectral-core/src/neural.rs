@@ -23,7 +23,8 @@
 //! | 4 · (H·IN + H + H·H + H + OUT·H + OUT) | `W1` (row-major, H rows), `b1`, `W2`, `b2`, `W3`, `b3` (`f32`) |
 //!
 //! [`SineMlp::from_bytes`] checks every field, the exact length and that
-//! every number is finite; bad bytes give `Err`, never a panic.
+//! every number is finite and at most [`MAX_MAGNITUDE`] in magnitude (so
+//! `f32` evaluation stays finite); bad bytes give `Err`, never a panic.
 
 use crate::SpectralError;
 use crate::fourier::FourierSpectrum;
@@ -38,6 +39,9 @@ pub const VERSION: u16 = 1;
 pub const ACTIVATION_SINE: u8 = 1;
 /// Header bytes before the input normalisation.
 pub const HEADER_BYTES: usize = 24;
+/// Largest magnitude of any stored number: keeps `f32` evaluation finite for
+/// inputs of magnitude up to 1e6 (`|W x'|` stays below 1e30).
+pub const MAX_MAGNITUDE: f32 = 1e6;
 
 /// A two-hidden-layer sine MLP with `IN` inputs, `H` hidden neurons per
 /// layer and `OUT` outputs, weights in fixed arrays (no allocation).
