@@ -4,7 +4,12 @@
 pub mod coeffs;
 pub mod error;
 pub mod image_out;
+pub mod render_cmd;
+pub mod scene_file;
+pub mod scene_source;
 pub mod spectrum_cmd;
 pub mod spectrum_file;
+pub mod texture_file;
+pub mod train;
 
 pub use error::CliError;

@@ -2,7 +2,9 @@
 
 use clap::{Parser, Subcommand};
 use fspec_cli::CliError;
+use fspec_cli::render_cmd::{self, RenderArgs};
 use fspec_cli::spectrum_cmd::{self, SpectrumArgs};
+use fspec_cli::train::{self, TrainArgs};
 use std::process::ExitCode;
 
 /// Fourier-series spectral rendering: spectra as N cosine coefficients.
@@ -15,16 +17,37 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Render a built-in scene, a TOML scene file or an OBJ to PNG/EXR.
+    Render(Box<RenderArgs>),
+    /// List the built-in scenes.
+    Scenes,
     /// Inspect one spectrum: Fourier coefficients, XYZ by every conversion
     /// route, sRGB preview and reconstruction error.
     Spectrum(SpectrumArgs),
+    /// Train the small sine network of a neural thin-film material.
+    Train(TrainArgs),
 }
 
 fn run(cli: &Cli) -> Result<(), CliError> {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     match &cli.command {
+        Command::Render(args) => {
+            let summary = render_cmd::run(args)?;
+            println!("{}", render_cmd::summary_line(&summary));
+            Ok(())
+        }
+        Command::Scenes => {
+            print!("{}", fspec_cli::scene_source::list_scenes());
+            Ok(())
+        }
         Command::Spectrum(args) => spectrum_cmd::run(args, &mut out),
+        Command::Train(args) => {
+            let trained = train::run(args, &mut out)?;
+            let last = trained.curve.last().map_or(f64::NAN, |(_, l)| *l);
+            println!("final loss {last:.3e}; wrote {}", args.out.display());
+            Ok(())
+        }
     }
 }
 

@@ -16,6 +16,7 @@
 
 use crate::spectra::{MAX_COEFFS, SceneSpectrum};
 use spectral_core::complex::Complex;
+use spectral_core::neural::SineMlp;
 use spectral_core::optics::{Layer, fresnel_conductor, fresnel_dielectric, multilayer};
 use spectral_core::table::{FilmQuantity, FilmSide, FourierTable};
 use spectral_core::{SpectralError, SpectralRange};
@@ -101,6 +102,88 @@ pub struct FilmLayer {
     pub thickness_nm: f64,
 }
 
+macro_rules! networks {
+    ($($variant:ident: $inputs:literal, $hidden:literal, $outputs:literal;)*) => {
+        /// A trained sine MLP of one of the supported shapes (inputs
+        /// `cos θ` [and a film thickness in nm], hidden width, outputs).
+        #[derive(Debug, Clone, PartialEq)]
+        pub enum Network {
+            $(
+                #[doc = concat!(stringify!($inputs), " input(s), ", stringify!($hidden), " hidden, ", stringify!($outputs), " coefficients")]
+                $variant(Box<SineMlp<$inputs, $hidden, $outputs>>),
+            )*
+        }
+
+        impl Network {
+            /// Parses a network file of any supported shape.
+            pub fn from_bytes(bytes: &[u8]) -> Result<Self, SpectralError> {
+                $(
+                    if let Ok(net) = SineMlp::<$inputs, $hidden, $outputs>::from_bytes(bytes) {
+                        return Ok(Self::$variant(Box::new(net)));
+                    }
+                )*
+                // Report the specific problem for the most common shape.
+                SineMlp::<1, 10, 10>::from_bytes(bytes).map(|net| Self::In1H10N10(Box::new(net))).map_err(|e| match e {
+                    SpectralError::InvalidParameter("network shape differs from the expected one") => SpectralError::InvalidParameter(
+                        "network shape not supported (inputs 1-2, hidden 10 or 16, outputs 10, 12 or 16)",
+                    ),
+                    other => other,
+                })
+            }
+
+            /// Number of inputs.
+            pub fn inputs(&self) -> usize {
+                match self {
+                    $(Self::$variant(_) => $inputs,)*
+                }
+            }
+
+            /// The spectral range of the outputs.
+            pub fn range(&self) -> SpectralRange {
+                match self {
+                    $(Self::$variant(net) => net.range,)*
+                }
+            }
+
+            /// The coefficients at `cos θ` and thickness (nm; ignored by
+            /// one-input networks).
+            pub fn eval(&self, cos_theta: f32, thickness_nm: f32) -> [f32; MAX_COEFFS] {
+                let mut out = [0.0f32; MAX_COEFFS];
+                match self {
+                    $(Self::$variant(net) => {
+                        let input: [f32; $inputs] = core::array::from_fn(|i| if i == 0 { cos_theta } else { thickness_nm });
+                        let c = net.eval::<f32>(input);
+                        out[..$outputs].copy_from_slice(&c.coeffs);
+                    })*
+                }
+                out
+            }
+
+            /// Bytes of weights.
+            pub fn weight_bytes(&self) -> usize {
+                match self {
+                    $(Self::$variant(_) => SineMlp::<$inputs, $hidden, $outputs>::weight_bytes(),)*
+                }
+            }
+        }
+    };
+}
+
+networks! {
+    In1H10N10: 1, 10, 10;
+    In1H10N12: 1, 10, 12;
+    In1H10N16: 1, 10, 16;
+    In1H16N10: 1, 16, 10;
+    In1H16N12: 1, 16, 12;
+    In1H16N16: 1, 16, 16;
+    In2H10N10: 2, 10, 10;
+    In2H10N12: 2, 10, 12;
+    In2H10N16: 2, 10, 16;
+    In2H16N10: 2, 16, 10;
+    In2H16N12: 2, 16, 12;
+    In2H16N16: 2, 16, 16;
+}
+
 /// The exact angular function.
 #[derive(Debug, Clone, PartialEq)]
 pub enum AngularFunction {
@@ -137,6 +220,16 @@ pub enum AngularFunction {
         side: FilmSide,
         /// Thickness range of layer 0 when it comes from a texture.
         thickness_range_nm: Option<(f64, f64)>,
+    },
+    /// A trained network that outputs the coefficients (paper §4); the
+    /// network *is* the representation: sampled transports evaluate its
+    /// series at each wavelength.
+    Neural {
+        /// The network.
+        network: Network,
+        /// Thickness range (nm) a [0, 1] texture value maps into, for
+        /// two-input (parametric film) networks.
+        thickness_range_nm: (f64, f64),
     },
 }
 
@@ -200,6 +293,17 @@ impl AngularFunction {
                     FilmQuantity::Transmittance => response.transmittance(),
                 }
             }
+            Self::Neural {
+                network,
+                thickness_range_nm,
+            } => {
+                let range = network.range();
+                let t = thickness_nm.unwrap_or(thickness_range_nm.0);
+                let c = network.eval(cos_theta as f32, t as f32);
+                let series: spectral_core::FourierSpectrum<f64, MAX_COEFFS> =
+                    spectral_core::FourierSpectrum::from_coeffs(c.map(f64::from));
+                series.eval(&range, lambda_nm).max(0.0)
+            }
         }
     }
 }
@@ -247,6 +351,24 @@ impl AngularSpectrum {
         if let AngularFunction::Dielectric { ior, .. } = &function {
             ior.validate(range)?;
         }
+        if let AngularFunction::Neural {
+            network,
+            thickness_range_nm: (lo, hi),
+        } = &function
+        {
+            if network.range() != *range {
+                return Err(SpectralError::InvalidParameter(
+                    "the network's spectral range differs from the scene's",
+                ));
+            }
+            if !(lo.is_finite() && hi.is_finite() && *lo >= 0.0 && lo <= hi) {
+                return Err(SpectralError::InvalidParameter("network thickness range"));
+            }
+            return Ok(Self {
+                function,
+                tables: Vec::new(),
+            });
+        }
         let thicknesses: Vec<Option<f64>> = match &function {
             AngularFunction::Film {
                 thickness_range_nm: Some((lo, hi)),
@@ -275,6 +397,10 @@ impl AngularSpectrum {
             AngularFunction::Film {
                 thickness_range_nm: Some((lo, hi)),
                 ..
+            }
+            | AngularFunction::Neural {
+                thickness_range_nm: (lo, hi),
+                ..
             } => Some(lo + (hi - lo) * f64::from(thickness01.clamp(0.0, 1.0))),
             _ => None,
         };
@@ -284,6 +410,14 @@ impl AngularSpectrum {
 
     /// The Fourier coefficients at `cos θ` (and thickness), all 32.
     pub fn fourier(&self, cos_theta: f32, thickness01: f32) -> [f32; MAX_COEFFS] {
+        if let AngularFunction::Neural {
+            network,
+            thickness_range_nm: (lo, hi),
+        } = &self.function
+        {
+            let t = lo + (hi - lo) * f64::from(thickness01.clamp(0.0, 1.0));
+            return network.eval(cos_theta, t as f32);
+        }
         let cos = f64::from(cos_theta);
         if self.tables.len() <= 1 {
             return self
@@ -307,9 +441,12 @@ impl AngularSpectrum {
         self.fourier(cos_theta, thickness01)[0]
     }
 
-    /// Bytes of Fourier tables.
+    /// Bytes of Fourier tables, or of network weights.
     pub fn table_bytes(&self) -> usize {
-        self.tables.len() * FourierTable::<MAX_COEFFS, ANGLE_ROWS>::memory_bytes()
+        match &self.function {
+            AngularFunction::Neural { network, .. } => network.weight_bytes(),
+            _ => self.tables.len() * FourierTable::<MAX_COEFFS, ANGLE_ROWS>::memory_bytes(),
+        }
     }
 }
 

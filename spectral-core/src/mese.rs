@@ -123,6 +123,10 @@ pub struct Mese<const N: usize> {
     numerator: f64,
     /// Autocorrelation `R_l` of `q`.
     autocorrelation: [f64; N],
+    /// `q` (the normalised prediction-error filter).
+    predictor: [f64; N],
+    /// The (possibly corrected) normalised moments `t_j = c̃_j/(2π c_0)`.
+    moments: [f64; N],
     feasible: bool,
 }
 
@@ -136,6 +140,8 @@ impl<const N: usize> Mese<N> {
                 mean: 0.0,
                 numerator: 0.0,
                 autocorrelation: [0.0; N],
+                predictor: [0.0; N],
+                moments: [0.0; N],
                 feasible: mean == 0.0 && c.coeffs.iter().all(|&v| v == 0.0),
             });
         }
@@ -152,8 +158,36 @@ impl<const N: usize> Mese<N> {
             mean,
             numerator: 2.0 * PI * q[0].re,
             autocorrelation,
+            predictor: q.map(|v| v.re),
+            moments: t.map(|v| v.re),
             feasible,
         })
+    }
+
+    /// The first `M` Fourier coefficients of the MESE density itself: the
+    /// (corrected) moments `c̃_0 … c̃_m`, continued by the maximum-entropy
+    /// (autoregressive) extension `t_k = −(1/q_0) Σ_{i=1}^{m} q_i t_{k−i}`,
+    /// `k > m` (the Yule–Walker equations of the AR model whose spectrum
+    /// the density is). Integrals of the density against smooth functions
+    /// follow from these by Parseval, however narrow its peaks: the XYZ
+    /// route uses them instead of sampling the density.
+    pub fn extended_coefficients<const M: usize>(&self) -> FourierSpectrum<f64, M> {
+        let mut t = [0.0f64; M];
+        let q0 = self.predictor[0];
+        for k in 0..M {
+            t[k] = if k < N {
+                self.moments[k]
+            } else if q0 > 0.0 {
+                -(1..N).map(|i| self.predictor[i] * t[k - i]).sum::<f64>() / q0
+            } else {
+                0.0
+            };
+            if !t[k].is_finite() {
+                t[k] = 0.0;
+            }
+        }
+        let scale = 2.0 * PI * self.mean;
+        FourierSpectrum::from_coeffs(t.map(|v| v * scale))
     }
 
     /// Whether the moments were feasible (used without correction).

@@ -15,9 +15,16 @@
 //! 3. [`XyzRoute::Zeroth`]: `X = (λ1 − λ0) · h_0`, `h_0` the zeroth coefficient
 //!    of the truncated product of `s` with the projection of `x̄`:
 //!    `X = (λ1−λ0)(c_0 x_0 + 2 Σ c_j x_j) / ∫ȳ` — the 3×N [`XyzKernel`].
-//! 4. [`XyzRoute::Mese`]: reconstruct the spectrum by unbounded MESE
-//!    ([`crate::mese::Mese`], one `O(N²)` preparation, then `O(N)` per table
-//!    wavelength) and sum like route 1. The only non-linear route.
+//! 4. [`XyzRoute::Mese`]: the unbounded MESE density ([`crate::mese::Mese`])
+//!    integrated against the CMFs. Instead of sampling the density at the
+//!    table wavelengths (the paper's description), the route continues its
+//!    moments by the maximum-entropy (AR) recursion to
+//!    [`MESE_EXTENDED_COEFFS`] and applies a kernel of that size: the exact
+//!    Parseval integral of the density against the piecewise-linear CMFs.
+//!    This matters for nearly singular moment sets (laser lines): their MESE
+//!    density has peaks far narrower than 1 nm, which sampling at the table
+//!    wavelengths misses entirely (measured: a laser-lit pixel came out
+//!    black). The only non-linear route.
 //!
 //! By orthogonality routes 1–3 are the same linear map up to quadrature
 //! error: route 3 integrates the truncated series against the piecewise
@@ -34,6 +41,10 @@ use crate::lane::Lane;
 use crate::mese::Mese;
 use crate::range::SpectralRange;
 use crate::spectrum::{Spectrum, TabulatedSpectrum};
+
+/// Coefficients of the MESE density used by the MESE route (the CMF
+/// coefficients beyond it are below 1e-12 of the largest).
+pub const MESE_EXTENDED_COEFFS: usize = 128;
 
 /// Which conversion from coefficients to XYZ.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -128,8 +139,8 @@ pub struct XyzConverter<const N: usize> {
     cosines: [[f32; N]; cmf::SAMPLES],
     /// Trapezoid weight × CMFs / ∫ȳ for each table sample in the range.
     weighted_cmf: [[f32; 3]; cmf::SAMPLES],
-    /// `cos φ_i` in f64 for the MESE route.
-    cos_phase: [f64; cmf::SAMPLES],
+    /// The kernel of the MESE route over the extended coefficients.
+    mese_kernel: XyzKernel<MESE_EXTENDED_COEFFS>,
     first_sample: usize,
     sample_count: usize,
 }
@@ -141,7 +152,6 @@ impl<const N: usize> XyzConverter<N> {
         let kernel = XyzKernel::new(&range)?;
         let mut cosines = [[0.0f32; N]; cmf::SAMPLES];
         let mut weighted_cmf = [[0.0f32; 3]; cmf::SAMPLES];
-        let mut cos_phase = [0.0f64; cmf::SAMPLES];
         let mut first_sample = None;
         let mut sample_count = 0;
         for (row, (i, weight, phase)) in table_samples(&range).enumerate() {
@@ -149,7 +159,6 @@ impl<const N: usize> XyzConverter<N> {
             for (j, c) in cosines[row].iter_mut().enumerate() {
                 *c = libm::cos(j as f64 * phase) as f32;
             }
-            cos_phase[row] = libm::cos(phase);
             let cmf_i = cmf::sample(i);
             weighted_cmf[row] = cmf_i.map(|v| (v * weight / Y_BAR_INTEGRAL) as f32);
             sample_count = row + 1;
@@ -159,7 +168,7 @@ impl<const N: usize> XyzConverter<N> {
             kernel,
             cosines,
             weighted_cmf,
-            cos_phase,
+            mese_kernel: XyzKernel::new(&range)?,
             first_sample: first_sample.unwrap_or(0),
             sample_count,
         })
@@ -212,24 +221,16 @@ impl<const N: usize> XyzConverter<N> {
         self.kernel.apply(spectrum)
     }
 
-    /// Route 4: unbounded MESE reconstruction at the table wavelengths.
-    /// Non-finite coefficients give black (the film counts such samples
-    /// before they get here).
+    /// Route 4: the unbounded MESE density integrated against the CMFs
+    /// through its extended coefficients (module docs). Non-finite
+    /// coefficients give black (the film counts such samples before they
+    /// get here).
     pub fn mese(&self, spectrum: &FourierSpectrum<f64, N>) -> [f64; 3] {
         let Ok(mese) = Mese::new(spectrum) else {
             return [0.0; 3];
         };
-        let mut xyz = [0.0; 3];
-        let rows = self.cos_phase[..self.sample_count]
-            .iter()
-            .zip(&self.weighted_cmf[..self.sample_count]);
-        for (&cos_phase, weights) in rows {
-            let value = mese.eval_cos(cos_phase);
-            for (acc, &w) in xyz.iter_mut().zip(weights) {
-                *acc += value * f64::from(w);
-            }
-        }
-        xyz
+        self.mese_kernel
+            .apply(&mese.extended_coefficients::<MESE_EXTENDED_COEFFS>())
     }
 
     /// XYZ of one spectrum by `route`.

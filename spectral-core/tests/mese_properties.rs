@@ -144,3 +144,37 @@ fn near_singular_moments_stay_finite() {
     let scaled = FourierSpectrum::<f64, N>::from_coeffs(delta.coeffs.map(|c| c * 0.3));
     assert_bounded_ok(&BoundedMese::new(&scaled).unwrap());
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    #[test]
+    fn extended_coefficients_are_the_projection_of_the_density((nm, values) in polyline(0.05, 1.0)) {
+        let range = SpectralRange::VISIBLE;
+        let c = TabulatedSpectrum::new(&nm, &values).unwrap().project::<N>(&range);
+        let mese = Mese::new(&c).unwrap();
+        let extended = mese.extended_coefficients::<24>();
+        let dense = project_function::<24>(&range, |l| mese.eval(&range, l));
+        for j in 0..24 {
+            prop_assert!((extended.coeffs[j] - dense.coeffs[j]).abs() < 1e-6 * c.coeffs[0],
+                "j = {}: {} vs {}", j, extended.coeffs[j], dense.coeffs[j]);
+        }
+    }
+}
+
+#[test]
+fn mese_xyz_route_resolves_laser_lines() {
+    use spectral_core::xyz::{XyzConverter, XyzRoute};
+    let range = SpectralRange::VISIBLE;
+    let lines =
+        laser(450.0, 2.0).unwrap() + laser(532.0, 2.0).unwrap() + laser(638.0, 2.0).unwrap();
+    let converter = XyzConverter::<N>::new(range).unwrap();
+    let series = converter.convert(XyzRoute::Zeroth, &lines);
+    let mese = converter.convert(XyzRoute::Mese, &lines);
+    // The density keeps the mean: its luminance is of the same order.
+    assert!(
+        mese.y > 0.3 * series.y && mese.y < 3.0 * series.y,
+        "{mese:?} vs {series:?}"
+    );
+    assert!(mese.to_array().iter().all(|v| v.is_finite() && *v >= 0.0));
+}

@@ -1,0 +1,85 @@
+//! Resolving the scene argument of `fspec render`: a built-in name, a TOML
+//! scene file or a bare OBJ.
+
+use crate::error::CliError;
+use crate::spectrum_file::{SpectrumSource as CliSpectrum, resolve};
+use simd_tracer::scene::SceneBuilder;
+use simd_tracer::scenes::{SCENES, SceneOptions, builtin_scene};
+use simd_tracer::spectra::SpectrumSource;
+use spectral_core::SpectralRange;
+use std::path::Path;
+
+/// Render settings a scene file may set (CLI flags override them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SceneDefaults {
+    /// Width, pixels.
+    pub width: Option<u32>,
+    /// Height, pixels.
+    pub height: Option<u32>,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Max depth.
+    pub max_depth: Option<u32>,
+    /// Seed.
+    pub seed: Option<u64>,
+}
+
+/// The builder, defaults and warnings of the scene named by `argument`.
+pub fn resolve_scene(
+    argument: &str,
+    options: &SceneOptions,
+) -> Result<(SceneBuilder, SceneDefaults, Vec<String>), CliError> {
+    if SCENES.iter().any(|s| s.name == argument) {
+        let builder = builtin_scene(argument, SpectralRange::VISIBLE, options)
+            .map_err(|e| CliError::input(e.to_string()))?;
+        return Ok((builder, SceneDefaults::default(), Vec::new()));
+    }
+    let path = Path::new(argument);
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let loaded = match extension.as_deref() {
+        Some("toml") => crate::scene_file::load_scene_file(path)?,
+        Some("obj") => crate::scene_file::load_obj_scene(path)?,
+        _ if path.exists() => {
+            return Err(CliError::input(format!(
+                "{argument}: unknown scene format (use .toml or .obj)"
+            )));
+        }
+        _ => {
+            let names: Vec<&str> = SCENES.iter().map(|s| s.name).collect();
+            return Err(CliError::input(format!(
+                "`{argument}` is neither a built-in scene ({}) nor a .toml/.obj file",
+                names.join(", ")
+            )));
+        }
+    };
+    let defaults = SceneDefaults {
+        width: loaded.render.width,
+        height: loaded.render.height,
+        spp: loaded.render.spp,
+        max_depth: loaded.render.max_depth,
+        seed: loaded.render.seed,
+    };
+    Ok((loaded.builder, defaults, loaded.warnings))
+}
+
+/// The spectrum of `--illuminant`: a built-in name or a CSV file.
+pub fn illuminant_source(argument: &str) -> Result<SpectrumSource, CliError> {
+    Ok(match resolve(argument)? {
+        CliSpectrum::Builtin(b) => SpectrumSource::Builtin(b),
+        CliSpectrum::File(data) => SpectrumSource::Tabulated {
+            lambda_nm: data.lambda_nm,
+            values: data.values,
+        },
+    })
+}
+
+/// `fspec scenes`: the built-in scenes, one per line.
+pub fn list_scenes() -> String {
+    SCENES
+        .iter()
+        .map(|s| format!("{:<14} {}\n", s.name, s.description))
+        .collect()
+}

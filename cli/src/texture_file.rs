@@ -1,0 +1,329 @@
+//! Loading textures for scene files: PNG and OpenEXR images as spectral
+//! (albedo) or scalar (film thickness) [`Texture`]s.
+//!
+//! # Formats
+//!
+//! The format is recognised by the file's first bytes, not its extension.
+//!
+//! * **PNG** (8 or 16 bits per sample; grey, grey + alpha, RGB, RGBA or
+//!   palette; interlaced or not; alpha is ignored):
+//!   * albedo: the values are sRGB-encoded and decoded with
+//!     [`spectral_core::color::srgb_decode`] (grey images as grey colours),
+//!     then upsampled per texel ([`Texture::rgb`]);
+//!   * thickness: must be grey; the value `v / (2^bits − 1)` is used as it is
+//!     (linear, 0 … 1).
+//! * **OpenEXR** (first part; values are linear):
+//!   * albedo: channels `F0 … F{N−1}` make a Fourier texture read with
+//!     [`read_coefficients_exr`] (its `fourierRangeNm` must equal the
+//!     scene's range); otherwise `R`, `G`, `B` (linear sRGB reflectance,
+//!     clamped to [0, 1] by the upsampling) or `Y` (grey);
+//!   * thickness: `Y`, else the only channel of a single-channel image.
+//!
+//! # Limits
+//!
+//! Files larger than [`MAX_TEXTURE_FILE_BYTES`] are refused before anything
+//! is read, images of more than [`MAX_TEXELS`] texels after reading the
+//! header and before decoding the pixels.
+//!
+//! Errors are a [`CliError`] whose message starts with the texture's path:
+//! `scenes/wood.png: not a PNG or OpenEXR file`.
+
+use crate::error::CliError;
+use crate::image_out::read_coefficients_exr;
+use exr::prelude::{ReadChannels, ReadLayers, read};
+use simd_tracer::texture::{MAX_TEXELS, Texture};
+use spectral_core::SpectralRange;
+use spectral_core::color::srgb_decode;
+use std::fs::File;
+use std::io::{BufReader, Read};
+use std::path::Path;
+
+/// Largest texture file accepted, bytes (512 MiB).
+pub const MAX_TEXTURE_FILE_BYTES: u64 = 512 * 1024 * 1024;
+
+const PNG_MAGIC: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+/// What a texture is used for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum TextureUse {
+    /// A spectral reflectance (RGB, grey or Fourier coefficients).
+    Albedo,
+    /// A scalar in [0, 1] (a film thickness within its range).
+    Thickness,
+}
+
+enum Format {
+    Png,
+    Exr,
+}
+
+fn error(path: &Path, message: impl std::fmt::Display) -> CliError {
+    CliError::input(format!("{}: {message}", path.display()))
+}
+
+/// Checks the file (exists, size) and recognises its format.
+fn sniff(path: &Path) -> Result<Format, CliError> {
+    let metadata = std::fs::metadata(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
+    if metadata.is_dir() {
+        return Err(error(path, "is a directory"));
+    }
+    if metadata.len() > MAX_TEXTURE_FILE_BYTES {
+        return Err(error(
+            path,
+            format!(
+                "{} bytes is larger than the {} MiB limit for a texture",
+                metadata.len(),
+                MAX_TEXTURE_FILE_BYTES / (1024 * 1024)
+            ),
+        ));
+    }
+    let mut file = File::open(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
+    let mut magic = [0u8; 8];
+    let mut filled = 0;
+    while filled < magic.len() {
+        match file.read(&mut magic[filled..]) {
+            Ok(0) => break,
+            Ok(n) => filled += n,
+            Err(e) => return Err(error(path, format!("cannot read: {e}"))),
+        }
+    }
+    if filled == 8 && magic == PNG_MAGIC {
+        Ok(Format::Png)
+    } else if filled >= 4 && magic[..4] == EXR_MAGIC {
+        Ok(Format::Exr)
+    } else {
+        Err(error(path, "not a PNG or OpenEXR file"))
+    }
+}
+
+fn check_texels(path: &Path, width: usize, height: usize) -> Result<(), CliError> {
+    let texels = width.saturating_mul(height);
+    if width == 0 || height == 0 || texels > MAX_TEXELS {
+        return Err(error(
+            path,
+            format!("image of {width}x{height} texels is outside 1 … {MAX_TEXELS} texels"),
+        ));
+    }
+    Ok(())
+}
+
+/// Loads a texture from a PNG or OpenEXR file over `range` (module docs).
+pub fn load_texture(
+    path: &Path,
+    usage: TextureUse,
+    range: SpectralRange,
+) -> Result<Texture, CliError> {
+    match sniff(path)? {
+        Format::Png => load_png(path, usage, range),
+        Format::Exr => load_exr(path, usage, range),
+    }
+}
+
+/// A decoded image: channels per texel and values in [0, 1] (PNG) or linear.
+struct Pixels {
+    width: u32,
+    height: u32,
+    channels: usize,
+    values: Vec<f32>,
+}
+
+fn decode_png(path: &Path) -> Result<Pixels, CliError> {
+    let file = File::open(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
+    // 16-bit RGBA at the texel limit: 8 bytes per texel.
+    let limits = png::Limits {
+        bytes: MAX_TEXELS.saturating_mul(8),
+    };
+    let mut decoder = png::Decoder::new_with_limits(BufReader::new(file), limits);
+    decoder.set_transformations(png::Transformations::EXPAND);
+    let mut reader = decoder
+        .read_info()
+        .map_err(|e| error(path, format!("bad PNG: {e}")))?;
+    let (width, height) = (reader.info().width, reader.info().height);
+    check_texels(path, width as usize, height as usize)?;
+    let (color, depth) = reader.output_color_type();
+    let channels = match color {
+        png::ColorType::Grayscale => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        png::ColorType::Rgb => 3,
+        png::ColorType::Rgba => 4,
+        png::ColorType::Indexed => {
+            return Err(error(path, "palette PNG could not be expanded"));
+        }
+    };
+    let bytes_per_sample = match depth {
+        png::BitDepth::Eight => 1,
+        png::BitDepth::Sixteen => 2,
+        other => {
+            return Err(error(
+                path,
+                format!("unsupported PNG bit depth {other:?} after expansion"),
+            ));
+        }
+    };
+    let size = reader
+        .output_buffer_size()
+        .ok_or_else(|| error(path, "PNG too large"))?;
+    let mut buffer = vec![0u8; size];
+    let frame = reader
+        .next_frame(&mut buffer)
+        .map_err(|e| error(path, format!("bad PNG data: {e}")))?;
+    let row_bytes = width as usize * channels * bytes_per_sample;
+    let mut values = Vec::with_capacity(width as usize * height as usize * channels);
+    for row in 0..height as usize {
+        let start = row * frame.line_size;
+        let Some(line) = buffer.get(start..start + row_bytes) else {
+            return Err(error(path, "PNG rows are shorter than expected"));
+        };
+        if bytes_per_sample == 1 {
+            values.extend(line.iter().map(|&b| f32::from(b) / 255.0));
+        } else {
+            values.extend(
+                line.chunks_exact(2)
+                    .map(|b| f32::from(u16::from_be_bytes([b[0], b[1]])) / 65535.0),
+            );
+        }
+    }
+    Ok(Pixels {
+        width,
+        height,
+        channels,
+        values,
+    })
+}
+
+fn load_png(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Texture, CliError> {
+    let pixels = decode_png(path)?;
+    let texel = |i: usize| &pixels.values[i * pixels.channels..(i + 1) * pixels.channels];
+    let count = pixels.width as usize * pixels.height as usize;
+    let describe = |e| error(path, format!("invalid texture: {e}"));
+    match usage {
+        TextureUse::Albedo => {
+            let decode = |v: f32| srgb_decode(f64::from(v)) as f32;
+            let rgb: Vec<[f32; 3]> = (0..count)
+                .map(|i| {
+                    let t = texel(i);
+                    if pixels.channels >= 3 {
+                        [decode(t[0]), decode(t[1]), decode(t[2])]
+                    } else {
+                        [decode(t[0]); 3]
+                    }
+                })
+                .collect();
+            Texture::rgb(pixels.width, pixels.height, &rgb, range).map_err(describe)
+        }
+        TextureUse::Thickness => {
+            if pixels.channels >= 3 {
+                return Err(error(
+                    path,
+                    "a thickness texture must be a grey image (this PNG is in colour)",
+                ));
+            }
+            let values = (0..count).map(|i| texel(i)[0]).collect();
+            Texture::scalar(pixels.width, pixels.height, values, range).map_err(describe)
+        }
+    }
+}
+
+fn load_exr(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Texture, CliError> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| error(path, format!("bad OpenEXR header: {e}")))?;
+    let Some(header) = meta.headers.first() else {
+        return Err(error(path, "OpenEXR file has no part"));
+    };
+    check_texels(path, header.layer_size.0, header.layer_size.1)?;
+    let has_f0 = header.channels.list.iter().any(|c| c.name.eq("F0"));
+    let describe = |e| error(path, format!("invalid texture: {e}"));
+    if has_f0 {
+        if usage == TextureUse::Thickness {
+            return Err(error(
+                path,
+                "a thickness texture must be a grey image (this EXR holds Fourier coefficients)",
+            ));
+        }
+        let image = read_coefficients_exr(path)?;
+        let (lo, hi) = image.range_nm;
+        if (lo - range.min_nm()).abs() > 1e-9 || (hi - range.max_nm()).abs() > 1e-9 {
+            return Err(error(
+                path,
+                format!(
+                    "coefficients over {lo}–{hi} nm, but the scene's range is {}–{} nm",
+                    range.min_nm(),
+                    range.max_nm()
+                ),
+            ));
+        }
+        return Texture::fourier(image.width, image.height, image.n, image.coeffs, range)
+            .map_err(describe);
+    }
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| error(path, format!("cannot decode OpenEXR: {e}")))?;
+    let layer = &image.layer_data;
+    let (width, height) = (layer.size.0, layer.size.1);
+    check_texels(path, width, height)?;
+    let (Ok(w32), Ok(h32)) = (u32::try_from(width), u32::try_from(height)) else {
+        return Err(error(path, "image size does not fit in 32 bits"));
+    };
+    let list = &layer.channel_data.list;
+    let channel = |name: &str| -> Option<Vec<f32>> {
+        list.iter()
+            .find(|c| c.name.eq(name))
+            .map(|c| c.sample_data.values_as_f32().collect())
+    };
+    let count = width * height;
+    let names: Vec<String> = list.iter().map(|c| c.name.to_string()).collect();
+    match usage {
+        TextureUse::Albedo => {
+            let rgb: Vec<[f32; 3]> = match (channel("R"), channel("G"), channel("B"), channel("Y"))
+            {
+                (Some(r), Some(g), Some(b), _) => (0..count)
+                    .map(|i| {
+                        [
+                            r.get(i).copied().unwrap_or(0.0),
+                            g.get(i).copied().unwrap_or(0.0),
+                            b.get(i).copied().unwrap_or(0.0),
+                        ]
+                    })
+                    .collect(),
+                (_, _, _, Some(y)) => (0..count)
+                    .map(|i| [y.get(i).copied().unwrap_or(0.0); 3])
+                    .collect(),
+                _ => {
+                    return Err(error(
+                        path,
+                        format!(
+                            "an albedo EXR needs channels R, G, B, or Y, or F0 … (found {})",
+                            names.join(", ")
+                        ),
+                    ));
+                }
+            };
+            Texture::rgb(w32, h32, &rgb, range).map_err(describe)
+        }
+        TextureUse::Thickness => {
+            let values = match channel("Y") {
+                Some(y) => y,
+                None if list.len() == 1 => list
+                    .first()
+                    .map(|c| c.sample_data.values_as_f32().collect())
+                    .unwrap_or_default(),
+                None => {
+                    return Err(error(
+                        path,
+                        format!(
+                            "a thickness EXR needs a Y channel or a single channel (found {})",
+                            names.join(", ")
+                        ),
+                    ));
+                }
+            };
+            Texture::scalar(w32, h32, values, range).map_err(describe)
+        }
+    }
+}
