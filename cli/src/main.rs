@@ -28,15 +28,13 @@ enum Command {
     Train(TrainArgs),
 }
 
-fn run(cli: &Cli) -> Result<(), CliError> {
+/// Runs the command; `Ok` carries the exit code of a command that finished
+/// its work (a render stopped by Ctrl-C still writes its image).
+fn run(cli: &Cli) -> Result<ExitCode, CliError> {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     match &cli.command {
-        Command::Render(args) => {
-            let summary = render_cmd::run(args)?;
-            println!("{}", render_cmd::summary_line(&summary));
-            Ok(())
-        }
+        Command::Render(args) => return render(args),
         Command::Scenes => {
             print!("{}", fspec_cli::scene_source::list_scenes());
             Ok(())
@@ -48,13 +46,27 @@ fn run(cli: &Cli) -> Result<(), CliError> {
             println!("final loss {last:.3e}; wrote {}", args.out.display());
             Ok(())
         }
-    }
+    }?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `fspec render`: exit code 130 when Ctrl-C stopped it early (after
+/// writing the passes done).
+fn render(args: &RenderArgs) -> Result<ExitCode, CliError> {
+    render_cmd::install_interrupt_handler()?;
+    let summary = render_cmd::run(args)?;
+    println!("{}", render_cmd::summary_line(&summary));
+    Ok(if summary.interrupted {
+        ExitCode::from(render_cmd::INTERRUPTED_EXIT_CODE)
+    } else {
+        ExitCode::SUCCESS
+    })
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(&cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(error) => {
             eprintln!("fspec: error: {error}");
             ExitCode::from(error.exit_code())

@@ -30,7 +30,36 @@ use spectral_core::sampling::WavelengthStrategy;
 use spectral_core::xyz::XyzRoute;
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Duration;
+
+/// Ctrl-C presses seen since [`install_interrupt_handler`].
+static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
+
+/// Exit code of a render stopped by Ctrl-C (128 + SIGINT, the shell's
+/// convention), used after the partial image has been written.
+pub const INTERRUPTED_EXIT_CODE: u8 = 130;
+
+/// Installs the Ctrl-C handler of `fspec render`: the first press stops the
+/// render after the pass in progress and the passes done so far are written
+/// as usual; a second press exits at once. Outputs are always written to a
+/// temporary name and renamed, so neither leaves a truncated file.
+pub fn install_interrupt_handler() -> Result<(), CliError> {
+    ctrlc::set_handler(|| {
+        if INTERRUPTS.fetch_add(1, Ordering::SeqCst) == 0 {
+            eprintln!(
+                "\nfspec: interrupted: finishing the current pass (Ctrl-C again to quit now)"
+            );
+        } else {
+            std::process::exit(i32::from(INTERRUPTED_EXIT_CODE));
+        }
+    })
+    .map_err(|e| CliError::input(format!("cannot install the Ctrl-C handler: {e}")))
+}
+
+fn interrupted() -> bool {
+    INTERRUPTS.load(Ordering::SeqCst) > 0
+}
 
 /// How light is carried along paths.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -203,6 +232,8 @@ pub struct RenderSummary {
     pub elapsed: Duration,
     /// Files written.
     pub written: Vec<PathBuf>,
+    /// Stopped early by Ctrl-C (the files hold the passes done).
+    pub interrupted: bool,
 }
 
 fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSettings, CliError> {
@@ -320,7 +351,7 @@ impl Reporter {
             let rate = p.samples as f64 / p.elapsed.as_secs_f64().max(1e-9);
             bar.set_message(format!("{:.2} M samples/s", rate / 1e6));
         }
-        true
+        !interrupted()
     }
 
     fn finish(&self) {
@@ -582,6 +613,7 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
         rejected: result.rejected,
         elapsed: result.elapsed,
         written,
+        interrupted: interrupted(),
     })
 }
 
@@ -598,8 +630,13 @@ pub fn summary_line(summary: &RenderSummary) -> String {
     } else {
         String::new()
     };
+    let stopped = if summary.interrupted {
+        " (interrupted)"
+    } else {
+        ""
+    };
     format!(
-        "rendered {} passes in {seconds:.2} s ({:.2} M samples/s{rejected}); wrote {}",
+        "rendered {} passes{stopped} in {seconds:.2} s ({:.2} M samples/s{rejected}); wrote {}",
         summary.passes,
         summary.samples as f64 / seconds.max(1e-9) / 1e6,
         files.join(", ")
