@@ -703,8 +703,9 @@ fn write_exr_channels(
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
 /// Writes through `write` into a temporary file beside `path`, syncs it and
-/// renames it over `path`; removes the temporary on any error.
-fn write_atomically(
+/// renames it over `path`; removes the temporary on any error (so `path` is
+/// either the complete new file or untouched).
+pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut File) -> Result<(), String>,
 ) -> Result<(), CliError> {

@@ -4,6 +4,7 @@
 pub mod coeffs;
 pub mod error;
 pub mod image_out;
+pub mod neural_report;
 pub mod render_cmd;
 pub mod scene_file;
 pub mod scene_source;

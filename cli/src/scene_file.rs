@@ -36,7 +36,7 @@
 //! scale = 10.0              # optional multiplier (>= 0) of any source
 //!
 //! [materials.floor]         # named materials; `type` is required
-//! type = "lambert"          # lambert | conductor | dielectric | coated | thin-film
+//! type = "lambert"          # lambert | conductor | dielectric | coated | thin-film | neural
 //! albedo = "colorchecker-19"
 //! emission = "lamp"         # optional, any type
 //! emission_scale = 1.0      # optional, >= 0 (needs `emission`)
@@ -81,6 +81,7 @@
 //! | `dielectric` | `ior`; `roughness` | smooth or GGX dielectric interface (inside relative to outside) |
 //! | `coated` | `albedo` or `albedo_texture`; `ior` (a number); `roughness` | dielectric coat over a Lambertian base |
 //! | `thin-film` | `layers`, `substrate`, `base`; `thickness_texture` with `thickness_range_nm` | smooth thin-film stack |
+//! | `neural` | `network`; `roughness`; for two-input networks `thickness_nm`, or `thickness_texture` with `thickness_range_nm` | GGX reflector whose Fresnel reflectance is a trained sine network (paper §4) |
 //!
 //! * `roughness`: GGX `α`, a number `>= 0`, default 0 (smooth; below 10⁻³
 //!   the surface is a mirror).
@@ -103,6 +104,14 @@
 //!   `thickness_range_nm = [100, 800]` (both or neither) layer 0's thickness
 //!   comes from a grey texture, 0 … 1 mapping linearly into the range (layer
 //!   0's `thickness_nm` may then be left out).
+//! * `neural`: `network = "film.nn"` is a file written by `fspec train`
+//!   (`spectral_core::neural` byte format; 1 or 2 inputs, 10 or 16 hidden,
+//!   10, 12 or 16 coefficients, spectral range 360–830 nm). Its
+//!   coefficients are the Fresnel reflectance at `cos θ`: a mirror, or a
+//!   GGX reflector with `roughness`; the rest of the light is absorbed (a
+//!   film on a black base). A two-input network (`--param thickness:…`)
+//!   takes `thickness_nm = 400`, or a grey `thickness_texture` with
+//!   `thickness_range_nm` (smooth only).
 //!
 //! ## Meshes
 //!
@@ -134,7 +143,7 @@ use crate::error::CliError;
 use crate::spectrum_file;
 use crate::texture_file::{TextureUse, load_texture};
 use glam::{Vec2, Vec3};
-use simd_tracer::angular::{AngularFunction, FilmLayer, Ior, REFERENCE_WAVELENGTH_NM};
+use simd_tracer::angular::{AngularFunction, FilmLayer, Ior, Network, REFERENCE_WAVELENGTH_NM};
 use simd_tracer::camera::{Camera, CameraError};
 use simd_tracer::material::{Albedo, Bsdf, Material, diffuse_fresnel};
 use simd_tracer::scene::{MaterialId, SceneBuilder, SceneError, SpectrumId, TextureId};
@@ -767,7 +776,9 @@ struct MaterialEntry {
 
 struct Loader<'s> {
     src: Source<'s>,
-    dir: PathBuf,
+    /// Directory that file references are relative to; `None` refuses every
+    /// file reference (the fuzz entry point reads no file).
+    dir: Option<PathBuf>,
     range: SpectralRange,
     builder: SceneBuilder,
     warnings: Vec<String>,
@@ -830,6 +841,18 @@ const THIN_FILM_KEYS: &[&str] = &[
     "thickness_range_nm",
 ];
 
+const NEURAL_KEYS: &[&str] = &[
+    "type",
+    "emission",
+    "emission_scale",
+    "two_sided",
+    "network",
+    "roughness",
+    "thickness_nm",
+    "thickness_texture",
+    "thickness_range_nm",
+];
+
 const METALS: [(&str, &str); 5] = [
     ("gold", "gold"),
     ("silver", "silver"),
@@ -839,7 +862,7 @@ const METALS: [(&str, &str); 5] = [
 ];
 
 impl<'s> Loader<'s> {
-    fn new(src: Source<'s>, dir: PathBuf) -> Self {
+    fn new(src: Source<'s>, dir: Option<PathBuf>) -> Self {
         let range = SpectralRange::VISIBLE;
         Self {
             src,
@@ -854,6 +877,16 @@ impl<'s> Loader<'s> {
             material_order: Vec::new(),
             textures: HashMap::new(),
             mesher: Mesher::default(),
+        }
+    }
+
+    /// The path of a file reference `item` (a string, relative to the scene
+    /// file's directory).
+    fn file(&self, item: &Item<'_, '_>) -> Result<PathBuf, CliError> {
+        let name = item.string(&self.src)?;
+        match &self.dir {
+            Some(dir) => Ok(dir.join(name)),
+            None => Err(item.err(&self.src, "file references are not available here")),
         }
     }
 
@@ -912,7 +945,7 @@ impl<'s> Loader<'s> {
                 )
             }
             "csv" => {
-                let path = self.dir.join(item.string(src)?);
+                let path = self.file(item)?;
                 let data = spectrum_file::load_csv(&path).map_err(|e| item.err(src, e))?;
                 SpectrumSource::Tabulated {
                     lambda_nm: data.lambda_nm,
@@ -1116,7 +1149,7 @@ impl<'s> Loader<'s> {
     // ----- textures
 
     fn texture(&mut self, item: &Item<'_, '_>, usage: TextureUse) -> Result<TextureId, CliError> {
-        let path = self.dir.join(item.string(&self.src)?);
+        let path = self.file(item)?;
         if let Some(&id) = self.textures.get(&(path.clone(), usage)) {
             return Ok(id);
         }
@@ -1519,12 +1552,117 @@ impl<'s> Loader<'s> {
         })
     }
 
+    /// `neural`: a (GGX) reflector whose Fresnel reflectance is a network
+    /// written by `fspec train` (module docs).
+    fn neural(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
+        let item = table.require(
+            &self.src,
+            "network",
+            "a neural material needs `network = \"file.nn\"` (written by `fspec train`)",
+        )?;
+        let path = self.file(&item)?;
+        let bytes = std::fs::read(&path)
+            .map_err(|e| item.err(&self.src, format!("{}: {e}", path.display())))?;
+        let network = Network::from_bytes(&bytes)
+            .map_err(|e| item.err(&self.src, format!("{}: {e}", path.display())))?;
+        let roughness = self.roughness(table)?;
+        let (fixed, texture, range) = (
+            table.get("thickness_nm"),
+            table.get("thickness_texture"),
+            table.get("thickness_range_nm"),
+        );
+        let name = table.key.clone();
+        let requested = match (fixed.as_ref(), range.as_ref()) {
+            (Some(t), _) => Some((t, vec![t.non_negative(&self.src)?; 2])),
+            (None, Some(r)) => Some((r, r.numbers(&self.src, 2)?)),
+            (None, None) => None,
+        };
+        if let (Some((item, values)), Some((trained_lo, trained_hi))) =
+            (requested, network.trained_input_range(1))
+            && let [lo, hi] = values.as_slice()
+        {
+            // 1 nm of slack for the f32 round trip of the normalisation.
+            if *lo < f64::from(trained_lo) - 1.0 || *hi > f64::from(trained_hi) + 1.0 {
+                self.warnings.push(item.warning(
+                    &self.src,
+                    format!(
+                        "the network was trained on thicknesses {trained_lo:.0}–{trained_hi:.0} nm: outside them it extrapolates"
+                    ),
+                ));
+            }
+        }
+        if network.inputs() == 1 {
+            if let Some(extra) = fixed.or(texture).or(range) {
+                return Err(extra.err(
+                    &self.src,
+                    "this network has one input (cos θ): it takes no thickness",
+                ));
+            }
+            let fresnel = self.add_angular(
+                table,
+                &name,
+                AngularFunction::Neural {
+                    network,
+                    thickness_range_nm: (0.0, 0.0),
+                },
+            )?;
+            return Ok(Bsdf::Conductor { fresnel, roughness });
+        }
+        match (fixed, texture, range) {
+            (Some(t), None, None) => {
+                let t = t.non_negative(&self.src)?;
+                let fresnel = self.add_angular(
+                    table,
+                    &name,
+                    AngularFunction::Neural {
+                        network,
+                        thickness_range_nm: (t, t),
+                    },
+                )?;
+                Ok(Bsdf::Conductor { fresnel, roughness })
+            }
+            (None, Some(texture), Some(range)) => {
+                let r = range.numbers(&self.src, 2)?;
+                if !(r[0] >= 0.0 && r[0] < r[1]) {
+                    return Err(range.err(&self.src, "must be [min, max] with 0 <= min < max"));
+                }
+                if roughness > 0.0 {
+                    return Err(table.err(
+                        &self.src,
+                        "a textured-thickness neural film is smooth: leave out `roughness`",
+                    ));
+                }
+                let thickness = Some(self.texture(&texture, TextureUse::Thickness)?);
+                let front_reflectance = self.add_angular(
+                    table,
+                    &name,
+                    AngularFunction::Neural {
+                        network,
+                        thickness_range_nm: (r[0], r[1]),
+                    },
+                )?;
+                Ok(Bsdf::ThinFilm {
+                    front_reflectance,
+                    front_transmittance: None,
+                    back: None,
+                    // Unused: an opaque base refracts nothing.
+                    substrate_ior: 1.0,
+                    thickness,
+                })
+            }
+            _ => Err(table.err(
+                &self.src,
+                "this network takes a thickness: give `thickness_nm`, or `thickness_texture` with `thickness_range_nm`",
+            )),
+        }
+    }
+
     fn material(&mut self, name: &str, item: &Item<'_, '_>) -> Result<MaterialId, CliError> {
         let table = item.table(&self.src)?;
         let kind_item = table.require(
             &self.src,
             "type",
-            "lambert, conductor, dielectric, coated or thin-film",
+            "lambert, conductor, dielectric, coated, thin-film or neural",
         )?;
         let kind = kind_item.string(&self.src)?;
         let keys = match kind {
@@ -1533,11 +1671,12 @@ impl<'s> Loader<'s> {
             "dielectric" => DIELECTRIC_KEYS,
             "coated" => COATED_KEYS,
             "thin-film" => THIN_FILM_KEYS,
+            "neural" => NEURAL_KEYS,
             other => {
                 return Err(kind_item.err(
                     &self.src,
                     format!(
-                        "unknown material type \"{other}\" (lambert, conductor, dielectric, coated or thin-film)"
+                        "unknown material type \"{other}\" (lambert, conductor, dielectric, coated, thin-film or neural)"
                     ),
                 ));
             }
@@ -1550,6 +1689,7 @@ impl<'s> Loader<'s> {
             "conductor" => self.conductor(&table)?,
             "dielectric" => self.dielectric(&table)?,
             "coated" => self.coated(&table)?,
+            "neural" => self.neural(&table)?,
             _ => self.thin_film(&table)?,
         };
         let mut material = Material::new(name, bsdf);
@@ -1616,7 +1756,7 @@ impl<'s> Loader<'s> {
             let table = mesh.table(&self.src)?;
             table.allow(&self.src, &["obj", "material", "materials"], "a mesh")?;
             let obj_item = table.require(&self.src, "obj", "a mesh needs `obj = \"file.obj\"`")?;
-            let path = self.dir.join(obj_item.string(&self.src)?);
+            let path = self.file(&obj_item)?;
             let faces = match (table.get("material"), table.get("materials")) {
                 (Some(_), Some(map)) => {
                     return Err(map.err(
@@ -1913,11 +2053,18 @@ fn read_text(path: &Path, limit: u64) -> Result<String, CliError> {
 /// un-built (call `.build()`); the range is 360–830 nm.
 pub fn load_scene_file(path: &Path) -> Result<LoadedScene, CliError> {
     let text = read_text(path, MAX_SCENE_FILE_BYTES)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    load_scene_text(&path.display().to_string(), &text, Some(dir))
+}
+
+/// [`load_scene_file`] on the text of a file named `file` (for messages),
+/// with file references relative to `dir`, or refused when `dir` is `None`.
+fn load_scene_text(file: &str, text: &str, dir: Option<PathBuf>) -> Result<LoadedScene, CliError> {
     let src = Source {
-        file: path.display().to_string(),
-        text: &text,
+        file: file.to_string(),
+        text,
     };
-    let document = DeTable::parse(&text).map_err(|e| {
+    let document = DeTable::parse(text).map_err(|e| {
         let line = e.span().map_or(1, |s| src.line(s.start));
         let message = e.message().trim_end().replace('\n', "; ");
         CliError::input(format!("{}:{line}: TOML syntax: {message}", src.file))
@@ -1927,8 +2074,33 @@ pub fn load_scene_file(path: &Path) -> Result<LoadedScene, CliError> {
         span: 0..0,
         map: document.get_ref(),
     };
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     Loader::new(src, dir).load(&root)
+}
+
+/// Fuzz entry point: arbitrary bytes as a scene file, with every file
+/// reference (`csv`, `obj`, textures) refused so that nothing is read from
+/// disk. Checks that nothing panics, that every error and warning is one
+/// line (module docs), and that a scene the loader accepts either builds
+/// into a scene with a valid BVH and finite normals or gives `Err`.
+pub fn fuzz_scene_toml(bytes: &[u8]) {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return;
+    };
+    let loaded = match load_scene_text("fuzz.toml", text, None) {
+        Ok(loaded) => loaded,
+        Err(e) => {
+            let message = e.to_string();
+            assert!(!message.contains('\n'), "multi-line error: {message:?}");
+            return;
+        }
+    };
+    for warning in &loaded.warnings {
+        assert!(!warning.contains('\n'), "multi-line warning: {warning:?}");
+    }
+    if let Ok(scene) = loaded.builder.build() {
+        assert!(scene.bvh.validate().is_ok(), "{:?}", scene.bvh.validate());
+        assert!(scene.normals.iter().all(|n| n.is_finite()));
+    }
 }
 
 /// A bare OBJ as a scene (module docs of `simd_tracer::obj` for the MTL

@@ -21,10 +21,12 @@
 //! The result is written in `spectral_core::neural`'s byte format.
 
 use crate::error::CliError;
+use crate::image_out::write_atomically;
 use spectral_core::SpectralRange;
 use spectral_core::complex::Complex;
 use spectral_core::optics::{Layer, multilayer};
 use spectral_core::table::FourierTable;
+use std::io::Write;
 use std::path::PathBuf;
 
 /// Wavelengths of the reconstruction loss.
@@ -67,6 +69,12 @@ pub struct TrainArgs {
     /// Output file.
     #[arg(long, default_value = "film.nn")]
     pub out: PathBuf,
+    /// Also write the evidence of the paper's figure 3 into this folder:
+    /// `tables.png` (explicit, Fourier-table and network reflectance tables
+    /// side by side, then 10 × the network's error) and `evidence.md`
+    /// (max/RMS error, ΔE2000 under D65, memory).
+    #[arg(long)]
+    pub evidence: Option<PathBuf>,
 }
 
 /// The film of a training run.
@@ -444,7 +452,7 @@ pub fn parse_param(text: &str) -> Result<(f64, f64), CliError> {
 }
 
 /// Runs `fspec train`, printing the training curve to `out`.
-pub fn run(args: &TrainArgs, out: &mut dyn std::io::Write) -> Result<Trained, CliError> {
+pub fn run(args: &TrainArgs, out: &mut dyn Write) -> Result<Trained, CliError> {
     let thickness = match &args.param {
         Some(p) => parse_param(p)?,
         None => (args.thickness_nm, args.thickness_nm),
@@ -465,6 +473,18 @@ pub fn run(args: &TrainArgs, out: &mut dyn std::io::Write) -> Result<Trained, Cl
             "--hidden must be 1 to 64 and --steps at least 1",
         ));
     }
+    // Fail before training, not after it.
+    let parent = match args.out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => std::path::Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err(CliError::input(format!(
+            "cannot write {}: directory {} does not exist",
+            args.out.display(),
+            parent.display()
+        )));
+    }
     let film = FilmSpec {
         film_ior: args.film_ior,
         substrate_ior: args.substrate_ior,
@@ -481,8 +501,33 @@ pub fn run(args: &TrainArgs, out: &mut dyn std::io::Write) -> Result<Trained, Cl
         &mut report
     ))?;
     let bytes = trained.network.to_bytes(&SpectralRange::VISIBLE);
-    std::fs::write(&args.out, bytes)
-        .map_err(|e| CliError::input(format!("cannot write {}: {e}", args.out.display())))?;
+    write_atomically(&args.out, |file| {
+        file.write_all(&bytes).map_err(|e| e.to_string())
+    })?;
+    if let Some(dir) = &args.evidence {
+        let evidence = crate::neural_report::evidence(&film, &bytes)?;
+        let table = crate::neural_report::markdown(&evidence);
+        std::fs::create_dir_all(dir)
+            .map_err(|e| CliError::input(format!("cannot create {}: {e}", dir.display())))?;
+        crate::neural_report::write_picture(&dir.join("tables.png"), &evidence)?;
+        let text = format!(
+            "# Neural thin film: evidence\n\n`fspec train thin-film --film-ior {} --substrate-ior {} --thickness-nm {}{} --coeffs {} --hidden {} --steps {} --seed {}`\n\n{table}\n![explicit | Fourier table | network | 10 × network error](tables.png)\n",
+            args.film_ior,
+            args.substrate_ior,
+            args.thickness_nm,
+            args.param
+                .as_ref()
+                .map_or(String::new(), |p| format!(" --param {p}")),
+            args.coeffs,
+            args.hidden,
+            args.steps,
+            args.seed
+        );
+        write_atomically(&dir.join("evidence.md"), |file| {
+            file.write_all(text.as_bytes()).map_err(|e| e.to_string())
+        })?;
+        let _ = write!(out, "{table}");
+    }
     Ok(trained)
 }
 

@@ -1068,3 +1068,116 @@ fn scene_files_never_panic_on_odd_values() -> TestResult {
     );
     Ok(())
 }
+
+// ---------------------------------------------------------------------------
+// Neural materials
+// ---------------------------------------------------------------------------
+
+/// A scene directory with the committed networks and thickness texture
+/// copied next to `text`; returns the scene path.
+fn neural_scene(test: &str, text: &str) -> TestResult<PathBuf> {
+    let dir = test_dir(test)?;
+    for file in ["film-400nm.nn", "film-100-800nm.nn", "thickness.png"] {
+        fs::copy(scenes_dir().join("assets").join(file), dir.join(file))?;
+    }
+    write(&dir, "scene.toml", text)
+}
+
+#[test]
+fn neural_materials_load_in_every_form() -> TestResult {
+    let text = format!(
+        "{BASE}\n[materials.a]\ntype = \"neural\"\nnetwork = \"film-400nm.nn\"\nroughness = 0.2\n\
+         [materials.b]\ntype = \"neural\"\nnetwork = \"film-100-800nm.nn\"\nthickness_nm = 300\n\
+         [materials.c]\ntype = \"neural\"\nnetwork = \"film-100-800nm.nn\"\n\
+         thickness_texture = \"thickness.png\"\nthickness_range_nm = [100, 800]\n\
+         [[quads]]\nvertices = [[-1, -1, -1], [0, -1, -1], [0, 0, -1], [-1, 0, -1]]\nmaterial = \"a\"\n\
+         [[quads]]\nvertices = [[0, -1, -1], [1, -1, -1], [1, 0, -1], [0, 0, -1]]\nmaterial = \"b\"\n\
+         [[quads]]\nvertices = [[0, 0, -1], [1, 0, -1], [1, 1, -1], [0, 1, -1]]\nmaterial = \"c\"\n"
+    );
+    let path = neural_scene("neural-ok", &text)?;
+    let loaded = load_scene_file(&path)?;
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    assert_renders("neural", loaded)?;
+    Ok(())
+}
+
+#[test]
+fn neural_material_errors_name_the_key() -> TestResult {
+    let cases: [(&str, &str, &str, &str); 6] = [
+        (
+            "network = \"missing.nn\"",
+            "network",
+            "materials.n.network",
+            "missing.nn",
+        ),
+        (
+            "network = \"thickness.png\"",
+            "network",
+            "materials.n.network",
+            "thickness.png",
+        ),
+        (
+            "network = \"film-400nm.nn\"\nthickness_nm = 300",
+            "thickness_nm",
+            "materials.n.thickness_nm",
+            "one input",
+        ),
+        (
+            "network = \"film-100-800nm.nn\"",
+            "type = \"neural\"",
+            "materials.n",
+            "takes a thickness",
+        ),
+        (
+            "network = \"film-100-800nm.nn\"\nthickness_texture = \"thickness.png\"\n\
+             thickness_range_nm = [100, 800]\nroughness = 0.1",
+            "type = \"neural\"",
+            "materials.n",
+            "smooth",
+        ),
+        (
+            "roughness = 0.1",
+            "type = \"neural\"",
+            "materials.n",
+            "network",
+        ),
+    ];
+    for (i, (keys, needle, key, detail)) in cases.iter().enumerate() {
+        let text = format!("{BASE}\n[materials.n]\ntype = \"neural\"\n{keys}\n");
+        let path = neural_scene(&format!("neural-bad-{i}"), &text)?;
+        let message = error_of(&path)?;
+        let at = if *needle == "type = \"neural\"" {
+            // Table-level errors point at the table header's line or its type.
+            message.starts_with(&format!("{}:", path.display()))
+                && message.contains(&format!(": {key}"))
+        } else {
+            message.starts_with(&format!(
+                "{}:{}: {key}: ",
+                path.display(),
+                line_of(&text, needle)?
+            ))
+        };
+        assert!(at, "case {i}: {message}");
+        assert!(message.contains(detail), "case {i}: {detail} in {message}");
+    }
+    Ok(())
+}
+
+#[test]
+fn neural_thickness_outside_the_training_range_warns() -> TestResult {
+    let text = format!(
+        "{BASE}\n[materials.n]\ntype = \"neural\"\nnetwork = \"film-100-800nm.nn\"\nthickness_nm = 1500\n\
+         [[quads]]\nvertices = [[-1, -1, -1], [0, -1, -1], [0, 0, -1], [-1, 0, -1]]\nmaterial = \"n\"\n"
+    );
+    let path = neural_scene("neural-warn", &text)?;
+    let loaded = load_scene_file(&path)?;
+    assert!(
+        loaded
+            .warnings
+            .iter()
+            .any(|w| w.contains("trained on thicknesses 100–800 nm")),
+        "{:?}",
+        loaded.warnings
+    );
+    Ok(())
+}

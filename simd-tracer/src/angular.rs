@@ -138,6 +138,13 @@ macro_rules! networks {
                 }
             }
 
+            /// Number of output coefficients.
+            pub fn outputs(&self) -> usize {
+                match self {
+                    $(Self::$variant(_) => $outputs,)*
+                }
+            }
+
             /// The spectral range of the outputs.
             pub fn range(&self) -> SpectralRange {
                 match self {
@@ -157,6 +164,19 @@ macro_rules! networks {
                     })*
                 }
                 out
+            }
+
+            /// The interval input `index` was trained on, read from its
+            /// normalisation `x' = (x − offset)·scale` (which maps it to
+            /// [−1, 1]); `None` for a missing input or a zero scale.
+            pub fn trained_input_range(&self, index: usize) -> Option<(f32, f32)> {
+                let (offset, scale) = match self {
+                    $(Self::$variant(net) => *net.normalisation.get(index)?,)*
+                };
+                (scale != 0.0).then(|| {
+                    let half = (1.0 / scale).abs();
+                    (offset - half, offset + half)
+                })
             }
 
             /// Bytes of weights.

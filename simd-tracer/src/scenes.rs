@@ -8,7 +8,7 @@
 //! | `materials` | the paper's figure 4: diffuse, gold, copper, glass, coated plastic, a single-layer and a multi-layer thin film, on a textured floor |
 //! | `colorchecker` | the 24 ColorChecker patches lit directly by an illuminant (a constant environment, D65 by default, scaled to Y = 1) in front of a black backdrop |
 
-use crate::angular::{AngularFunction, FilmLayer, Ior};
+use crate::angular::{AngularFunction, FilmLayer, Ior, Network};
 use crate::camera::Camera;
 use crate::material::{Albedo, Bsdf, Material, diffuse_fresnel};
 use crate::obj::{ObjError, ObjSource, load_obj};
@@ -37,6 +37,11 @@ pub struct SceneInfo {
     pub description: &'static str,
 }
 
+/// The network of the `materials` scene's neural sphere: `fspec train
+/// thin-film --out scenes/assets/film-400nm.nn` (film index 2.0, 400 nm, on
+/// a 1.5 substrate; 1 input, 10 hidden, 10 coefficients, seed 1).
+pub const FILM_NETWORK: &[u8] = include_bytes!("../../scenes/assets/film-400nm.nn");
+
 /// Every built-in scene.
 pub const SCENES: [SceneInfo; 5] = [
     SceneInfo {
@@ -53,7 +58,7 @@ pub const SCENES: [SceneInfo; 5] = [
     },
     SceneInfo {
         name: "materials",
-        description: "diffuse, gold, copper, glass, coated plastic, single- and multi-layer thin films (the paper's figure 4)",
+        description: "diffuse, gold, copper, glass, coated plastic, single- and multi-layer thin films, a neural thin film (the paper's figure 4)",
     },
     SceneInfo {
         name: "colorchecker",
@@ -567,16 +572,34 @@ fn materials(range: SpectralRange) -> Result<SceneBuilder, BuiltinError> {
             },
         ],
     )?;
-    let spheres = [diffuse, gold, copper, glass, plastic, single, multi];
+    // The paper's neural material: the single film's reflectance from the
+    // network of `fspec train thin-film` (committed, 1 KB), on a black base.
+    let network = Network::from_bytes(FILM_NETWORK)
+        .map_err(|e| SceneError::Spectrum("neural film".into(), e))?;
+    let neural_fresnel = b.add_angular(
+        "neural film",
+        AngularFunction::Neural {
+            network,
+            thickness_range_nm: (0.0, 0.0),
+        },
+    )?;
+    let neural = b.add_material(Material::new(
+        "neural film",
+        Bsdf::Conductor {
+            fresnel: neural_fresnel,
+            roughness: 0.0,
+        },
+    ));
+    let spheres = [diffuse, gold, copper, glass, plastic, single, multi, neural];
     for (i, &material) in spheres.iter().enumerate() {
         let (row, column) = (i / 4, i % 4);
-        let x = -1.8 + 1.2 * column as f32 + 0.6 * row as f32;
+        let x = -2.1 + 1.2 * column as f32 + 0.6 * row as f32;
         let z = -1.6 + 1.3 * row as f32;
         add_sphere(&mut b, Vec3::new(x, 0.5, z), 0.5, 32, 64, material);
     }
     b.set_camera(
         Camera::look_at(
-            Vec3::new(0.0, 2.6, 4.2),
+            Vec3::new(0.0, 2.9, 5.0),
             Vec3::new(0.0, 0.4, -0.9),
             Vec3::Y,
             40.0,

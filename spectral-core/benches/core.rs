@@ -9,10 +9,13 @@
 //! * `mese/*`: MESE preparation (O(N²), f64) and evaluation per wavelength.
 //! * `table/*`, `upsample/*`: Fourier-table lookups, sRGB → sigmoid lookup and
 //!   its projection to 12 coefficients.
+//! * `neural/*`: the paper's 1×10×10 sine network, one input or 8 lanes,
+//!   against a lookup in the N = 10 Fourier table it replaces.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use spectral_core::data::tables::METALS;
 use spectral_core::mese::{BoundedMese, Mese};
+use spectral_core::neural::SineMlp;
 use spectral_core::registry::Builtin;
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, SpectralRange, Spectrum};
@@ -161,6 +164,46 @@ fn tables_and_upsampling(c: &mut Criterion) {
     });
 }
 
+/// The paper's network (1 input, two hidden layers of 10 sine neurons, 10
+/// coefficients) against the Fourier table it replaces (N = 10, 180 rows).
+/// Evaluation cost does not depend on the weights' values, so fixed
+/// pseudo-random weights stand in for a trained network.
+fn neural(c: &mut Criterion) {
+    let range = SpectralRange::VISIBLE;
+    let mut state = 0x2545_f491u32;
+    let mut weight = move || {
+        state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (state >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+    };
+    let network = SineMlp::<1, 10, 10> {
+        range,
+        normalisation: [(0.5, 2.0)],
+        w1: core::array::from_fn(|_| [weight()]),
+        b1: core::array::from_fn(|_| weight()),
+        w2: core::array::from_fn(|_| core::array::from_fn(|_| weight())),
+        b2: core::array::from_fn(|_| weight()),
+        w3: core::array::from_fn(|_| core::array::from_fn(|_| weight())),
+        b3: core::array::from_fn(|_| weight()),
+    };
+    let mut group = c.benchmark_group("neural");
+    group.bench_function("sine_mlp_1x10x10_f32", |b| {
+        b.iter(|| black_box(network.eval::<f32>(black_box([0.437]))));
+    });
+    let lanes = f32x8::new([0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8]);
+    group.bench_function("sine_mlp_1x10x10_f32x8", |b| {
+        b.iter(|| black_box(network.eval::<f32x8>(black_box([lanes]))));
+    });
+    if let Ok(table) = table::metal_reflectance::<10, 180>(&range, &METALS[0]) {
+        group.bench_function("table_lookup_N10_L180_f32", |b| {
+            b.iter(|| black_box(table.lookup(black_box(0.437))));
+        });
+        group.bench_function("table_lookup_N10_L180_f32x8", |b| {
+            b.iter(|| black_box(table.lookup_lanes(black_box(lanes))));
+        });
+    }
+    group.finish();
+}
+
 criterion_group!(
     benches,
     fma_peak,
@@ -168,6 +211,7 @@ criterion_group!(
     xyz_routes,
     projection,
     mese,
-    tables_and_upsampling
+    tables_and_upsampling,
+    neural
 );
 criterion_main!(benches);

@@ -122,14 +122,22 @@ pub struct Layer {
     pub thickness_nm: f64,
 }
 
-/// At exactly grazing incidence every interface reflects everything (the
-/// limit of the formulas, which divide by `cos θ_1` there).
+/// At grazing incidence every interface reflects everything (the limit of
+/// the formulas, which divide by `cos θ_1` there).
 const GRAZING: FilmResponse = FilmResponse {
     reflectance_s: 1.0,
     reflectance_p: 1.0,
     transmittance_s: 0.0,
     transmittance_p: 0.0,
 };
+
+/// Below this `cos θ_1` the film formulas treat the incidence as grazing
+/// ([`GRAZING`]). The cosine in a medium of the incident index is
+/// recomputed from `sin θ_1`, and `1 − cos² θ_1` rounds to 1 for
+/// `cos θ_1 < 1.5·10⁻⁸`: that cosine becomes 0 and the p admittance `n/cos`
+/// infinite (NaN reflectances). Near grazing `1 − R = O(cos θ_1)`, so the
+/// cut-off changes `R` by about 10⁻⁶ at most.
+pub const GRAZING_COS: f64 = 1e-7;
 
 /// Power reflectance and transmittance per polarisation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -166,7 +174,7 @@ pub fn airy_film(
     cos_i: f64,
 ) -> FilmResponse {
     let cos_1 = cos_i.clamp(0.0, 1.0);
-    if cos_1 == 0.0 {
+    if cos_1 < GRAZING_COS {
         return GRAZING;
     }
     let n1 = Complex::real(incident_index);
@@ -215,7 +223,7 @@ pub fn multilayer(
     cos_i: f64,
 ) -> FilmResponse {
     let cos_1 = cos_i.clamp(0.0, 1.0);
-    if cos_1 == 0.0 {
+    if cos_1 < GRAZING_COS {
         return GRAZING;
     }
     let n1_sin1 = incident_index * libm::sqrt(1.0 - cos_1 * cos_1);

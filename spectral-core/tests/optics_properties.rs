@@ -82,3 +82,46 @@ proptest! {
         prop_assert!((a.reflectance() - b.reflectance()).abs() < 1e-9);
     }
 }
+
+/// Regression (found by `fspec train --evidence` at θ = 90°, where
+/// `cos θ = 6·10⁻¹⁷`): near-grazing cosines gave NaN through an infinite p
+/// admittance. Reflectances must stay finite, in [0, 1], and tend to 1.
+#[test]
+fn near_grazing_incidence_is_finite_and_tends_to_total_reflection() {
+    let angle_90 = 90f64.to_radians().cos();
+    for cos_i in [
+        0.0, 1e-300, 1e-17, angle_90, 1e-12, 1e-9, 1.4e-8, 1e-7, 2e-7, 1e-6,
+    ] {
+        for (incident, substrate) in [(1.0, 1.5), (1.0, 1.0), (1.5, 1.0), (1.33, 1.33)] {
+            let layer = Layer {
+                index: Complex::real(2.0),
+                thickness_nm: 400.0,
+            };
+            let film = Complex::real(substrate);
+            for r in [
+                multilayer(550.0, incident, &[layer], film, cos_i),
+                multilayer(550.0, incident, &[layer, layer], film, cos_i),
+                multilayer(550.0, incident, &[], film, cos_i),
+                airy_film(550.0, incident, layer, film, cos_i),
+            ] {
+                let values = [
+                    r.reflectance_s,
+                    r.reflectance_p,
+                    r.transmittance_s,
+                    r.transmittance_p,
+                ];
+                assert!(
+                    values
+                        .iter()
+                        .all(|v| v.is_finite() && (-1e-9..=1.0 + 1e-9).contains(v)),
+                    "cos {cos_i:e}, n {incident}/{substrate}: {r:?}"
+                );
+                // 1 − R = O(cos θ) near grazing, except for a matched
+                // interface without a film, which transmits everything.
+                if cos_i <= 1e-6 && incident != substrate {
+                    assert!(r.reflectance() > 0.99, "cos {cos_i:e}: {r:?}");
+                }
+            }
+        }
+    }
+}
