@@ -55,7 +55,7 @@
 //! `cannot write out/render.png: Permission denied (os error 13)`.
 
 use std::fs::{self, File};
-use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -368,7 +368,17 @@ pub fn write_by_extension(
 /// `F0` channel, a gap in the `F` channels, more than [`MAX_PIXELS`] pixels or
 /// [`MAX_SAMPLES`] samples, a malformed `fourierRangeNm`, non-finite values.
 pub fn read_coefficients_exr(path: &Path) -> Result<CoefficientImage, CliError> {
-    let mut file = File::open(path).map_err(|e| read_error(path, e))?;
+    let file = File::open(path).map_err(|e| read_error(path, e))?;
+    read_coefficients_exr_from(BufReader::new(file), path)
+}
+
+/// [`read_coefficients_exr`] from a buffered, seekable reader positioned at
+/// the start of the file (a `BufReader` over a file, or a `Cursor` over bytes
+/// in memory); `path` names the file in messages.
+pub fn read_coefficients_exr_from(
+    mut file: impl Read + Seek,
+    path: &Path,
+) -> Result<CoefficientImage, CliError> {
     let mut magic = [0u8; 4];
     let is_exr = match file.read_exact(&mut magic) {
         Ok(()) => magic == EXR_MAGIC,
@@ -380,7 +390,7 @@ pub fn read_coefficients_exr(path: &Path) -> Result<CoefficientImage, CliError> 
     }
     file.seek(SeekFrom::Start(0))
         .map_err(|e| read_error(path, e))?;
-    let meta = MetaData::read_from_unbuffered(&file, false)
+    let meta = MetaData::read_from_buffered(&mut file, false)
         .map_err(|e| read_error(path, format!("bad OpenEXR header: {e}")))?;
 
     let mut total_samples: u64 = 0;
@@ -424,7 +434,7 @@ pub fn read_coefficients_exr(path: &Path) -> Result<CoefficientImage, CliError> 
         .all_channels()
         .all_layers()
         .all_attributes()
-        .from_unbuffered(&file)
+        .from_buffered(file)
         .map_err(|e| read_error(path, format!("cannot decode: {e}")))?;
     let Some(layer) = image.layer_data.get(part) else {
         return Err(read_error(path, "part with the F0 channel is missing"));

@@ -673,7 +673,7 @@ fn load_obj_geometry(
         }
         Err(e) => return Err(format!("{shown}: cannot read: {e}")),
     }
-    let (models, materials) = tobj::load_obj(path, &obj_load_options())
+    let (models, materials) = simd_tracer::obj::load_obj_file(path, &obj_load_options())
         .map_err(|e| format!("{shown}: {e} (OBJ/MTL syntax)"))?;
     let materials = materials.map_err(|e| match e {
         tobj::LoadError::OpenFileFailed => {

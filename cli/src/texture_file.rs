@@ -29,13 +29,13 @@
 //! `scenes/wood.png: not a PNG or OpenEXR file`.
 
 use crate::error::CliError;
-use crate::image_out::read_coefficients_exr;
+use crate::image_out::read_coefficients_exr_from;
 use exr::prelude::{ReadChannels, ReadLayers, read};
 use simd_tracer::texture::{MAX_TEXELS, Texture};
 use spectral_core::SpectralRange;
 use spectral_core::color::srgb_decode;
 use std::fs::File;
-use std::io::{BufReader, Read};
+use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
 /// Largest texture file accepted, bytes (512 MiB).
@@ -116,7 +116,10 @@ pub fn load_texture(
 ) -> Result<Texture, CliError> {
     match sniff(path)? {
         Format::Png => load_png(path, usage, range),
-        Format::Exr => load_exr(path, usage, range),
+        Format::Exr => {
+            let file = File::open(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
+            load_exr(BufReader::new(file), path, usage, range)
+        }
     }
 }
 
@@ -225,9 +228,19 @@ fn load_png(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Text
     }
 }
 
-fn load_exr(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Texture, CliError> {
-    let meta = exr::meta::MetaData::read_from_file(path, false)
+/// Loads an OpenEXR texture from `reader`, positioned at the start of the
+/// file; `path` names the file in messages.
+fn load_exr(
+    mut reader: impl BufRead + Seek,
+    path: &Path,
+    usage: TextureUse,
+    range: SpectralRange,
+) -> Result<Texture, CliError> {
+    let meta = exr::meta::MetaData::read_from_buffered(&mut reader, false)
         .map_err(|e| error(path, format!("bad OpenEXR header: {e}")))?;
+    reader
+        .seek(SeekFrom::Start(0))
+        .map_err(|e| error(path, format!("cannot read: {e}")))?;
     let Some(header) = meta.headers.first() else {
         return Err(error(path, "OpenEXR file has no part"));
     };
@@ -241,7 +254,7 @@ fn load_exr(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Text
                 "a thickness texture must be a grey image (this EXR holds Fourier coefficients)",
             ));
         }
-        let image = read_coefficients_exr(path)?;
+        let image = read_coefficients_exr_from(reader, path)?;
         let (lo, hi) = image.range_nm;
         if (lo - range.min_nm()).abs() > 1e-9 || (hi - range.max_nm()).abs() > 1e-9 {
             return Err(error(
@@ -262,7 +275,7 @@ fn load_exr(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Text
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(reader)
         .map_err(|e| error(path, format!("cannot decode OpenEXR: {e}")))?;
     let layer = &image.layer_data;
     let (width, height) = (layer.size.0, layer.size.1);
@@ -324,6 +337,56 @@ fn load_exr(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Text
                 }
             };
             Texture::scalar(w32, h32, values, range).map_err(describe)
+        }
+    }
+}
+
+/// Largest image the fuzz entry point decodes, samples (pixels × channels
+/// over all parts): larger headers are skipped so that a tiny input cannot
+/// make the decoder allocate gigabytes within the loader's own limits.
+const FUZZ_MAX_SAMPLES: u64 = 1 << 18;
+
+/// Fuzz entry point: arbitrary bytes as an OpenEXR coefficient texture,
+/// read in memory (no file is written). Through the coefficient reader and
+/// the texture loader as an albedo and as a thickness texture, checks that
+/// nothing panics and that every `Ok` is consistent: a coefficient image
+/// has `n >= 1`, `width × height × n` finite coefficients and a finite
+/// increasing range; a texture gives no NaN when sampled, and an RGB albedo
+/// texture has finite Fourier coefficients.
+pub fn fuzz_coefficient_exr(bytes: &[u8]) {
+    let Ok(meta) = exr::meta::MetaData::read_from_buffered(bytes, false) else {
+        return;
+    };
+    let samples = meta.headers.iter().fold(0u64, |total, header| {
+        let pixels = (header.layer_size.0 as u64).saturating_mul(header.layer_size.1 as u64);
+        let channels = (header.channels.list.len() as u64).max(1);
+        total.saturating_add(pixels.saturating_mul(channels))
+    });
+    if samples > FUZZ_MAX_SAMPLES {
+        return;
+    }
+    let name = Path::new("fuzz.exr");
+    if let Ok(image) = read_coefficients_exr_from(std::io::Cursor::new(bytes), name) {
+        let texels = image.width as usize * image.height as usize;
+        assert!(image.n >= 1 && image.coeffs.len() == texels * image.n);
+        assert!(image.coeffs.iter().all(|c| c.is_finite()));
+        let (lo, hi) = image.range_nm;
+        assert!(lo.is_finite() && hi.is_finite() && lo < hi, "{lo}..{hi}");
+    }
+    let range = SpectralRange::VISIBLE;
+    for usage in [TextureUse::Albedo, TextureUse::Thickness] {
+        let Ok(texture) = load_exr(std::io::Cursor::new(bytes), name, usage, range) else {
+            continue;
+        };
+        if let simd_tracer::texture::TextureData::Rgb { fourier, .. } = texture.data() {
+            assert!(fourier.iter().all(|c| c.is_finite()));
+        }
+        for (u, v) in [(0.0, 0.0), (0.3, 0.7), (0.99, 0.5), (-1.5, 2.25)] {
+            for lambda in [360.0, 555.5, 830.0] {
+                let value = texture.value_at(u, v, lambda);
+                assert!(!value.is_nan(), "{usage:?} texture gave NaN at ({u}, {v})");
+            }
+            assert!(!texture.scalar_at(u, v).is_nan());
         }
     }
 }

@@ -8,7 +8,8 @@
 //! splits, so every triangle sits in exactly one leaf). Degenerate triangles
 //! (a non-finite vertex, or zero area: `|e1 × e2| ≤ 1e-7 |e1| |e2|` evaluated
 //! in `f64`, i.e. collinear to `f32` precision, or an `f32` edge cross product
-//! that is zero or overflows) are left out of the tree and counted. The kept
+//! that overflows or whose squared length is below the smallest normal `f32`,
+//! i.e. zero or subnormal noise) are left out of the tree and counted. The kept
 //! triangles are stored in BVH leaf order (vertices and the normal
 //! `(v1 − v0) × (v2 − v0)`), so a leaf's triangles are contiguous, together
 //! with the map back to the caller's triangle index.
@@ -315,13 +316,17 @@ fn safe_inverse_x8(d: f32x8) -> f32x8 {
     inv.is_finite().select(inv, f32x8::MAX.copysign(d))
 }
 
-/// Whether a triangle is left out of the tree (see the module docs).
+/// Whether a triangle is left out of the tree (see the module docs). Also
+/// when `|n|²` of its `f32` normal is below the smallest normal `f32`
+/// (`|n| < 1.1e-19`): the normal is then made of subnormals with a few
+/// significant bits, and the grazing threshold `GRAZING · |n|` is 0, so the
+/// hit distance would be noise.
 fn is_degenerate(vertices: &[Vec3; 3]) -> bool {
     if !vertices.iter().all(|v| v.is_finite()) {
         return true;
     }
     let normal = PreparedTriangle::new(vertices).normal;
-    if !normal.iter().all(|c| c.is_finite()) || normal.iter().all(|&c| c == 0.0) {
+    if !normal.iter().all(|c| c.is_finite()) || dot(normal, normal) < f32::MIN_POSITIVE {
         return true;
     }
     let [a, b, c] = vertices.map(Vec3::as_dvec3);

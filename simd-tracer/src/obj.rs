@@ -75,6 +75,32 @@ fn load_options() -> tobj::LoadOptions {
     }
 }
 
+/// `tobj::load_mtl_buf` on MTL text, after refusing the `Ka`, `Kd`, `Ks`
+/// and `Ke` lines with fewer than three values: tobj 4.0.5 unwraps those
+/// and panics (found by the `obj` fuzz target).
+pub fn load_mtl_text(text: &str) -> tobj::MTLLoadResult {
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        if matches!(words.next(), Some("Ka" | "Kd" | "Ks" | "Ke")) && words.count() < 3 {
+            return Err(tobj::LoadError::MaterialParseError);
+        }
+    }
+    tobj::load_mtl_buf(&mut text.as_bytes())
+}
+
+/// `tobj::load_obj` of a file, with its `mtllib` files (relative to the
+/// OBJ's directory) read through [`load_mtl_text`].
+pub fn load_obj_file(path: &Path, options: &tobj::LoadOptions) -> tobj::LoadResult {
+    let file = std::fs::File::open(path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+    let directory = path.parent().unwrap_or(Path::new(""));
+    tobj::load_obj_buf(&mut BufReader::new(file), options, |mtl_path| {
+        let bytes =
+            std::fs::read(directory.join(mtl_path)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let text = String::from_utf8(bytes).map_err(|_| tobj::LoadError::ReadError)?;
+        load_mtl_text(&text)
+    })
+}
+
 fn describe(e: &tobj::LoadError) -> String {
     format!("{e} (OBJ/MTL syntax)")
 }
@@ -88,12 +114,10 @@ pub fn load_obj(
     material_override: &dyn Fn(&str) -> Option<MaterialId>,
 ) -> Result<LoadedObj, ObjError> {
     let (label, result) = match source {
-        ObjSource::File(path) => (path.to_path_buf(), tobj::load_obj(path, &load_options())),
+        ObjSource::File(path) => (path.to_path_buf(), load_obj_file(path, &load_options())),
         ObjSource::Text { name, obj, mtl } => {
             let mut reader = BufReader::new(obj.as_bytes());
-            let result = tobj::load_obj_buf(&mut reader, &load_options(), |_| {
-                tobj::load_mtl_buf(&mut BufReader::new(mtl.as_bytes()))
-            });
+            let result = tobj::load_obj_buf(&mut reader, &load_options(), |_| load_mtl_text(mtl));
             (PathBuf::from(name), result)
         }
     };

@@ -93,11 +93,11 @@ impl<'a> Reader<'a> {
 
     fn f32(&mut self) -> Result<f32, SpectralError> {
         let v = f32::from_le_bytes(self.take()?);
-        if v.is_finite() {
+        if v.is_finite() && v.abs() <= MAX_MAGNITUDE {
             Ok(v)
         } else {
             Err(SpectralError::InvalidParameter(
-                "network file holds a NaN or infinite number",
+                "network file holds a NaN, an infinity or a number above 1e6 in magnitude",
             ))
         }
     }
@@ -292,6 +292,10 @@ mod tests {
         let mut nan = bytes;
         nan[HEADER_BYTES + 20..HEADER_BYTES + 24].copy_from_slice(&f32::NAN.to_le_bytes());
         assert!(SineMlp::<2, 3, 4>::from_bytes(&nan).is_err());
+        let mut large = bytes;
+        let above = MAX_MAGNITUDE * 1.5;
+        large[HEADER_BYTES + 20..HEADER_BYTES + 24].copy_from_slice(&above.to_le_bytes());
+        assert!(SineMlp::<2, 3, 4>::from_bytes(&large).is_err());
         assert!(SineMlp::<2, 3, 4>::from_bytes(&[]).is_err());
     }
 
