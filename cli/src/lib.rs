@@ -3,6 +3,7 @@
 
 pub mod coeffs;
 pub mod error;
+pub mod experiment;
 pub mod image_out;
 pub mod neural_report;
 pub mod render_cmd;

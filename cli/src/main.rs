@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use fspec_cli::CliError;
+use fspec_cli::experiment::{self, ExperimentArgs};
 use fspec_cli::render_cmd::{self, RenderArgs};
 use fspec_cli::spectrum_cmd::{self, SpectrumArgs};
 use fspec_cli::train::{self, TrainArgs};
@@ -17,6 +18,9 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Reproduce the paper's experiments (and three beyond it): CSV,
+    /// Markdown and PNG plots in --out.
+    Experiment(Box<ExperimentArgs>),
     /// Render a built-in scene, a TOML scene file or an OBJ to PNG/EXR.
     Render(Box<RenderArgs>),
     /// List the built-in scenes.
@@ -34,6 +38,7 @@ fn run(cli: &Cli) -> Result<ExitCode, CliError> {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     match &cli.command {
+        Command::Experiment(args) => experiment::run(args, &mut out),
         Command::Render(args) => return render(args),
         Command::Scenes => {
             print!("{}", fspec_cli::scene_source::list_scenes());
