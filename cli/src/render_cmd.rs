@@ -26,10 +26,11 @@ use simd_tracer::transport::{
     AlphaMode, Buffer, ControlVariateTransport, FourierTransport, SampledTransport, Transport,
 };
 use spectral_core::SpectralRange;
+use spectral_core::color::Xyz;
 use spectral_core::sampling::WavelengthStrategy;
 use spectral_core::xyz::XyzRoute;
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Duration;
 
@@ -216,6 +217,9 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
+/// The built-in scene that `--illuminant` lights.
+const COLORCHECKER: &str = "colorchecker";
+
 /// Largest image side, pixels.
 pub const MAX_SIDE: u32 = 1 << 15;
 
@@ -234,6 +238,8 @@ pub struct RenderSummary {
     pub written: Vec<PathBuf>,
     /// Stopped early by Ctrl-C (the files hold the passes done).
     pub interrupted: bool,
+    /// The memory predicted before the render started.
+    pub memory: MemoryPrediction,
 }
 
 fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSettings, CliError> {
@@ -290,15 +296,166 @@ fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSe
     })
 }
 
-/// Bytes per pixel the render needs (accumulators and outputs).
-fn bytes_per_pixel(args: &RenderArgs) -> u64 {
-    let n = args.coeffs as u64;
-    match args.transport {
-        // Coefficient and XYZ sums (f64), count, XYZ output, coefficient planes.
-        TransportKind::Fourier => (n + 4) * 8 + 24 + 4 * n,
-        TransportKind::Sampled => 4 * 8 + 24,
-        // Three control-variate accumulators of 12 f64 each.
-        TransportKind::Cv => 3 * 12 * 8 + 24,
+/// Bytes of one `f32` sample in the image buffers and the EXR writers.
+const F32_BYTES: u64 = size_of::<f32>() as u64;
+
+/// Bytes per pixel of the 8-bit RGB buffer of the PNG writer.
+const PNG_BYTES_PER_PIXEL: u64 = 3;
+
+/// Copies of the PNG bytes alive while it is encoded: the sRGB bytes, the
+/// `png` crate's filtered rows, and its compressed stream (at most the size
+/// of the input for image data).
+const PNG_COPIES: u64 = 3;
+
+/// Scan lines per block of the EXR outputs (ZIP16 compression).
+const EXR_ROWS_PER_BLOCK: u64 = 16;
+
+/// Blocks the `exr` crate keeps per compressor thread: the one being
+/// compressed and one compressed block waiting to be written in order (it
+/// compresses on `threads + 2` blocks at a time, `threads` = the cores).
+const EXR_BLOCKS_PER_THREAD: u64 = 2;
+
+/// Extra compressor threads of the `exr` crate beyond the cores.
+const EXR_EXTRA_THREADS: u64 = 2;
+
+/// Copies of a block's bytes while it is in flight: the uncompressed
+/// block, the compressor's working buffer, the compressed output.
+const EXR_BLOCK_COPIES: u64 = 3;
+
+/// Channels of an EXR output: R, G, B, and X, Y, Z with `--exr-xyz`.
+const EXR_RGB_CHANNELS: u64 = 3;
+
+/// Resident memory of the process before it allocates anything for the
+/// render: code, libraries, thread stacks, allocator arenas. Measured at
+/// 8 MiB (maximum resident set of a release `fspec render` of 8 × 8 pixels
+/// with 1, 2 and 16 threads), doubled for margin.
+pub const PROCESS_BASELINE_BYTES: u64 = 16 << 20;
+
+/// The peak memory of a render, predicted before it starts (bytes, by
+/// phase). The render holds the scene throughout; the film accumulators,
+/// the resolved XYZ image and the coefficient planes coexist at the end of
+/// the render; the film is then freed and the outputs are written one at a
+/// time from the resolved image. Loading the scene happens before and is
+/// bounded by the loaders' own limits (texture size, file size).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct MemoryPrediction {
+    /// The process itself ([`PROCESS_BASELINE_BYTES`]).
+    pub process_bytes: u64,
+    /// The built scene ([`Scene::memory_bytes`]).
+    pub scene_bytes: u64,
+    /// Film accumulators (one transport pixel per image pixel), the
+    /// transport's own tables, the XYZ image and the coefficient planes.
+    pub render_bytes: u64,
+    /// The XYZ image and coefficient planes plus the buffers of the largest
+    /// output writer (PNG, EXR, spectral EXR, coefficient EXR).
+    pub output_bytes: u64,
+}
+
+impl MemoryPrediction {
+    /// The predicted peak of the render's own data: the scene plus the
+    /// larger phase.
+    pub fn data_bytes(&self) -> u64 {
+        self.scene_bytes
+            .saturating_add(self.render_bytes.max(self.output_bytes))
+    }
+
+    /// The predicted peak resident memory of the process: its baseline plus
+    /// [`MemoryPrediction::data_bytes`].
+    pub fn peak_bytes(&self) -> u64 {
+        self.process_bytes.saturating_add(self.data_bytes())
+    }
+}
+
+/// `bytes` for people: MiB below a GiB, else GiB.
+pub fn format_bytes(bytes: u64) -> String {
+    const MIB: f64 = (1u64 << 20) as f64;
+    const GIB: f64 = (1u64 << 30) as f64;
+    let b = bytes as f64;
+    if b < GIB {
+        format!("{:.1} MiB", b / MIB)
+    } else {
+        format!("{:.1} GiB", b / GIB)
+    }
+}
+
+/// The wavelengths of the spectral EXR: `min, min + step, …` up to the end
+/// of `range`.
+fn spectral_wavelengths(range: &SpectralRange, step_nm: f64) -> Vec<f64> {
+    let steps = (range.width_nm() / step_nm).floor() as usize;
+    (0..=steps)
+        .map(|i| range.min_nm() + i as f64 * step_nm)
+        .collect()
+}
+
+/// Predicts the peak memory of rendering `settings` with `args` into
+/// `outputs`, for a transport whose pixel takes `film_pixel_bytes` and whose
+/// tables take `transport_bytes`, over a scene of `scene_bytes` with
+/// `spectral_wavelengths` channels in the spectral EXR.
+pub fn predict_memory(
+    args: &RenderArgs,
+    settings: &RenderSettings,
+    outputs: &[PathBuf],
+    film_pixel_bytes: u64,
+    transport_bytes: u64,
+    scene_bytes: u64,
+    spectral_wavelengths: u64,
+) -> MemoryPrediction {
+    let pixels = u64::from(settings.width) * u64::from(settings.height);
+    let per_pixel = |bytes: u64| pixels.saturating_mul(bytes);
+    let xyz = per_pixel(size_of::<Xyz>() as u64);
+    let coefficients = args.coeffs as u64;
+    let spectral_buffer =
+        args.transport == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
+    let planes = if spectral_buffer {
+        per_pixel(coefficients * F32_BYTES)
+    } else {
+        0
+    };
+    let resolved = xyz.saturating_add(planes);
+    let render_bytes = per_pixel(film_pixel_bytes)
+        .saturating_add(transport_bytes)
+        .saturating_add(resolved);
+    let exr_channels = if args.exr_xyz {
+        2 * EXR_RGB_CHANNELS
+    } else {
+        EXR_RGB_CHANNELS
+    };
+    // The `exr` crate compresses blocks of scan lines on one thread per
+    // core: the channel planes plus the blocks in flight.
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get() as u64);
+    let rows_in_flight = ((cores + EXR_EXTRA_THREADS) * EXR_BLOCKS_PER_THREAD * EXR_ROWS_PER_BLOCK)
+        .min(u64::from(settings.height));
+    let pixels_in_flight = rows_in_flight * u64::from(settings.width);
+    let exr = |channels: u64| {
+        let bytes_per_pixel = channels * F32_BYTES;
+        per_pixel(bytes_per_pixel)
+            .saturating_add(pixels_in_flight.saturating_mul(bytes_per_pixel * EXR_BLOCK_COPIES))
+    };
+    let mut writer = 0;
+    for path in outputs {
+        let bytes = match output_format(path) {
+            Some(OutputFormat::Png) => per_pixel(PNG_BYTES_PER_PIXEL * PNG_COPIES),
+            Some(OutputFormat::Exr) => exr(exr_channels),
+            None => 0,
+        };
+        writer = writer.max(bytes);
+    }
+    if spectral_buffer {
+        if args.coefficients_exr.is_some() {
+            writer = writer.max(exr(coefficients));
+        }
+        if args.spectral_exr.is_some() {
+            // The radiance at every wavelength, then its channel planes.
+            let radiance = per_pixel(spectral_wavelengths * F32_BYTES);
+            writer =
+                writer.max(radiance.saturating_add(exr(spectral_wavelengths + EXR_RGB_CHANNELS)));
+        }
+    }
+    MemoryPrediction {
+        process_bytes: PROCESS_BASELINE_BYTES,
+        scene_bytes,
+        render_bytes,
+        output_bytes: resolved.saturating_add(writer),
     }
 }
 
@@ -310,22 +467,35 @@ fn physical_memory_bytes() -> Option<u64> {
     Some(kib * 1024)
 }
 
-/// Refuses renders whose predicted memory exceeds half of the physical
-/// memory (or 8 GiB where that is unknown).
-pub fn check_memory(args: &RenderArgs, settings: &RenderSettings) -> Result<u64, CliError> {
-    let pixels = u64::from(settings.width) * u64::from(settings.height);
-    let predicted = pixels * bytes_per_pixel(args);
-    let limit = physical_memory_bytes().map_or(8 << 30, |m| m / 2);
-    if predicted > limit {
+/// Memory limit where the physical memory is unknown, bytes.
+const UNKNOWN_MEMORY_LIMIT_BYTES: u64 = 8 << 30;
+
+/// The memory a render may use: half of the physical memory, or 8 GiB where
+/// that is unknown.
+pub fn memory_limit_bytes() -> u64 {
+    physical_memory_bytes().map_or(UNKNOWN_MEMORY_LIMIT_BYTES, |m| m / 2)
+}
+
+/// Refuses a render whose predicted peak exceeds `limit_bytes`.
+pub fn check_memory(
+    prediction: &MemoryPrediction,
+    settings: &RenderSettings,
+    limit_bytes: u64,
+) -> Result<(), CliError> {
+    let peak = prediction.peak_bytes();
+    if peak > limit_bytes {
         return Err(CliError::input(format!(
-            "{}×{} pixels would need about {:.1} GiB for the film (limit {:.1} GiB, half the memory): use a smaller image",
+            "{}×{} pixels would need about {} at the peak (film {}, outputs {}, scene {}; limit {}, half the memory): use a smaller image or fewer outputs",
             settings.width,
             settings.height,
-            predicted as f64 / f64::from(1u32 << 30),
-            limit as f64 / f64::from(1u32 << 30)
+            format_bytes(peak),
+            format_bytes(prediction.render_bytes),
+            format_bytes(prediction.output_bytes),
+            format_bytes(prediction.scene_bytes),
+            format_bytes(limit_bytes)
         )));
     }
-    Ok(predicted)
+    Ok(())
 }
 
 struct Reporter {
@@ -361,17 +531,23 @@ impl Reporter {
     }
 }
 
+/// Checked before the film is allocated: from the bytes of one film pixel
+/// and of the transport, the memory prediction (or the refusal).
+type Preflight<'a> = &'a dyn Fn(u64, u64) -> Result<MemoryPrediction, CliError>;
+
 fn run_render<T: Transport>(
     transport: &T,
     scene: &Scene,
     settings: &RenderSettings,
     quiet: bool,
-) -> Result<RenderResult, CliError> {
+    preflight: Preflight,
+) -> Result<(RenderResult, MemoryPrediction), CliError> {
+    let memory = preflight(size_of::<T::Pixel>() as u64, size_of::<T>() as u64)?;
     let reporter = Reporter::new(settings.spp, quiet);
     let result = render(transport, scene, settings, &mut |p| reporter.update(p))
         .map_err(|e| CliError::input(e.to_string()));
     reporter.finish();
-    result
+    Ok((result?, memory))
 }
 
 fn strategy(args: &RenderArgs) -> WavelengthStrategy {
@@ -396,26 +572,29 @@ fn fourier<const N: usize>(
     args: &RenderArgs,
     scene: &Scene,
     settings: &RenderSettings,
-) -> Result<RenderResult, CliError> {
+    preflight: Preflight,
+) -> Result<(RenderResult, MemoryPrediction), CliError> {
     let buffer = match args.buffer {
         BufferKind::Spectral => Buffer::Spectral,
         BufferKind::Rgb => Buffer::Xyz,
     };
     let transport = FourierTransport::<N>::new(scene.range, buffer, route(args))
         .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
-    run_render(&transport, scene, settings, args.quiet)
+    run_render(&transport, scene, settings, args.quiet, preflight)
 }
 
 fn sampled<const C: usize>(
     args: &RenderArgs,
     scene: &Scene,
     settings: &RenderSettings,
-) -> Result<RenderResult, CliError> {
+    preflight: Preflight,
+) -> Result<(RenderResult, MemoryPrediction), CliError> {
     run_render(
         &SampledTransport::<C>::new(scene.range, strategy(args)),
         scene,
         settings,
         args.quiet,
+        preflight,
     )
 }
 
@@ -423,7 +602,8 @@ fn cv<const C: usize, const N: usize>(
     args: &RenderArgs,
     scene: &Scene,
     settings: &RenderSettings,
-) -> Result<RenderResult, CliError> {
+    preflight: Preflight,
+) -> Result<(RenderResult, MemoryPrediction), CliError> {
     let alpha = if args.cv_alpha_per_pixel {
         AlphaMode::PerPixel
     } else {
@@ -431,14 +611,15 @@ fn cv<const C: usize, const N: usize>(
     };
     let transport = ControlVariateTransport::<C, N>::new(scene.range, strategy(args), alpha)
         .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
-    run_render(&transport, scene, settings, args.quiet)
+    run_render(&transport, scene, settings, args.quiet, preflight)
 }
 
 fn dispatch(
     args: &RenderArgs,
     scene: &Scene,
     settings: &RenderSettings,
-) -> Result<RenderResult, CliError> {
+    preflight: Preflight,
+) -> Result<(RenderResult, MemoryPrediction), CliError> {
     let unsupported = |what: &str, value: usize, supported: &str| {
         Err(CliError::input(format!(
             "{what} {value} is not supported (supported: {supported})"
@@ -446,34 +627,34 @@ fn dispatch(
     };
     match args.transport {
         TransportKind::Fourier => match args.coeffs {
-            4 => fourier::<4>(args, scene, settings),
-            8 => fourier::<8>(args, scene, settings),
-            12 => fourier::<12>(args, scene, settings),
-            16 => fourier::<16>(args, scene, settings),
-            24 => fourier::<24>(args, scene, settings),
-            32 => fourier::<32>(args, scene, settings),
+            4 => fourier::<4>(args, scene, settings, preflight),
+            8 => fourier::<8>(args, scene, settings, preflight),
+            12 => fourier::<12>(args, scene, settings, preflight),
+            16 => fourier::<16>(args, scene, settings, preflight),
+            24 => fourier::<24>(args, scene, settings, preflight),
+            32 => fourier::<32>(args, scene, settings, preflight),
             n => unsupported("--coeffs", n, "4, 8, 12, 16, 24, 32"),
         },
         TransportKind::Sampled => match args.wavelengths.unwrap_or(4) {
-            1 => sampled::<1>(args, scene, settings),
-            2 => sampled::<2>(args, scene, settings),
-            4 => sampled::<4>(args, scene, settings),
-            8 => sampled::<8>(args, scene, settings),
-            12 => sampled::<12>(args, scene, settings),
-            16 => sampled::<16>(args, scene, settings),
-            32 => sampled::<32>(args, scene, settings),
+            1 => sampled::<1>(args, scene, settings, preflight),
+            2 => sampled::<2>(args, scene, settings, preflight),
+            4 => sampled::<4>(args, scene, settings, preflight),
+            8 => sampled::<8>(args, scene, settings, preflight),
+            12 => sampled::<12>(args, scene, settings, preflight),
+            16 => sampled::<16>(args, scene, settings, preflight),
+            32 => sampled::<32>(args, scene, settings, preflight),
             c => unsupported("--wavelengths", c, "1, 2, 4, 8, 12, 16, 32"),
         },
         TransportKind::Cv => match (args.wavelengths.unwrap_or(8), args.coeffs) {
-            (4, 4) => cv::<4, 4>(args, scene, settings),
-            (4, 8) => cv::<4, 8>(args, scene, settings),
-            (4, 12) => cv::<4, 12>(args, scene, settings),
-            (8, 4) => cv::<8, 4>(args, scene, settings),
-            (8, 8) => cv::<8, 8>(args, scene, settings),
-            (8, 12) => cv::<8, 12>(args, scene, settings),
-            (12, 4) => cv::<12, 4>(args, scene, settings),
-            (12, 8) => cv::<12, 8>(args, scene, settings),
-            (12, 12) => cv::<12, 12>(args, scene, settings),
+            (4, 4) => cv::<4, 4>(args, scene, settings, preflight),
+            (4, 8) => cv::<4, 8>(args, scene, settings, preflight),
+            (4, 12) => cv::<4, 12>(args, scene, settings, preflight),
+            (8, 4) => cv::<8, 4>(args, scene, settings, preflight),
+            (8, 8) => cv::<8, 8>(args, scene, settings, preflight),
+            (8, 12) => cv::<8, 12>(args, scene, settings, preflight),
+            (12, 4) => cv::<12, 4>(args, scene, settings, preflight),
+            (12, 8) => cv::<12, 8>(args, scene, settings, preflight),
+            (12, 12) => cv::<12, 12>(args, scene, settings, preflight),
             (c, n) => Err(CliError::input(format!(
                 "--transport cv with --wavelengths {c} --coeffs {n} is not supported (C and N in 4, 8, 12)"
             ))),
@@ -481,19 +662,77 @@ fn dispatch(
     }
 }
 
+/// Image formats of `--out`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum OutputFormat {
+    Png,
+    Exr,
+}
+
+/// The format of an output path, by its extension (case-insensitive).
+fn output_format(path: &Path) -> Option<OutputFormat> {
+    let extension = path.extension()?.to_str()?.to_ascii_lowercase();
+    match extension.as_str() {
+        "png" => Some(OutputFormat::Png),
+        "exr" => Some(OutputFormat::Exr),
+        _ => None,
+    }
+}
+
+/// Refuses an output that cannot be written: its folder is missing or it
+/// names a folder. Checked before rendering, so that no render is lost to
+/// a typo and no other output is written before the error.
+fn check_writable(path: &Path) -> Result<(), CliError> {
+    let parent = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err(CliError::input(format!(
+            "cannot write {}: directory {} does not exist",
+            path.display(),
+            parent.display()
+        )));
+    }
+    if path.is_dir() {
+        return Err(CliError::input(format!(
+            "cannot write {}: it is a directory",
+            path.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Checks the output options before rendering (so a typo fails fast).
 fn check_outputs(args: &RenderArgs, outputs: &[PathBuf]) -> Result<(), CliError> {
     for path in outputs {
-        let extension = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        if !matches!(extension.as_deref(), Some("png" | "exr")) {
+        if output_format(path).is_none() {
             return Err(CliError::input(format!(
                 "{}: unsupported output format (use .png or .exr)",
                 path.display()
             )));
         }
+        check_writable(path)?;
+    }
+    for (option, path) in [
+        ("--spectral-exr", &args.spectral_exr),
+        ("--coefficients-exr", &args.coefficients_exr),
+    ] {
+        if let Some(path) = path {
+            if output_format(path) != Some(OutputFormat::Exr) {
+                return Err(CliError::input(format!(
+                    "{option} {}: must be an .exr file",
+                    path.display()
+                )));
+            }
+            check_writable(path)?;
+        }
+    }
+    if !args.exposure.is_finite() {
+        return Err(CliError::input(format!(
+            "--exposure {}: must be a finite number of stops",
+            args.exposure
+        )));
     }
     let spectral = args.transport == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
     if (args.spectral_exr.is_some() || args.coefficients_exr.is_some()) && !spectral {
@@ -551,12 +790,17 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
             .map(crate::scene_source::illuminant_source)
             .transpose()?,
     };
-    let (builder, defaults, warnings) = resolve_scene(&args.scene, &options)?;
+    let (builder, defaults, mut warnings) = resolve_scene(&args.scene, &options)?;
+    if args.illuminant.is_some() && args.scene != COLORCHECKER {
+        warnings.push(format!(
+            "--illuminant only applies to the {COLORCHECKER} scene: ignored for {}",
+            args.scene
+        ));
+    }
     for warning in &warnings {
         eprintln!("fspec: warning: {warning}");
     }
     let settings = settings_from(args, &defaults)?;
-    check_memory(args, &settings)?;
     let scene = builder
         .build()
         .map_err(|e| CliError::input(format!("{}: {e}", args.scene)))?;
@@ -566,7 +810,23 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
             scene.skipped_triangles()
         );
     }
-    let result = dispatch(args, &scene, &settings)?;
+    let wavelengths = spectral_wavelengths(&scene.range, args.spectral_step_nm);
+    let scene_bytes = scene.memory_bytes() as u64;
+    let limit_bytes = memory_limit_bytes();
+    let preflight = |film_pixel_bytes: u64, transport_bytes: u64| {
+        let prediction = predict_memory(
+            args,
+            &settings,
+            &outputs,
+            film_pixel_bytes,
+            transport_bytes,
+            scene_bytes,
+            wavelengths.len() as u64,
+        );
+        check_memory(&prediction, &settings, limit_bytes)?;
+        Ok(prediction)
+    };
+    let (result, memory) = dispatch(args, &scene, &settings, &preflight)?;
     let image = XyzImage {
         width: result.width,
         height: result.height,
@@ -591,10 +851,6 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
             written.push(path.clone());
         }
         if let Some(path) = &args.spectral_exr {
-            let steps = (scene.range.width_nm() / args.spectral_step_nm).floor() as usize;
-            let wavelengths: Vec<f64> = (0..=steps)
-                .map(|i| scene.range.min_nm() + i as f64 * args.spectral_step_nm)
-                .collect();
             let radiance = spectral_planes(&scene.range, *n, coeffs, &wavelengths);
             write_spectral_exr(
                 path,
@@ -614,10 +870,12 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
         elapsed: result.elapsed,
         written,
         interrupted: interrupted(),
+        memory,
     })
 }
 
-/// The final line: time, samples/s, rejected samples, output paths.
+/// The final line: time, samples/s, rejected samples, predicted peak
+/// memory, output paths.
 pub fn summary_line(summary: &RenderSummary) -> String {
     let seconds = summary.elapsed.as_secs_f64();
     let files: Vec<String> = summary
@@ -636,9 +894,10 @@ pub fn summary_line(summary: &RenderSummary) -> String {
         ""
     };
     format!(
-        "rendered {} passes{stopped} in {seconds:.2} s ({:.2} M samples/s{rejected}); wrote {}",
+        "rendered {} passes{stopped} in {seconds:.2} s ({:.2} M samples/s{rejected}); predicted peak memory {}; wrote {}",
         summary.passes,
         summary.samples as f64 / seconds.max(1e-9) / 1e6,
+        format_bytes(summary.memory.peak_bytes()),
         files.join(", ")
     )
 }

@@ -114,7 +114,67 @@ impl Scene {
     pub fn area(&self, index: usize) -> f32 {
         self.areas.get(index).copied().unwrap_or(0.0)
     }
+
+    /// Bytes of memory the scene holds: geometry, BVH, light distribution,
+    /// spectra (with their dense tables), angular Fourier tables or network
+    /// weights, textures and materials. Exact for the vectors owned here;
+    /// the BVH and light set are counted per node, triangle and light (see
+    /// [`BVH_NODE_BYTES`], [`BVH_TRIANGLE_BYTES`], [`LIGHT_BYTES`]).
+    pub fn memory_bytes(&self) -> usize {
+        fn vec_bytes<T>(v: &Vec<T>) -> usize {
+            v.capacity() * size_of::<T>()
+        }
+        let geometry = vec_bytes(&self.triangles)
+            + vec_bytes(&self.normals)
+            + vec_bytes(&self.areas)
+            + vec_bytes(&self.triangle_material)
+            + vec_bytes(&self.uvs);
+        let kept = self.bvh.input_triangles() - self.bvh.skipped_triangles();
+        let bvh = self.bvh.node_count() * BVH_NODE_BYTES + kept * BVH_TRIANGLE_BYTES;
+        let lights = self.lights.len() * LIGHT_BYTES + self.triangles.len() * size_of::<u32>();
+        let spectra: usize = self.spectra.iter().map(SceneSpectrum::memory_bytes).sum();
+        let angular: usize = self
+            .angular
+            .iter()
+            .map(|a| {
+                let spectra = match a.function() {
+                    AngularFunction::Conductor { n, k, .. } => n.memory_bytes() + k.memory_bytes(),
+                    AngularFunction::Film { layers, .. } => {
+                        layers.capacity() * size_of::<crate::angular::FilmLayer>()
+                    }
+                    _ => 0,
+                };
+                size_of::<AngularSpectrum>() + a.table_bytes() + spectra
+            })
+            .sum();
+        let textures: usize = self
+            .textures
+            .iter()
+            .map(|t| size_of::<Texture>() + t.memory_bytes())
+            .sum();
+        let materials: usize = self
+            .materials
+            .iter()
+            .map(|m| size_of::<Material>() + m.name.capacity())
+            .sum();
+        size_of::<Self>() + geometry + bvh + lights + spectra + angular + textures + materials
+    }
 }
+
+/// Bytes the BVH keeps per node: obvhs' `Bvh2Node` and its parent index.
+pub const BVH_NODE_BYTES: usize = size_of::<obvhs::bvh2::node::Bvh2Node>() + size_of::<u32>();
+
+/// Bytes the BVH keeps per (non-degenerate) triangle: the prepared
+/// edge-test triangle (vertices, edge moments, edge directions: 27 `f32`;
+/// normal, plane, grazing threshold: 5 `f32`), a copy of its vertices
+/// (9 `f32`), and three `u32` indices (input index, obvhs' primitive index
+/// and primitive-to-node map).
+pub const BVH_TRIANGLE_BYTES: usize = (27 + 5 + 9) * size_of::<f32>() + 3 * size_of::<u32>();
+
+/// Bytes the light set keeps per emissive triangle: its triangle index,
+/// area, CDF and PMF entries (its per-triangle light index is counted per
+/// triangle).
+pub const LIGHT_BYTES: usize = 4 * size_of::<u32>();
 
 /// Incremental construction of a [`Scene`].
 #[derive(Debug)]

@@ -158,6 +158,19 @@ impl SceneSpectrum {
         &self.source
     }
 
+    /// Bytes this spectrum holds: the struct itself, its dense table and the
+    /// samples of a tabulated or Fourier source.
+    pub fn memory_bytes(&self) -> usize {
+        let source = match &self.source {
+            SpectrumSource::Tabulated { lambda_nm, values } => {
+                (lambda_nm.capacity() + values.capacity()) * size_of::<f64>()
+            }
+            SpectrumSource::Fourier(coeffs) => coeffs.capacity() * size_of::<f64>(),
+            _ => 0,
+        };
+        size_of::<Self>() + self.dense.capacity() * size_of::<f32>() + source
+    }
+
     /// The first `N` Fourier coefficients.
     pub fn fourier<const N: usize>(&self) -> FourierSpectrum<f32, N> {
         FourierSpectrum::from_coeffs(core::array::from_fn(|j| self.coeffs_f32[j]))
