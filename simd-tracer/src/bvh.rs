@@ -121,6 +121,12 @@ const GRAZING: f32 = 1e-5;
 /// Stack entries kept inline before spilling to the heap.
 const INLINE_STACK: usize = 64;
 
+/// Bytes the BVH keeps per non-degenerate triangle: the prepared edge-test
+/// triangle, a copy of its vertices (for validation), its input index, and
+/// obvhs' primitive index and primitive-to-node entries.
+pub const BYTES_PER_TRIANGLE: usize =
+    size_of::<PreparedTriangle>() + size_of::<[Vec3; 3]>() + 3 * size_of::<u32>();
+
 /// A closest hit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hit {

@@ -164,12 +164,9 @@ impl Scene {
 /// Bytes the BVH keeps per node: obvhs' `Bvh2Node` and its parent index.
 pub const BVH_NODE_BYTES: usize = size_of::<obvhs::bvh2::node::Bvh2Node>() + size_of::<u32>();
 
-/// Bytes the BVH keeps per (non-degenerate) triangle: the prepared
-/// edge-test triangle (vertices, edge moments, edge directions: 27 `f32`;
-/// normal, plane, grazing threshold: 5 `f32`), a copy of its vertices
-/// (9 `f32`), and three `u32` indices (input index, obvhs' primitive index
-/// and primitive-to-node map).
-pub const BVH_TRIANGLE_BYTES: usize = (27 + 5 + 9) * size_of::<f32>() + 3 * size_of::<u32>();
+/// Bytes the BVH keeps per (non-degenerate) triangle
+/// ([`crate::bvh::BYTES_PER_TRIANGLE`], derived from the BVH's own types).
+pub const BVH_TRIANGLE_BYTES: usize = crate::bvh::BYTES_PER_TRIANGLE;
 
 /// Bytes the light set keeps per emissive triangle: its triangle index,
 /// area, CDF and PMF entries (its per-triangle light index is counted per
