@@ -10,12 +10,22 @@
 //! blocked, like shadow rays), `∞` where the ray escapes.
 //!
 //! Throughput is reported per ray (`Throughput::Elements(8)` per packet).
+//!
+//! `closest/cwbvh_per_ray` is not the renderer's code: the same 8 rays one
+//! by one through obvhs' compressed 8-wide BVH (`CwBvh`) with obvhs' own
+//! Möller–Trumbore test — the speed a single-ray wide-BVH traversal could
+//! reach, measured to decide what to build next (ARCHITECTURE.md).
 
 use std::f32::consts::{PI, TAU};
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
+use obvhs::BvhBuildParams;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::ray::{Ray as ObvhsRay, RayHit};
+use obvhs::triangle::Triangle as ObvhsTriangle;
 use simd_tracer::bvh::Bvh;
 use simd_tracer::packet::{LANES, Ray, RayPacket};
 
@@ -247,8 +257,40 @@ fn occlusion_packets(bvh: &Bvh, packets: &[RayPacket], seed: u64) -> Vec<RayPack
         .collect()
 }
 
+/// The closest hits of a packet's active lanes, one ray at a time through a
+/// `CwBvh` (triangle slot per lane, `u32::MAX` for a miss).
+fn cwbvh_per_ray(cwbvh: &CwBvh, triangles: &[ObvhsTriangle], packet: &RayPacket) -> [u32; LANES] {
+    core::array::from_fn(|lane| {
+        if !packet.active.contains(lane) {
+            return u32::MAX;
+        }
+        let r = packet.ray(lane);
+        let ray = ObvhsRay::new(r.origin.into(), r.direction.into(), 0.0, r.t_max);
+        let mut hit = RayHit::none();
+        cwbvh.ray_traverse(ray, &mut hit, |ray, id| {
+            let slot = cwbvh.primitive_indices[id] as usize;
+            triangles[slot].intersect(ray)
+        });
+        hit.primitive_id
+    })
+}
+
 fn bench_scene(c: &mut Criterion, name: &str, triangles: &[[Vec3; 3]], camera: (Vec3, Vec3, f32)) {
     let bvh = Bvh::build(triangles);
+    let obvhs_triangles: Vec<ObvhsTriangle> = triangles
+        .iter()
+        .map(|[a, b, c]| ObvhsTriangle {
+            v0: (*a).into(),
+            v1: (*b).into(),
+            v2: (*c).into(),
+        })
+        .collect();
+    let mut build_time = std::time::Duration::ZERO;
+    let cwbvh = build_cwbvh_from_tris(
+        &obvhs_triangles,
+        BvhBuildParams::medium_build(),
+        &mut build_time,
+    );
     println!(
         "{name}: {} triangles ({} skipped), {} nodes",
         triangles.len(),
@@ -276,6 +318,16 @@ fn bench_scene(c: &mut Criterion, name: &str, triangles: &[[Vec3; 3]], camera: (
             b.iter(|| {
                 i = (i + 1) % n;
                 black_box(bvh.intersect_lanes(black_box(&packets[i])))
+            })
+        });
+        group.bench_function("closest/cwbvh_per_ray", |b| {
+            b.iter(|| {
+                i = (i + 1) % n;
+                black_box(cwbvh_per_ray(
+                    &cwbvh,
+                    &obvhs_triangles,
+                    black_box(&packets[i]),
+                ))
             })
         });
         group.bench_function("occluded/packet", |b| {
