@@ -6,11 +6,12 @@
 # Each target runs until SECONDS_PER_TARGET seconds have passed or, when
 # MAX_RUNS is given, MAX_RUNS inputs have been executed, whichever comes
 # first (libFuzzer's -max_total_time and -runs), with -rss_limit_mb=2048 and
-# -timeout=10, under `nice -n 19`. Needs cargo-fuzz; stable Rust works with
+# -timeout=10, under `nice -n $FUZZ_NICE` (default 19). Needs cargo-fuzz; stable Rust works with
 # --sanitizer none (coverage-guided all the same).
 #
 # Environment:
 #   FUZZ_TARGETS="mese obj"  run only these targets (default: all of them)
+#   FUZZ_NICE=10             niceness of the build and the targets (default 19)
 #   FUZZ_MERGE=1             afterwards, merge the inputs that add coverage
 #                            into the committed corpus fuzz/corpus/<target>,
 #                            kept only if it stays under 200 files and 2 MB
@@ -32,11 +33,14 @@ max_runs=${2:--1}
 [[ $seconds =~ ^[0-9]+$ && $seconds -ge 1 ]] || usage
 [[ $max_runs =~ ^-?[0-9]+$ ]] || usage
 
+niceness=${FUZZ_NICE:-19}
+[[ $niceness =~ ^[0-9]+$ ]] || usage
+
 cd "$(dirname "$0")"
 all_targets=(csv_spectrum scene_toml coefficient_exr obj traversal sine_mlp mese product_xyz)
 read -r -a targets <<<"${FUZZ_TARGETS:-${all_targets[*]}}"
 
-nice -n 19 cargo fuzz build --sanitizer none -O
+nice -n "$niceness" cargo fuzz build --sanitizer none -O
 bin_dir=target/x86_64-unknown-linux-gnu/release
 work=target/run-all
 mkdir -p "$work/logs"
@@ -56,7 +60,7 @@ for target in "${targets[@]}"; do
     echo "== $target: up to ${seconds}s$([[ $max_runs -ge 0 ]] && echo " or $max_runs runs")"
     start=$(date +%s)
     status=0
-    nice -n 19 "$bin_dir/$target" \
+    nice -n "$niceness" "$bin_dir/$target" \
         -max_total_time="$seconds" -runs="$max_runs" \
         -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
         -artifact_prefix="$artifacts/" \
@@ -87,7 +91,7 @@ for target in "${targets[@]}"; do
     if [[ ${FUZZ_MERGE:-0} == 1 && $crashes == 0 ]]; then
         committed=corpus/$target
         old=$(find "$committed" -maxdepth 1 -type f | sort)
-        nice -n 19 "$bin_dir/$target" -merge=1 -rss_limit_mb=2048 -timeout=10 \
+        nice -n "$niceness" "$bin_dir/$target" -merge=1 -rss_limit_mb=2048 -timeout=10 \
             "$committed" "$scratch" >"$work/logs/$target.merge.log" 2>&1
         added=$(comm -13 <(echo "$old") <(find "$committed" -maxdepth 1 -type f | sort))
         files=$(find "$committed" -maxdepth 1 -type f | wc -l)
@@ -108,7 +112,7 @@ done
     echo
     echo "\`${FUZZ_TARGETS:+FUZZ_TARGETS=\"$FUZZ_TARGETS\" }fuzz/run-all.sh $*\` on $(date -u '+%Y-%m-%d %H:%M UTC'), $(nproc) CPU(s)" \
         "($(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -n 1)), one target" \
-        "at a time under \`nice -n 19\`; \`cargo fuzz build --sanitizer none -O\`," \
+        "at a time under \`nice -n $niceness\`; \`cargo fuzz build --sanitizer none -O\`," \
         "-rss_limit_mb=2048 -timeout=10."
     echo
     echo "| target | executions | seconds | exec/s | crashes |"
