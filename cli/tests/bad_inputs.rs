@@ -5,8 +5,11 @@
 //! degenerate camera, an ignored `--illuminant`, a second Ctrl-C, and the
 //! memory prediction counting the spectral and coefficient EXR outputs.
 
+mod common;
+
 use assert_cmd::Command;
 use clap::Parser;
+use common::{TestResult, entries};
 use fspec_cli::render_cmd::{RenderArgs, check_memory, predict_memory};
 use simd_tracer::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
@@ -15,8 +18,6 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
-
 /// A tiny, fast render.
 const SMALL: [&str; 6] = ["--width", "8", "--height", "8", "--spp", "1"];
 
@@ -24,24 +25,8 @@ fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-/// A fresh, empty directory for one test.
 fn test_dir(name: &str) -> TestResult<PathBuf> {
-    let dir = std::env::temp_dir().join(format!("fspec-bad-inputs-{}-{name}", std::process::id()));
-    if dir.exists() {
-        fs::remove_dir_all(&dir)?;
-    }
-    fs::create_dir_all(&dir)?;
-    Ok(dir)
-}
-
-/// Names of the entries of `dir`, sorted.
-fn entries(dir: &Path) -> TestResult<Vec<String>> {
-    let mut names = Vec::new();
-    for entry in fs::read_dir(dir)? {
-        names.push(entry?.file_name().to_string_lossy().into_owned());
-    }
-    names.sort();
-    Ok(names)
+    common::test_dir("bad-inputs", name)
 }
 
 /// Runs `fspec render SMALL args` in `dir`; expects exit code 2, one

@@ -1,7 +1,9 @@
 //! Tests of `fspec_cli::image_out`: PNG / EXR / spectral EXR / coefficient
 //! EXR writers, the coefficient reader, atomic writes and error messages.
 
-use std::error::Error;
+mod common;
+
+use common::{TestResult, entries};
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -16,28 +18,10 @@ use fspec_cli::image_out::{
 };
 use spectral_core::color::{LinearSrgb, Xyz};
 
-type TestResult<T> = Result<T, Box<dyn Error>>;
-
 type ExrImage = Image<Layer<AnyChannels<FlatSamples>>>;
 
-/// A fresh, empty directory for one test.
 fn test_dir(name: &str) -> TestResult<PathBuf> {
-    let dir = std::env::temp_dir().join(format!("fspec-image-out-{}-{name}", std::process::id()));
-    if dir.exists() {
-        fs::remove_dir_all(&dir)?;
-    }
-    fs::create_dir_all(&dir)?;
-    Ok(dir)
-}
-
-/// Names of the entries of `dir`, sorted.
-fn entries(dir: &Path) -> TestResult<Vec<String>> {
-    let mut names = Vec::new();
-    for entry in fs::read_dir(dir)? {
-        names.push(entry?.file_name().to_string_lossy().into_owned());
-    }
-    names.sort();
-    Ok(names)
+    common::test_dir("image-out", name)
 }
 
 /// Decodes a PNG: (width, height, color type, bit depth, bytes).

@@ -4,14 +4,15 @@
 //! channels and attributes, and refuses each class of bad input with one
 //! clear message, exit code 2, no panic and no file left behind.
 
+mod common;
+
 use assert_cmd::Command;
+use common::{TestResult, entries};
 use exr::prelude::{
     AnyChannels, AttributeValue, FlatSamples, Image, Layer, ReadChannels, ReadLayers, Text, read,
 };
 use std::fs;
 use std::path::{Path, PathBuf};
-
-type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
 type ExrImage = Image<Layer<AnyChannels<FlatSamples>>>;
 
@@ -19,24 +20,8 @@ fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-/// A fresh, empty directory for one test.
 fn test_dir(name: &str) -> TestResult<PathBuf> {
-    let dir = std::env::temp_dir().join(format!("fspec-render-cli-{}-{name}", std::process::id()));
-    if dir.exists() {
-        fs::remove_dir_all(&dir)?;
-    }
-    fs::create_dir_all(&dir)?;
-    Ok(dir)
-}
-
-/// Names of the entries of `dir`, sorted.
-fn entries(dir: &Path) -> TestResult<Vec<String>> {
-    let mut names = Vec::new();
-    for entry in fs::read_dir(dir)? {
-        names.push(entry?.file_name().to_string_lossy().into_owned());
-    }
-    names.sort();
-    Ok(names)
+    common::test_dir("render-cli", name)
 }
 
 fn read_exr(path: &Path) -> TestResult<ExrImage> {

@@ -1,0 +1,27 @@
+//! Helpers shared by the CLI integration tests.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+/// The result type of the tests.
+pub type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
+
+/// A fresh, empty directory for one test of `suite`.
+pub fn test_dir(suite: &str, name: &str) -> TestResult<PathBuf> {
+    let dir = std::env::temp_dir().join(format!("fspec-{suite}-{}-{name}", std::process::id()));
+    if dir.exists() {
+        fs::remove_dir_all(&dir)?;
+    }
+    fs::create_dir_all(&dir)?;
+    Ok(dir)
+}
+
+/// Names of the entries of `dir`, sorted.
+pub fn entries(dir: &Path) -> TestResult<Vec<String>> {
+    let mut names = Vec::new();
+    for entry in fs::read_dir(dir)? {
+        names.push(entry?.file_name().to_string_lossy().into_owned());
+    }
+    names.sort();
+    Ok(names)
+}
