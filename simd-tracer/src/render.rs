@@ -173,10 +173,6 @@ fn render_tile<T: Transport>(
                 let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
                 Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Path)
             });
-            let mut wavelength_rngs: [Rng; LANES] = core::array::from_fn(|lane| {
-                let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
-                Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Wavelengths)
-            });
             let rays: [Ray; LANES] = core::array::from_fn(|lane| match lanes[lane] {
                 Some((lx, ly)) => camera_ray(
                     scene,
@@ -196,7 +192,10 @@ fn render_tile<T: Transport>(
                 crate::packet::LaneMask(lanes.iter().enumerate().fold(0u8, |m, (lane, l)| {
                     if l.is_some() { m | (1 << lane) } else { m }
                 }));
-            let mut wavelengths = transport.sample_wavelengths(&mut wavelength_rngs);
+            let mut wavelengths = transport.sample_wavelengths(|lane| {
+                let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
+                Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Wavelengths)
+            });
             let radiance = trace(
                 transport,
                 scene,

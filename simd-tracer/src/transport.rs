@@ -56,8 +56,11 @@ pub trait Transport: Sync {
     fn describe(&self) -> String;
     /// An empty pixel.
     fn empty_pixel(&self) -> Self::Pixel;
-    /// Draws the wavelengths of a packet from per-lane wavelength streams.
-    fn sample_wavelengths(&self, rngs: &mut [Rng; LANES]) -> Self::Wavelengths;
+    /// Draws the wavelengths of a packet; `stream(lane)` makes a lane's
+    /// wavelength random stream on demand (hashing its key costs about as
+    /// much as the camera ray, so transports that draw no wavelengths,
+    /// like Fourier, never make one).
+    fn sample_wavelengths(&self, stream: impl Fn(usize) -> Rng) -> Self::Wavelengths;
     /// The hero wavelength of a lane (`None` where light is not sampled).
     fn hero_wavelength(&self, _wavelengths: &Self::Wavelengths, _lane: usize) -> Option<f32> {
         None
@@ -236,7 +239,7 @@ impl<const N: usize> Transport for FourierTransport<N> {
         }
     }
 
-    fn sample_wavelengths(&self, _rngs: &mut [Rng; LANES]) {}
+    fn sample_wavelengths(&self, _stream: impl Fn(usize) -> Rng) {}
 
     fn one(&self) -> Self::Spectra {
         FourierSpectrum::constant(f32x8::splat(1.0))
@@ -421,9 +424,10 @@ impl<const C: usize> Transport for SampledTransport<C> {
         XyzPixel::default()
     }
 
-    fn sample_wavelengths(&self, rngs: &mut [Rng; LANES]) -> Self::Wavelengths {
+    fn sample_wavelengths(&self, stream: impl Fn(usize) -> Rng) -> Self::Wavelengths {
         core::array::from_fn(|lane| {
-            let u: [f32; C] = core::array::from_fn(|_| rngs[lane].next_f32());
+            let mut rng = stream(lane);
+            let u: [f32; C] = core::array::from_fn(|_| rng.next_f32());
             SampledWavelengths::sample(self.strategy, &self.range, u)
         })
     }
@@ -582,8 +586,8 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
         CvPixel::default()
     }
 
-    fn sample_wavelengths(&self, rngs: &mut [Rng; LANES]) -> Self::Wavelengths {
-        self.sampled.sample_wavelengths(rngs)
+    fn sample_wavelengths(&self, stream: impl Fn(usize) -> Rng) -> Self::Wavelengths {
+        self.sampled.sample_wavelengths(stream)
     }
 
     fn hero_wavelength(&self, wavelengths: &Self::Wavelengths, lane: usize) -> Option<f32> {

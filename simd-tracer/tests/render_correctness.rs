@@ -400,7 +400,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
         let seeds: [Rng; LANES] = core::array::from_fn(|lane| {
             Rng::for_sample(3, packet_index * 8 + lane as u64, 0, Purpose::Path)
         });
-        let mut wavelength_rngs: [Rng; LANES] = core::array::from_fn(|lane| {
+        let wavelength_rngs: [Rng; LANES] = core::array::from_fn(|lane| {
             Rng::for_sample(3, packet_index * 8 + lane as u64, 0, Purpose::Wavelengths)
         });
         let mut rngs = seeds;
@@ -415,7 +415,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
             &mut counts,
         );
         let mut rngs = seeds;
-        let mut w = sampled.sample_wavelengths(&mut wavelength_rngs);
+        let mut w = sampled.sample_wavelengths(|lane| wavelength_rngs[lane]);
         let s = trace(
             &sampled,
             &scene,
