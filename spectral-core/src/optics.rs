@@ -227,33 +227,40 @@ pub fn multilayer(
         return GRAZING;
     }
     let n1_sin1 = incident_index * libm::sqrt(1.0 - cos_1 * cos_1);
-    let polarised = |p_polarised: bool| -> (f64, f64) {
-        let admittance = |index: Complex| {
-            let (cos_j, n_cos_j) = n_cos(index, n1_sin1);
-            if p_polarised { index / cos_j } else { n_cos_j }
-        };
-        let eta_0 = admittance(Complex::real(incident_index));
-        let eta_sub = admittance(substrate);
-        // [B; C] = M_1 ⋯ M_q [1; η_sub], accumulated from the substrate up.
-        let (mut b, mut c) = (Complex::ONE, eta_sub);
-        for layer in layers.iter().rev() {
-            let (_, n_cos_j) = n_cos(layer.index, n1_sin1);
-            let delta = n_cos_j.scale(2.0 * PI * layer.thickness_nm / lambda_nm);
-            let (cos_d, sin_d) = complex_cos_sin(delta);
-            let eta_j = admittance(layer.index);
-            let minus_i = -Complex::I;
-            let new_b = cos_d * b + minus_i * sin_d / eta_j * c;
-            let new_c = minus_i * eta_j * sin_d * b + cos_d * c;
-            b = new_b;
-            c = new_c;
+    // Admittances of a medium, s and p: `n cos θ_j` and `n / cos θ_j`.
+    let admittances = |index: Complex| {
+        let (cos_j, n_cos_j) = n_cos(index, n1_sin1);
+        [n_cos_j, index / cos_j]
+    };
+    let eta_0 = admittances(Complex::real(incident_index));
+    let eta_sub = admittances(substrate);
+    // [B; C] = M_1 ⋯ M_q [1; η_sub] per polarisation, accumulated from the
+    // substrate up. The phase thickness δ_j and its cosine and sine are the
+    // same for both polarisations, so both are carried in one pass.
+    let mut b = [Complex::ONE; 2];
+    let mut c = eta_sub;
+    let minus_i = -Complex::I;
+    for layer in layers.iter().rev() {
+        let (cos_j, n_cos_j) = n_cos(layer.index, n1_sin1);
+        let delta = n_cos_j.scale(2.0 * PI * layer.thickness_nm / lambda_nm);
+        let (cos_d, sin_d) = complex_cos_sin(delta);
+        let eta_j = [n_cos_j, layer.index / cos_j];
+        for polarisation in 0..2 {
+            let (b_old, c_old, eta) = (b[polarisation], c[polarisation], eta_j[polarisation]);
+            b[polarisation] = cos_d * b_old + minus_i * sin_d / eta * c_old;
+            c[polarisation] = minus_i * eta * sin_d * b_old + cos_d * c_old;
         }
-        let denom = eta_0 * b + c;
-        let r = (eta_0 * b - c) / denom;
+    }
+    let [
+        (reflectance_s, transmittance_s),
+        (reflectance_p, transmittance_p),
+    ] = core::array::from_fn(|polarisation| {
+        let (eta_0, eta_sub) = (eta_0[polarisation], eta_sub[polarisation]);
+        let denom = eta_0 * b[polarisation] + c[polarisation];
+        let r = (eta_0 * b[polarisation] - c[polarisation]) / denom;
         let t = 4.0 * eta_0.re * eta_sub.re / denom.norm_sqr();
         (r.norm_sqr(), t)
-    };
-    let (reflectance_s, transmittance_s) = polarised(false);
-    let (reflectance_p, transmittance_p) = polarised(true);
+    });
     FilmResponse {
         reflectance_s,
         reflectance_p,
