@@ -221,6 +221,41 @@ impl<'a> TabulatedSpectrum<'a> {
         Ok(())
     }
 
+    /// The index of the first sample with a wavelength `> lambda_nm`
+    /// (`partition_point(|l| l <= lambda_nm)`: 0 below the table or for NaN,
+    /// `n` at or above its last wavelength). Most tables are evenly spaced,
+    /// so the index is first guessed from the end points and checked
+    /// against its two neighbours; a binary search settles the rest. Either
+    /// way the result is the same index.
+    fn upper_index(&self, lambda_nm: f64) -> usize {
+        let n = self.lambda_nm.len();
+        let (Some(&first_nm), Some(&last_nm)) = (self.lambda_nm.first(), self.lambda_nm.last())
+        else {
+            return 0;
+        };
+        if !(lambda_nm >= first_nm) {
+            return 0;
+        }
+        if lambda_nm >= last_nm {
+            return n;
+        }
+        // Here n ≥ 2 and the answer is in 1..n.
+        let position = (lambda_nm - first_nm) / (last_nm - first_nm) * (n - 1) as f64;
+        let guess = (position as usize + 1).clamp(1, n - 1);
+        let brackets = |upper: usize| {
+            self.lambda_nm[upper - 1] <= lambda_nm && lambda_nm < self.lambda_nm[upper]
+        };
+        if brackets(guess) {
+            guess
+        } else if guess + 1 < n && brackets(guess + 1) {
+            guess + 1
+        } else if guess > 1 && brackets(guess - 1) {
+            guess - 1
+        } else {
+            self.lambda_nm.partition_point(|&l| l <= lambda_nm)
+        }
+    }
+
     /// The sample wavelengths, nm.
     pub fn wavelengths_nm(&self) -> &'a [f64] {
         self.lambda_nm
@@ -272,8 +307,7 @@ impl Spectrum for TabulatedSpectrum<'_> {
     fn value(&self, lambda_nm: f64) -> f64 {
         let n = self.lambda_nm.len();
         debug_assert!(n > 0 && n == self.values.len());
-        // First sample with a wavelength > lambda_nm.
-        let upper = self.lambda_nm.partition_point(|&l| l <= lambda_nm);
+        let upper = self.upper_index(lambda_nm);
         if upper == 0 {
             return self.values[0];
         }
@@ -298,6 +332,38 @@ impl Spectrum for TabulatedSpectrum<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn segment_lookup_equals_binary_search() {
+        let even: [f64; 41] = core::array::from_fn(|i| 380.0 + 10.0 * i as f64);
+        let uneven: [f64; 12] = [
+            300.0, 301.0, 305.0, 330.0, 331.5, 400.0, 401.0, 402.0, 600.0, 700.0, 700.5, 900.0,
+        ];
+        let single = [555.0];
+        let mut seed = 1u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for nm in [&even[..], &uneven[..], &single[..]] {
+            let values = [0.5; 41];
+            let table = TabulatedSpectrum::new(nm, &values[..nm.len()]).unwrap();
+            let mut probes: [f64; 2000] = core::array::from_fn(|_| 250.0 + 700.0 * next());
+            probes[..nm.len()].copy_from_slice(nm);
+            probes[nm.len()..2 * nm.len()]
+                .iter_mut()
+                .zip(nm)
+                .for_each(|(p, &l)| *p = l - l * f64::EPSILON);
+            let specials = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 0.0, -1.0];
+            for lambda_nm in probes.into_iter().chain(specials) {
+                assert_eq!(
+                    table.upper_index(lambda_nm),
+                    nm.partition_point(|&l| l <= lambda_nm),
+                    "{lambda_nm}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn tabulated_validation_names_the_sample() {
