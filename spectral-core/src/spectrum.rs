@@ -233,7 +233,7 @@ impl<'a> TabulatedSpectrum<'a> {
         else {
             return 0;
         };
-        if !(lambda_nm >= first_nm) {
+        if lambda_nm.is_nan() || lambda_nm < first_nm {
             return 0;
         }
         if lambda_nm >= last_nm {
