@@ -174,14 +174,15 @@ impl RayCounts {
 }
 
 /// Per-lane uniform numbers from the lanes' streams (0 in idle lanes).
+/// Every stream is advanced: a lane outside `active` has ended its path
+/// for good (a packet's active set only shrinks), so its stream is never
+/// read again, and drawing in all 8 lanes spares a branch per lane.
 fn uniforms(rngs: &mut [Rng; LANES], active: LaneMask) -> [f32; LANES] {
-    core::array::from_fn(|lane| {
-        if active.contains(lane) {
-            rngs[lane].next_f32()
-        } else {
-            0.0
-        }
-    })
+    let drawn: [f32; LANES] = core::array::from_fn(|lane| rngs[lane].next_f32());
+    active
+        .to_simd()
+        .select(f32x8::new(drawn), f32x8::ZERO)
+        .to_array()
 }
 
 /// Ray origins moved off the surface along `n`, relative to the

@@ -14,13 +14,15 @@
 
 use crate::filter::Filter;
 use crate::integrator::{IntegratorSettings, RayCounts, trace};
-use crate::packet::{LANES, Ray, RayPacket};
+use crate::packet::{LANES, LaneMask, RayPacket};
 use crate::rng::{Purpose, Rng};
 use crate::scene::Scene;
+use crate::simd::Vec3x8;
 use crate::transport::Transport;
 use rayon::prelude::*;
 use spectral_core::color::Xyz;
 use std::time::{Duration, Instant};
+use wide::f32x8;
 
 /// Tile edge, pixels.
 pub const TILE_SIZE: u32 = 16;
@@ -131,19 +133,45 @@ struct Tile<P> {
     rays: RayCounts,
 }
 
-/// The camera ray of pixel `(x, y)` and the path random stream.
-fn camera_ray(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, rng: &mut Rng) -> Ray {
+/// The camera rays of a packet: lane `l` goes through pixel `lanes[l]` of
+/// `tile` (inactive where `None`) at an offset drawn from the filter with
+/// the lane's path stream (two numbers, x then y), all 8 lanes at once.
+fn camera_packet<P>(
+    scene: &Scene,
+    settings: &RenderSettings,
+    tile: &Tile<P>,
+    lanes: &[Option<(u32, u32)>; LANES],
+    path_rngs: &mut [Rng; LANES],
+) -> RayPacket {
+    let mut u = [0.0f32; LANES];
+    let mut v = [0.0f32; LANES];
+    let mut pixel_x = [0.0f32; LANES];
+    let mut pixel_y = [0.0f32; LANES];
+    let mut active = LaneMask::NONE;
+    for (lane, slot) in lanes.iter().enumerate() {
+        if let Some((lx, ly)) = *slot {
+            u[lane] = path_rngs[lane].next_f32();
+            v[lane] = path_rngs[lane].next_f32();
+            pixel_x[lane] = (tile.x0 + lx) as f32 + 0.5;
+            pixel_y[lane] = (tile.y0 + ly) as f32 + 0.5;
+            active = active.with(lane);
+        }
+    }
     let (dx, dy) = settings
         .filter
-        .sample_offset(rng.next_f32(), rng.next_f32());
-    let film_x = x as f32 + 0.5 + dx;
-    let film_y = y as f32 + 0.5 + dy;
-    Ray {
-        origin: scene.camera.position(),
-        direction: scene
-            .camera
-            .direction(film_x, film_y, settings.width, settings.height),
-        t_max: f32::INFINITY,
+        .sample_offset_x8(f32x8::new(u), f32x8::new(v));
+    let direction = scene.camera.direction_x8(
+        f32x8::new(pixel_x) + dx,
+        f32x8::new(pixel_y) + dy,
+        settings.width,
+        settings.height,
+    );
+    let live = active.to_simd();
+    RayPacket {
+        origin: Vec3x8::splat(scene.camera.position()).to_array(),
+        direction: Vec3x8::select(live, direction, Vec3x8::splat(glam::Vec3::Z)).to_array(),
+        t_max: live.select(f32x8::splat(f32::INFINITY), f32x8::ZERO),
+        active,
     }
 }
 
@@ -173,25 +201,7 @@ fn render_tile<T: Transport>(
                 let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
                 Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Path)
             });
-            let rays: [Ray; LANES] = core::array::from_fn(|lane| match lanes[lane] {
-                Some((lx, ly)) => camera_ray(
-                    scene,
-                    settings,
-                    tile.x0 + lx,
-                    tile.y0 + ly,
-                    &mut path_rngs[lane],
-                ),
-                None => Ray {
-                    origin: scene.camera.position(),
-                    direction: glam::Vec3::Z,
-                    t_max: 0.0,
-                },
-            });
-            let mut packet = RayPacket::from_rays(&rays);
-            packet.active =
-                crate::packet::LaneMask(lanes.iter().enumerate().fold(0u8, |m, (lane, l)| {
-                    if l.is_some() { m | (1 << lane) } else { m }
-                }));
+            let packet = camera_packet(scene, settings, tile, &lanes, &mut path_rngs);
             let mut wavelengths = transport.sample_wavelengths(|lane| {
                 let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
                 Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Wavelengths)
