@@ -165,21 +165,39 @@ pub struct FourierPixel<const N: usize> {
     count: f64,
 }
 
-/// The Fourier coefficients of a spectral reference (zero if it dangles).
-fn reference_fourier(scene: &Scene, reference: &SpectralRef) -> [f32; MAX_COEFFS] {
+/// Writes `scale ·` the first `N` Fourier coefficients of a spectral
+/// reference into `row` (zero if the reference dangles). Scene spectra are
+/// read in place; textures and angular tables fill a temporary.
+fn reference_fourier<const N: usize>(
+    scene: &Scene,
+    reference: &SpectralRef,
+    scale: f32,
+    row: &mut [f32; N],
+) {
+    let mut write = |coeffs: &[f32; MAX_COEFFS]| {
+        for (r, &value) in row.iter_mut().zip(coeffs) {
+            *r = scale * value;
+        }
+    };
     match *reference {
-        SpectralRef::Scene(id) => scene
-            .spectra
-            .get(id as usize)
-            .map_or([0.0; MAX_COEFFS], |s| *s.coefficients_f32()),
-        SpectralRef::Texture { texture, u, v } => scene
-            .textures
-            .get(texture as usize)
-            .map_or([0.0; MAX_COEFFS], |t| t.fourier_at(u, v)),
-        SpectralRef::Angular { id, cos, thickness } => scene
-            .angular
-            .get(id as usize)
-            .map_or([0.0; MAX_COEFFS], |a| a.fourier(cos, thickness)),
+        SpectralRef::Scene(id) => write(
+            scene
+                .spectra
+                .get(id as usize)
+                .map_or(&[0.0; MAX_COEFFS], |s| s.coefficients_f32()),
+        ),
+        SpectralRef::Texture { texture, u, v } => write(
+            &scene
+                .textures
+                .get(texture as usize)
+                .map_or([0.0; MAX_COEFFS], |t| t.fourier_at(u, v)),
+        ),
+        SpectralRef::Angular { id, cos, thickness } => write(
+            &scene
+                .angular
+                .get(id as usize)
+                .map_or([0.0; MAX_COEFFS], |a| a.fourier(cos, thickness)),
+        ),
     }
 }
 
@@ -208,10 +226,7 @@ fn gather_fourier<const N: usize>(
     let mut rows = [[0.0f32; N]; LANES];
     for (row, lane) in rows.iter_mut().zip(lanes) {
         if let Some(reference) = &lane.of {
-            let c = reference_fourier(scene, reference);
-            for (r, &value) in row.iter_mut().zip(&c) {
-                *r = lane.scale * value;
-            }
+            reference_fourier(scene, reference, lane.scale, row);
         }
         row[0] += lane.constant;
     }
