@@ -63,9 +63,11 @@
 //! (same vertex values) classify every ray identically against it: no ray
 //! passes between them. Rays exactly through a shared *vertex* are not
 //! guaranteed (the signs of the edge functions around it are rounded
-//! independently). The scalar and the 8-wide test are one generic function
-//! over `+ − × ÷` (no fused multiply-add), so every lane is bit-identical to
-//! the scalar test.
+//! independently). The scalar and the 8-wide test share the generic
+//! functions over `+ − × ÷` (no fused multiply-add) that form the edge and
+//! plane terms, and accept on the same conditions, so every lane is
+//! bit-identical to the scalar test. (The 8-wide test checks the plane
+//! conditions first and leaves the packet early when no lane passes them.)
 //!
 //! # Traversal
 //!
@@ -262,16 +264,41 @@ fn edge_terms<T: Arith>(
     triangle: &PreparedTriangle,
     splat: impl Fn(f32) -> T,
 ) -> EdgeTerms<T> {
-    let w = core::array::from_fn(|k| {
+    let (num, den) = plane_terms(origin, direction, triangle, &splat);
+    EdgeTerms {
+        w: edge_weights(direction, moment, triangle, &splat),
+        num,
+        den,
+    }
+}
+
+/// The `w` of [`EdgeTerms`].
+#[inline(always)]
+fn edge_weights<T: Arith>(
+    direction: [T; 3],
+    moment: [T; 3],
+    triangle: &PreparedTriangle,
+    splat: impl Fn(f32) -> T,
+) -> [T; 3] {
+    core::array::from_fn(|k| {
         dot(direction, triangle.edge_moment[k].map(&splat))
             + dot(triangle.edge_direction[k].map(&splat), moment)
-    });
+    })
+}
+
+/// The `(num, den)` of [`EdgeTerms`].
+#[inline(always)]
+fn plane_terms<T: Arith>(
+    origin: [T; 3],
+    direction: [T; 3],
+    triangle: &PreparedTriangle,
+    splat: impl Fn(f32) -> T,
+) -> (T, T) {
     let normal = triangle.normal.map(&splat);
-    EdgeTerms {
-        w,
-        num: splat(triangle.plane) - dot(normal, origin),
-        den: dot(normal, direction),
-    }
+    (
+        splat(triangle.plane) - dot(normal, origin),
+        dot(normal, direction),
+    )
 }
 
 /// A scalar hit: `t` and the weights of vertices 1 and 2.
@@ -398,6 +425,12 @@ impl PacketRays {
     /// Edge-function test against all lanes in `lanes` (a mask). Returns the
     /// mask of lanes that accept a hit with `t ∈ (0, t_max)`, with `t` and
     /// the unnormalised weights `w1`, `w2` and their normaliser `Σw`.
+    ///
+    /// The acceptance mask is the conjunction of the scalar test's
+    /// conditions; it is evaluated plane first (`t` in range, not grazing),
+    /// which rejects most of the triangles an incoherent packet meets (their
+    /// planes lie behind the rays or beyond the hits found so far) before
+    /// the three edge functions are formed.
     #[inline(always)]
     fn triangle(
         &self,
@@ -405,28 +438,21 @@ impl PacketRays {
         t_max: f32x8,
         lanes: f32x8,
     ) -> Option<(f32x8, f32x8, f32x8, f32x8, f32x8)> {
-        let e = edge_terms(
-            self.origin,
-            self.direction,
-            self.moment,
-            triangle,
-            f32x8::splat,
-        );
-        let [w0, w1, w2] = e.w;
         let zero = f32x8::ZERO;
+        let (num, den) = plane_terms(self.origin, self.direction, triangle, f32x8::splat);
+        let t = num / den;
+        let steep = den
+            .abs()
+            .simd_gt(f32x8::splat(triangle.grazing) * self.direction_length);
+        let in_range = lanes & steep & t.simd_gt(zero) & t.simd_lt(t_max);
+        if !in_range.any() {
+            return None;
+        }
+        let [w0, w1, w2] = edge_weights(self.direction, self.moment, triangle, f32x8::splat);
         let sum = w0 + w1 + w2;
         let inside = (w0.simd_ge(zero) & w1.simd_ge(zero) & w2.simd_ge(zero))
             | (w0.simd_le(zero) & w1.simd_le(zero) & w2.simd_le(zero));
-        let steep = e
-            .den
-            .abs()
-            .simd_gt(f32x8::splat(triangle.grazing) * self.direction_length);
-        let candidate = inside & steep & sum.simd_ne(zero) & lanes;
-        if !candidate.any() {
-            return None;
-        }
-        let t = e.num / e.den;
-        let accept = candidate & t.simd_gt(zero) & t.simd_lt(t_max);
+        let accept = in_range & inside & sum.simd_ne(zero);
         accept.any().then_some((accept, t, w1, w2, sum))
     }
 }
