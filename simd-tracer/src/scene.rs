@@ -212,12 +212,19 @@ impl SceneBuilder {
         self.range
     }
 
-    /// Adds a spectrum; `name` appears in error messages.
+    /// Adds a spectrum; `name` appears in error messages. A source equal to
+    /// one added before returns that spectrum's id: preparing a spectrum
+    /// (projection and dense table) is the bulk of loading an OBJ/MTL, whose
+    /// materials often repeat colours, and shared ids also let the
+    /// integrator sum their emission once.
     pub fn add_spectrum(
         &mut self,
         name: &str,
         source: SpectrumSource,
     ) -> Result<SpectrumId, SceneError> {
+        if let Some(index) = self.spectra.iter().position(|s| s.source() == &source) {
+            return Ok(index as SpectrumId);
+        }
         let spectrum = SceneSpectrum::new(source, self.range)
             .map_err(|e| SceneError::Spectrum(name.to_string(), e))?;
         self.spectra.push(spectrum);

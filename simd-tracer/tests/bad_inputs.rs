@@ -148,6 +148,28 @@ fn an_empty_image_is_an_error() -> TestResult {
 }
 
 #[test]
+fn equal_spectrum_sources_share_one_spectrum() -> TestResult {
+    let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
+    let red = SpectrumSource::RgbReflectance([0.8, 0.1, 0.1]);
+    let first = b.add_spectrum("a Kd", red.clone())?;
+    let again = b.add_spectrum("b Kd", red)?;
+    let other = b.add_spectrum("c Kd", SpectrumSource::RgbReflectance([0.8, 0.1, 0.2]))?;
+    let lamp = b.add_spectrum("lamp", SpectrumSource::RgbIlluminant([0.8, 0.1, 0.1]))?;
+    assert_eq!(first, again);
+    assert_ne!(first, other);
+    assert_ne!(first, lamp);
+    assert_ne!(other, lamp);
+    // A bad source is still refused under its own name after a good one.
+    b.add_spectrum("good", SpectrumSource::Constant(0.5))?;
+    let error = b
+        .add_spectrum("bad", SpectrumSource::Constant(f64::NAN))
+        .err()
+        .ok_or("NaN accepted")?;
+    assert!(error.to_string().contains("bad"), "{error}");
+    Ok(())
+}
+
+#[test]
 fn scene_memory_counts_geometry_and_textures() -> TestResult {
     const TEXTURE_SIDE: u32 = 256;
     let (mut b, m) = builder()?;
