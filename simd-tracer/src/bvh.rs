@@ -100,8 +100,9 @@ use std::time::Duration;
 use glam::{Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::builder::build_bvh2_from_tris;
+use obvhs::bvh2::node::Bvh2Node;
+use obvhs::bvh2::{Bvh2, DEFAULT_MAX_STACK_DEPTH};
 use obvhs::ray::{Ray as ObvhsRay, RayHit};
 use obvhs::triangle::Triangle as ObvhsTriangle;
 use wide::f32x8;
@@ -119,6 +120,12 @@ const DEGENERATE_SINE: f64 = 1e-7;
 /// `|n · d| ≤ GRAZING · |n| · |d|`. Below it the hit distance is rounding
 /// noise (`n · d` is a cancellation); see the module documentation.
 const GRAZING: f32 = 1e-5;
+
+/// Deepest tree handed to obvhs' recursive `Bvh2::validate` (one stack
+/// frame per level; a few hundred KiB at this depth, well inside a 2 MiB
+/// thread stack). Deeper trees get only [`Bvh::validate`]'s own iterative
+/// checks, which cover the same invariants.
+const OBVHS_VALIDATE_MAX_DEPTH: usize = 1024;
 
 /// Stack entries kept inline before spilling to the heap.
 const INLINE_STACK: usize = 64;
@@ -350,6 +357,25 @@ fn safe_inverse_x8(d: f32x8) -> f32x8 {
     inv.is_finite().select(inv, f32x8::MAX.copysign(d))
 }
 
+/// Number of nodes on the longest root-to-leaf path (1 for a lone leaf, 0
+/// for no nodes), without recursion: degenerate inputs can make deep trees.
+fn tree_depth(nodes: &[Bvh2Node]) -> usize {
+    let mut deepest = 0;
+    let mut stack = Vec::new();
+    if !nodes.is_empty() {
+        stack.push((0usize, 1usize));
+    }
+    while let Some((index, depth)) = stack.pop() {
+        deepest = deepest.max(depth);
+        if let Some(node) = nodes.get(index).filter(|node| !node.is_leaf()) {
+            let left = node.first_index as usize;
+            stack.push((left, depth + 1));
+            stack.push((left + 1, depth + 1));
+        }
+    }
+    deepest
+}
+
 /// Whether a triangle is left out of the tree (see the module docs). Also
 /// when `|n|²` of its `f32` normal is below the smallest normal `f32`
 /// (`|n| < 1.1e-19`): the normal is then made of subnormals with a few
@@ -547,11 +573,18 @@ impl Bvh {
             let obvhs_triangles: Vec<ObvhsTriangle> =
                 kept_vertices.iter().map(to_obvhs_triangle).collect();
             let mut build_time = Duration::ZERO;
-            build_bvh2_from_tris(
+            let mut bvh2 = build_bvh2_from_tris(
                 &obvhs_triangles,
                 BvhBuildParams::medium_build(),
                 &mut build_time,
-            )
+            );
+            // obvhs' PLOC build leaves `max_depth` (the size of its traversal
+            // stack) at the default of 96 even when the tree is deeper, as it
+            // is over many coincident triangles (found by fuzzing: depth 129);
+            // its traversal would then overflow and its validation refuses
+            // the tree. Size it from the real depth.
+            bvh2.max_depth = (tree_depth(&bvh2.nodes) + 1).max(DEFAULT_MAX_STACK_DEPTH);
+            bvh2
         };
 
         // Reorder into leaf order so that leaves index the triangles directly.
@@ -599,10 +632,12 @@ impl Bvh {
             .map(|root| (Vec3::from(root.aabb().min), Vec3::from(root.aabb().max)))
     }
 
-    /// Checks the invariants: `obvhs`'s own validation, every inner node
-    /// bounds its children, every leaf bounds its triangles, every node is
-    /// reached exactly once from the root, and every non-degenerate input
-    /// triangle is referenced exactly once. `Err` says what is wrong.
+    /// Checks the invariants: every inner node bounds its children, every
+    /// leaf bounds its triangles, every node is reached exactly once from
+    /// the root, every non-degenerate input triangle is referenced exactly
+    /// once, obvhs' traversal stack covers the tree's depth, and `obvhs`'s
+    /// own validation (for trees up to 1024 levels deep). `Err` says what is
+    /// wrong.
     pub fn validate(&self) -> Result<(), String> {
         let n = self.triangles.len();
         let nodes = &self.bvh2.nodes;
@@ -634,28 +669,6 @@ impl Bvh {
                 Err(format!("no triangles but {} nodes", nodes.len()))
             };
         }
-
-        // obvhs's validation (it asserts, so catch its panic). It wants the
-        // primitives in build order: slot i holds build primitive
-        // `primitive_indices[i]`.
-        let mut build_order = vec![ObvhsTriangle::default(); n];
-        for (slot, &primitive) in self.bvh2.primitive_indices.iter().enumerate() {
-            let target = build_order
-                .get_mut(primitive as usize)
-                .ok_or_else(|| format!("primitive index {primitive} out of range"))?;
-            *target = to_obvhs_triangle(&self.vertices[slot]);
-        }
-        catch_unwind(AssertUnwindSafe(|| {
-            self.bvh2.validate(&build_order, false, false);
-        }))
-        .map_err(|payload| {
-            let message = payload
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| payload.downcast_ref::<&str>().map(|s| (*s).to_owned()))
-                .unwrap_or_else(|| "unknown panic".to_owned());
-            format!("obvhs validation failed: {message}")
-        })?;
 
         // Own structural checks.
         let contains = |outer: &Aabb, inner_min: Vec3A, inner_max: Vec3A| {
@@ -724,6 +737,41 @@ impl Bvh {
                 "triangle slot {slot} (input {}) is referenced {} times",
                 self.original[slot], references[slot]
             ));
+        }
+
+        // obvhs's validation (it asserts, so catch its panic). It wants the
+        // primitives in build order: slot i holds build primitive
+        // `primitive_indices[i]`. It recurses once per tree level, so on
+        // degenerate deep trees (thousands of coincident triangles make a
+        // chain) it would overflow the thread's stack: past
+        // OBVHS_VALIDATE_MAX_DEPTH only the iterative checks above run
+        // (which also rule out cycles, so the depth is finite).
+        let depth = tree_depth(nodes);
+        if depth >= self.bvh2.max_depth {
+            return Err(format!(
+                "tree depth {depth} but traversal stack {}",
+                self.bvh2.max_depth
+            ));
+        }
+        if depth <= OBVHS_VALIDATE_MAX_DEPTH {
+            let mut build_order = vec![ObvhsTriangle::default(); n];
+            for (slot, &primitive) in self.bvh2.primitive_indices.iter().enumerate() {
+                let target = build_order
+                    .get_mut(primitive as usize)
+                    .ok_or_else(|| format!("primitive index {primitive} out of range"))?;
+                *target = to_obvhs_triangle(&self.vertices[slot]);
+            }
+            catch_unwind(AssertUnwindSafe(|| {
+                self.bvh2.validate(&build_order, false, false);
+            }))
+            .map_err(|payload| {
+                let message = payload
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| payload.downcast_ref::<&str>().map(|s| (*s).to_owned()))
+                    .unwrap_or_else(|| "unknown panic".to_owned());
+                format!("obvhs validation failed: {message}")
+            })?;
         }
 
         // The slot data and the map back to the input.
@@ -1117,6 +1165,34 @@ mod tests {
                 assert!((hit.t - 1.25).abs() < 1e-4, "{hit:?}");
             }
         }
+    }
+
+    #[test]
+    fn coincident_triangles_make_a_deep_but_valid_tree() {
+        // Fuzzing found an OBJ whose repeated faces made obvhs build a tree
+        // of depth 129 while its traversal stack stayed at 96: validation
+        // failed and scalar traversal could overflow.
+        let triangle = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let ray = Ray {
+            origin: Vec3::new(0.2, 0.2, 1.0),
+            direction: Vec3::NEG_Z,
+            t_max: f32::INFINITY,
+        };
+        let mut deepest = 0;
+        for count in [200, 2_000] {
+            let bvh = Bvh::build(&vec![triangle; count]);
+            bvh.validate().unwrap();
+            let depth = tree_depth(&bvh.bvh2.nodes);
+            assert!(depth < bvh.bvh2.max_depth, "{depth} {}", bvh.bvh2.max_depth);
+            deepest = deepest.max(depth);
+            let hit = bvh.intersect(&ray).unwrap();
+            assert_eq!(hit.t, 1.0);
+            assert!(bvh.occluded(&ray));
+            let packet = bvh.intersect_packet(&RayPacket::from_rays(&[ray; 8]));
+            assert_eq!(packet.hit, LaneMask::ALL);
+            assert_eq!(packet.t.to_array(), [1.0; 8]);
+        }
+        assert!(deepest > DEFAULT_MAX_STACK_DEPTH, "{deepest}");
     }
 
     #[test]
