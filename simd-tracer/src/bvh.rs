@@ -12,7 +12,10 @@
 //! i.e. zero or subnormal noise) are left out of the tree and counted. The kept
 //! triangles are stored in BVH leaf order (vertices and the normal
 //! `(v1 − v0) × (v2 − v0)`), so a leaf's triangles are contiguous, together
-//! with the map back to the caller's triangle index.
+//! with the map back to the caller's triangle index. obvhs' traversal stack
+//! (`Bvh2::max_depth`) is sized from the built tree's depth: PLOC chains
+//! coincident triangles into a tree as deep as their count, beyond the
+//! default 96 entries.
 //!
 //! # Ray/box test (slab test)
 //!
