@@ -11,6 +11,10 @@
 //!
 //! Throughput is reported per ray (`Throughput::Elements(8)` per packet).
 //!
+//! `*/wide_per_ray` is the renderer's single-ray path through the 8-wide
+//! tree (`Bvh::intersect_packet_wide`, `Bvh::occluded_packet_wide`), used
+//! for incoherent rays in scenes above `WIDE_MIN_TRIANGLES` triangles.
+//!
 //! `closest/cwbvh_per_ray` is not the renderer's code: the same 8 rays one
 //! by one through obvhs' compressed 8-wide BVH (`CwBvh`) with obvhs' own
 //! Möller–Trumbore test — the speed a single-ray wide-BVH traversal could
@@ -330,6 +334,12 @@ fn bench_scene(c: &mut Criterion, name: &str, triangles: &[[Vec3; 3]], camera: (
                 ))
             })
         });
+        group.bench_function("closest/wide_per_ray", |b| {
+            b.iter(|| {
+                i = (i + 1) % n;
+                black_box(bvh.intersect_packet_wide(black_box(&packets[i])))
+            })
+        });
         group.bench_function("occluded/packet", |b| {
             b.iter(|| {
                 i = (i + 1) % n;
@@ -340,6 +350,12 @@ fn bench_scene(c: &mut Criterion, name: &str, triangles: &[[Vec3; 3]], camera: (
             b.iter(|| {
                 i = (i + 1) % n;
                 black_box(bvh.occluded_lanes(black_box(&shadow[i])))
+            })
+        });
+        group.bench_function("occluded/wide_per_ray", |b| {
+            b.iter(|| {
+                i = (i + 1) % n;
+                black_box(bvh.occluded_packet_wide(black_box(&shadow[i])))
             })
         });
         group.finish();

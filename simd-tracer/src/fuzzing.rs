@@ -2,13 +2,14 @@
 //! public so that ordinary tests replay the committed corpora on stable
 //! Rust. Each panics only if an invariant is broken.
 //!
-//! * [`traversal`]: packet and scalar traversal agree on arbitrary finite
-//!   triangles and rays (same hit or miss; same triangle, or the same `t`
-//!   up to rounding).
+//! * [`traversal`]: packet, wide-tree and scalar traversal agree on
+//!   arbitrary finite triangles and rays (same hit or miss; same triangle,
+//!   or the same `t` up to rounding; the wide tree may also find hits the
+//!   oracle's box rounding culls, never lose one).
 //! * [`obj`]: arbitrary OBJ and MTL text through the loader and the scene
 //!   build: `Err` or a valid scene, never a panic.
 
-use crate::bvh::Bvh;
+use crate::bvh::{Bvh, WideStack};
 use crate::camera::Camera;
 use crate::obj::{ObjSource, load_obj};
 use crate::packet::{LANES, Ray, RayPacket};
@@ -91,8 +92,30 @@ pub fn traversal(bytes: &[u8]) {
     let packet = RayPacket::from_rays(&rays);
     let hits = bvh.intersect_packet(&packet);
     let blocked = bvh.occluded_packet(&packet);
+    let mut stack = WideStack::new();
     for (lane, ray) in rays.iter().enumerate() {
         let scalar = bvh.intersect(ray);
+        // The wide tree tests a superset of the oracle's triangles (it skips
+        // inner boxes below its leaves) with the bit-identical test: it hits
+        // whenever the oracle does, with the same bits on the same triangle,
+        // and its occlusion agrees with its own hits. (Where a hit distance
+        // is rounding noise it may lie outside its leaf's box, so the two
+        // traversal orders can settle on different triangles: `agrees`.)
+        let wide = bvh.intersect_wide(ray, &mut stack);
+        assert_eq!(bvh.occluded_wide(ray, &mut stack), wide.is_some());
+        if let Some(h) = scalar {
+            let w = wide.unwrap_or_else(|| panic!("lane {lane}: wide tree misses {h:?}"));
+            if w.triangle == h.triangle {
+                assert_eq!(
+                    [w.t, w.u, w.v].map(f32::to_bits),
+                    [h.t, h.u, h.v].map(f32::to_bits)
+                );
+            }
+            assert!(
+                agrees(ray, &triangles, (w.triangle, w.t), (h.triangle, h.t)),
+                "lane {lane}: wide {w:?} vs {h:?}"
+            );
+        }
         assert_eq!(
             hits.hit.contains(lane),
             scalar.is_some(),
@@ -106,27 +129,30 @@ pub fn traversal(bytes: &[u8]) {
         if let Some(h) = scalar {
             let t = hits.t.to_array()[lane];
             let packet_triangle = hits.triangle[lane];
-            let same = packet_triangle == h.triangle;
-            let close = (t - h.t).abs() <= 1e-4 * h.t.abs().max(1e-30);
-            // Different triangles at different `t`: a tie (shared edge or
-            // vertex) is accepted when the two hit points are within the
-            // rounding error of the `f32` hit distances along the ray.
-            let tie = || {
-                let bound = [(packet_triangle, t), (h.triangle, h.t)].map(|(i, t)| {
-                    triangles
-                        .get(i as usize)
-                        .map_or(0.0, |v| distance_error(ray, v, t))
-                });
-                let length = ray.direction.as_dvec3().length();
-                (f64::from(t) - f64::from(h.t)).abs() * length <= bound[0] + bound[1]
-            };
             assert!(
-                same || close || tie(),
+                agrees(ray, &triangles, (packet_triangle, t), (h.triangle, h.t)),
                 "lane {lane}: {t} (triangle {packet_triangle}) vs {} (triangle {})",
                 h.t,
                 h.triangle
             );
         }
+    }
+}
+
+/// Whether two reported hits `(triangle, t)` of `ray` agree: the same
+/// triangle, or the same `t` up to a relative 1e-4, or — different
+/// triangles at different `t`, a tie on a shared edge or vertex — hit points
+/// within the rounding error of the `f32` hit distances along the ray.
+fn agrees(ray: &Ray, triangles: &[[Vec3; 3]], a: (u32, f32), b: (u32, f32)) -> bool {
+    let (same, close) = (a.0 == b.0, (a.1 - b.1).abs() <= 1e-4 * b.1.abs().max(1e-30));
+    same || close || {
+        let bound = [a, b].map(|(i, t)| {
+            triangles
+                .get(i as usize)
+                .map_or(0.0, |v| distance_error(ray, v, t))
+        });
+        let length = ray.direction.as_dvec3().length();
+        (f64::from(a.1) - f64::from(b.1)).abs() * length <= bound[0] + bound[1]
     }
 }
 

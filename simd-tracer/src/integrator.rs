@@ -221,7 +221,12 @@ pub fn trace<T: Transport>(
     while !active.is_empty() {
         rays.active = active;
         counts.closest += active.count() as u64;
-        let hit = scene.bvh.intersect_packet(&rays);
+        // Camera rays are coherent: packets; the rest by the scene's choice.
+        let hit = if depth == 1 {
+            scene.bvh.intersect_packet(&rays)
+        } else {
+            scene.bvh.intersect_incoherent(&rays)
+        };
 
         // Escaped lanes see the environment (no NEE for it, so no MIS).
         let missed = active.and_not(hit.hit);
@@ -379,7 +384,7 @@ pub fn trace<T: Transport>(
                 active: nee_lanes,
             };
             counts.shadow += nee_lanes.count() as u64;
-            for lane in scene.bvh.occluded_packet(&shadow).iter() {
+            for lane in scene.bvh.occluded_incoherent(&shadow).iter() {
                 nee_weight[lane] = 0.0;
             }
         }

@@ -119,7 +119,8 @@ impl Scene {
     /// spectra (with their dense tables), angular Fourier tables or network
     /// weights, textures and materials. Exact for the vectors owned here;
     /// the BVH and light set are counted per node, triangle and light (see
-    /// [`BVH_NODE_BYTES`], [`BVH_TRIANGLE_BYTES`], [`LIGHT_BYTES`]).
+    /// [`BVH_NODE_BYTES`], [`BVH_TRIANGLE_BYTES`], [`LIGHT_BYTES`]), the
+    /// BVH's 8-wide tree exactly.
     pub fn memory_bytes(&self) -> usize {
         fn vec_bytes<T>(v: &Vec<T>) -> usize {
             v.capacity() * size_of::<T>()
@@ -130,7 +131,9 @@ impl Scene {
             + vec_bytes(&self.triangle_material)
             + vec_bytes(&self.uvs);
         let kept = self.bvh.input_triangles() - self.bvh.skipped_triangles();
-        let bvh = self.bvh.node_count() * BVH_NODE_BYTES + kept * BVH_TRIANGLE_BYTES;
+        let bvh = self.bvh.node_count() * BVH_NODE_BYTES
+            + kept * BVH_TRIANGLE_BYTES
+            + self.bvh.wide_memory_bytes();
         let lights = self.lights.len() * LIGHT_BYTES + self.triangles.len() * size_of::<u32>();
         let spectra: usize = self.spectra.iter().map(SceneSpectrum::memory_bytes).sum();
         let angular: usize = self

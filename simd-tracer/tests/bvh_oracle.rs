@@ -6,7 +6,7 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 use proptest::prelude::*;
-use simd_tracer::bvh::{Bvh, Hit, NO_TRIANGLE};
+use simd_tracer::bvh::{Bvh, Hit, NO_TRIANGLE, Traversal, WIDE_MIN_TRIANGLES};
 use simd_tracer::packet::{LANES, LaneMask, Ray, RayPacket};
 
 // ---------------------------------------------------------------------------
@@ -198,6 +198,12 @@ fn box_scene() -> &'static Scene {
     SCENE.get_or_init(|| Scene::new(closed_box(Vec3::splat(-1.0), Vec3::splat(1.0))))
 }
 
+/// Enough triangles for a wide tree of several levels.
+fn big_soup_scene() -> &'static Scene {
+    static SCENE: OnceLock<Scene> = OnceLock::new();
+    SCENE.get_or_init(|| Scene::new(random_soup(3000, 11)))
+}
+
 fn cornell_scene() -> &'static Scene {
     static SCENE: OnceLock<Scene> = OnceLock::new();
     SCENE.get_or_init(|| Scene::new(cornell_box()))
@@ -377,6 +383,9 @@ struct Tally {
     rays: usize,
     hits: usize,
     ties: usize,
+    /// Wide-tree hits on a triangle's boundary that the oracle's box test
+    /// culled.
+    box_rounding: usize,
 }
 
 /// Checks every query on `packet` against the per-ray oracle.
@@ -385,11 +394,15 @@ fn check_packet(scene: &Scene, packet: &RayPacket, tally: &mut Tally) -> Result<
     let packed = bvh.intersect_packet(packet);
     let per_lane = bvh.intersect_lanes(packet);
     let blocked = bvh.occluded_packet(packet);
+    let wide = bvh.intersect_packet_wide(packet);
+    let wide_blocked = bvh.occluded_packet_wide(packet);
     let active = packet.active;
     for (name, mask) in [
         ("intersect_packet", packed.hit),
         ("intersect_lanes", per_lane.hit),
         ("occluded_packet", blocked),
+        ("intersect_packet_wide", wide.hit),
+        ("occluded_packet_wide", wide_blocked),
     ] {
         if !mask.and_not(active).is_empty() {
             return Err(format!(
@@ -399,7 +412,10 @@ fn check_packet(scene: &Scene, packet: &RayPacket, tally: &mut Tally) -> Result<
     }
     for lane in 0..LANES {
         if !active.contains(lane) {
-            if packed.triangle[lane] != NO_TRIANGLE || per_lane.triangle[lane] != NO_TRIANGLE {
+            if packed.triangle[lane] != NO_TRIANGLE
+                || per_lane.triangle[lane] != NO_TRIANGLE
+                || wide.triangle[lane] != NO_TRIANGLE
+            {
                 return Err(format!("inactive lane {lane} carries a triangle"));
             }
             continue;
@@ -422,6 +438,55 @@ fn check_packet(scene: &Scene, packet: &RayPacket, tally: &mut Tally) -> Result<
             return Err(format!(
                 "intersect_lanes lane {lane} disagrees, ray {ray:?}"
             ));
+        }
+        // The wide tree skips the binary tree's inner boxes below its
+        // leaves, so it tests a superset of the triangles the oracle tests:
+        // where a ray only grazes such a box at a triangle's edge or vertex,
+        // box rounding can cull it for the oracle but not for the wide tree.
+        // Such extra hits lie on a triangle's boundary and are counted.
+        let on_boundary = |h: &Hit| {
+            h.u.min(h.v).min(1.0 - h.u - h.v) < 1e-5
+                && scene
+                    .triangles
+                    .get(h.triangle as usize)
+                    .is_some_and(|tri| hits_near(tri, &ray, h.t))
+        };
+        let wide_hit = wide.hit.contains(lane).then(|| lane_hit(&wide, lane));
+        let extra = match (scalar, wide_hit) {
+            (None, Some(w)) => on_boundary(&w),
+            (Some(s), Some(w)) => s.triangle != w.triangle && w.t < s.t && on_boundary(&w),
+            _ => false,
+        };
+        tally.box_rounding += usize::from(extra);
+        if wide_blocked.contains(lane) != occluded && !(extra && wide_blocked.contains(lane)) {
+            return Err(format!(
+                "occluded_packet_wide lane {lane} != occluded, ray {ray:?}"
+            ));
+        }
+        match (scalar, wide_hit) {
+            (None, None) => {
+                let t = wide.t.to_array()[lane];
+                if t.to_bits() != ray.t_max.to_bits() || wide.triangle[lane] != NO_TRIANGLE {
+                    return Err(format!("wide miss lane {lane} has t {t} / triangle"));
+                }
+            }
+            (_, Some(w)) if !(w.t > 0.0 && w.t < ray.t_max) => {
+                return Err(format!("wide t {} outside (0, {})", w.t, ray.t_max));
+            }
+            (_, Some(_)) if extra => {}
+            (Some(s), Some(w)) => {
+                // The wide test is the scalar test lane by lane: same bits.
+                let bits = |h: &Hit| [h.t, h.u, h.v].map(f32::to_bits);
+                if w.triangle == s.triangle && bits(&w) != bits(&s) {
+                    return Err(format!("wide hit {w:?} is not bit-identical to {s:?}"));
+                }
+                same_hit(scene, &ray, &s, &w).map_err(|e| format!("wide: {e}"))?;
+            }
+            (s, w) => {
+                return Err(format!(
+                    "hit/miss differ: scalar {s:?}, wide {w:?}, ray {ray:?}"
+                ));
+            }
         }
         match (scalar, packed.hit.contains(lane)) {
             (None, false) => {
@@ -568,9 +633,26 @@ fn random_specs(rng: &mut SplitMix) -> Vec<RaySpec> {
 }
 
 #[test]
+fn incoherent_rays_take_the_wide_tree_in_larger_scenes() {
+    assert_eq!(
+        cornell_scene().bvh.incoherent_traversal(),
+        Traversal::Packet
+    );
+    assert_eq!(cornell_scene().bvh.wide_node_count(), 1);
+    for scene in [soup_scene(), big_soup_scene()] {
+        assert!(scene.triangles.len() > WIDE_MIN_TRIANGLES);
+        assert_eq!(scene.bvh.incoherent_traversal(), Traversal::Wide);
+        scene.bvh.validate().unwrap();
+    }
+    // Several levels, so inner wide nodes are traversed by the tests below.
+    assert!(big_soup_scene().bvh.wide_node_count() > 8);
+}
+
+#[test]
 fn packet_agrees_with_scalar_on_many_random_packets() {
     for (name, scene) in [
         ("soup", soup_scene()),
+        ("big soup", big_soup_scene()),
         ("box", box_scene()),
         ("cornell", cornell_scene()),
     ] {
@@ -586,6 +668,9 @@ fn packet_agrees_with_scalar_on_many_random_packets() {
         // Not vacuous: a good share of hits and of misses.
         let hit_rate = tally.hits as f64 / tally.rays as f64;
         assert!((0.2..0.95).contains(&hit_rate), "{name}: {tally:?}");
+        // Boundary hits found only by the wide tree are rare (a quarter of
+        // the rays are aimed at edges and vertices).
+        assert!(tally.box_rounding * 100 < tally.rays, "{name}: {tally:?}");
         println!("{name}: {tally:?}");
     }
 }

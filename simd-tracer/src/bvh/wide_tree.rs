@@ -1,0 +1,804 @@
+//! An 8-wide BVH for single-ray traversal: the SIMD axis here is the
+//! *children of a node* and the *triangles of a leaf*, not ray lanes.
+//!
+//! # Why
+//!
+//! Packets pay for the union of their rays' paths: after a diffuse bounce
+//! the 8 rays of a packet diverge and every node or triangle visited by one
+//! lane is tested for all. A single ray visits only its own path, and with
+//! 8 children or 8 triangles per test it still fills the SIMD width (Wald,
+//! Benthin & Boulos, "Getting Rid of Packets", IRT 2008; Ernst & Greiner,
+//! "Multi Bounding Volume Hierarchies", IRT 2008; the layout of Embree's
+//! BVH8).
+//!
+//! # Construction (collapse of the binary tree)
+//!
+//! The wide tree is made from the binary obvhs tree: starting with a node's
+//! two children, the child with the largest surface area among those holding
+//! more than [`WIDTH`] triangles is replaced by its own two children until
+//! the node has [`WIDTH`] children or none can be opened. A child holding at
+//! most [`WIDTH`] triangles (or a binary leaf) becomes a leaf: its triangles,
+//! in the binary tree's leaf order, are stored as blocks of [`WIDTH`]
+//! prepared triangles in structure-of-arrays form, unused slots masked off.
+//! Every triangle is in exactly one block ([`WideBvh::validate`]).
+//!
+//! # Traversal
+//!
+//! A node tests the ray against its 8 child boxes at once (the slab test of
+//! the parent module, same operations); hit children are visited nearest
+//! entry first, the others pushed with their entry distance and skipped on
+//! pop when that is no longer below the closest hit. A leaf block tests the
+//! ray against 8 triangles at once with the parent module's edge-function
+//! arithmetic, operands swapped (ray splatted, triangles in lanes): each lane
+//! is bit-identical to the scalar test of that triangle. Of the accepted
+//! lanes the smallest `t` wins (lowest slot on exact ties); occlusion stops
+//! at the first accepted lane.
+
+use super::{
+    Bvh2, Bvh2Node, PreparedTriangle, ScalarHit, cross, dot, edge_weights, plane_terms,
+    safe_inverse,
+};
+use crate::packet::Ray;
+use glam::Vec3;
+use wide::f32x8;
+
+/// Children per node and triangles per leaf block (the SIMD axis of this
+/// module, distinct from the packet's ray lanes).
+pub const WIDTH: usize = 8;
+
+/// Stack entries kept inline before spilling to the heap.
+const INLINE_STACK: usize = 64;
+
+/// A node: the boxes of up to [`WIDTH`] children in structure-of-arrays
+/// form and what each child is.
+#[derive(Debug, Clone, Copy)]
+struct WideNode {
+    /// Box minima, per axis, child in lane.
+    min: [f32x8; 3],
+    /// Box maxima, per axis, child in lane.
+    max: [f32x8; 3],
+    /// Child `k` is an inner node (`blocks[k] == 0`: `index[k]` is a node)
+    /// or a leaf (`index[k]` is its first triangle block, `blocks[k]` their
+    /// number).
+    index: [u32; WIDTH],
+    /// See `index`.
+    blocks: [u32; WIDTH],
+    /// Bit `k`: child `k` exists.
+    used: u8,
+}
+
+/// Up to [`WIDTH`] prepared triangles, field by field, triangle in lane.
+#[derive(Debug, Clone, Copy)]
+struct TriangleBlock {
+    normal: [f32x8; 3],
+    plane: f32x8,
+    grazing: f32x8,
+    edge_moment: [[f32x8; 3]; 3],
+    edge_direction: [[f32x8; 3]; 3],
+    /// Index into the parent's prepared triangles, per lane.
+    slot: [u32; WIDTH],
+    /// All bits set in lanes holding a triangle.
+    used: f32x8,
+}
+
+impl TriangleBlock {
+    fn new(prepared: &[PreparedTriangle], slots: &[u32]) -> Self {
+        debug_assert!(!slots.is_empty() && slots.len() <= WIDTH);
+        let get = |lane: usize| {
+            slots
+                .get(lane)
+                .and_then(|&slot| prepared.get(slot as usize))
+        };
+        let field = |f: &dyn Fn(&PreparedTriangle) -> f32| {
+            f32x8::new(core::array::from_fn(|lane| get(lane).map_or(0.0, f)))
+        };
+        let vec3 = |f: &dyn Fn(&PreparedTriangle) -> [f32; 3]| -> [f32x8; 3] {
+            core::array::from_fn(|axis| field(&|t| f(t)[axis]))
+        };
+        Self {
+            normal: vec3(&|t| t.normal),
+            plane: field(&|t| t.plane),
+            grazing: field(&|t| t.grazing),
+            edge_moment: core::array::from_fn(|k| vec3(&|t| t.edge_moment[k])),
+            edge_direction: core::array::from_fn(|k| vec3(&|t| t.edge_direction[k])),
+            slot: core::array::from_fn(|lane| slots.get(lane).copied().unwrap_or(u32::MAX)),
+            used: f32x8::new(core::array::from_fn(|lane| {
+                if lane < slots.len() {
+                    f32::from_bits(u32::MAX)
+                } else {
+                    0.0
+                }
+            })),
+        }
+    }
+
+    /// The prepared triangle in `lane` as stored (for validation).
+    fn lane(&self, lane: usize) -> PreparedTriangle {
+        let at = |v: f32x8| v.to_array()[lane];
+        let vec3 = |v: [f32x8; 3]| v.map(at);
+        let vertices = [[0.0; 3]; 3];
+        PreparedTriangle {
+            vertices,
+            edge_moment: self.edge_moment.map(vec3),
+            edge_direction: self.edge_direction.map(vec3),
+            normal: vec3(self.normal),
+            plane: at(self.plane),
+            grazing: at(self.grazing),
+        }
+    }
+
+    fn used_bits(&self) -> u32 {
+        self.used.to_bitmask()
+    }
+}
+
+/// One ray splatted across the SIMD width, with the same derived values as
+/// the scalar test.
+struct SplatRay {
+    origin: [f32x8; 3],
+    direction: [f32x8; 3],
+    inv_direction: [f32x8; 3],
+    moment: [f32x8; 3],
+    direction_length: f32x8,
+}
+
+impl SplatRay {
+    fn new(ray: &Ray) -> Self {
+        let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
+        Self {
+            origin: o.map(f32x8::splat),
+            direction: d.map(f32x8::splat),
+            inv_direction: d.map(|c| f32x8::splat(safe_inverse(c))),
+            moment: cross(d, o).map(f32x8::splat),
+            direction_length: f32x8::splat(dot(d, d).sqrt()),
+        }
+    }
+
+    /// Slab test of a node's children: entry distances and the bit mask of
+    /// used children whose box the ray enters before `t_max`.
+    #[inline(always)]
+    fn children(&self, node: &WideNode, t_max: f32) -> (f32x8, u32) {
+        let mut entry = f32x8::NEG_INFINITY;
+        let mut exit = f32x8::INFINITY;
+        for axis in 0..3 {
+            let t1 = (node.min[axis] - self.origin[axis]) * self.inv_direction[axis];
+            let t2 = (node.max[axis] - self.origin[axis]) * self.inv_direction[axis];
+            entry = entry.fast_max(t1.fast_min(t2));
+            exit = exit.fast_min(t1.fast_max(t2));
+        }
+        let hit =
+            exit.simd_ge(entry) & exit.simd_ge(f32x8::ZERO) & entry.simd_lt(f32x8::splat(t_max));
+        (entry, hit.to_bitmask() & u32::from(node.used))
+    }
+
+    /// Edge-function test against a block: the accepted lanes' mask, `t`,
+    /// `w1`, `w2` and `Σw` (the conditions of the scalar test, lane-wise).
+    #[inline(always)]
+    fn block(
+        &self,
+        block: &TriangleBlock,
+        t_max: f32,
+    ) -> Option<(u32, f32x8, f32x8, f32x8, f32x8)> {
+        let zero = f32x8::ZERO;
+        let (num, den) = plane_terms(self.origin, self.direction, block.normal, block.plane);
+        let t = num / den;
+        let steep = den.abs().simd_gt(block.grazing * self.direction_length);
+        let in_range = block.used & steep & t.simd_gt(zero) & t.simd_lt(f32x8::splat(t_max));
+        if !in_range.any() {
+            return None;
+        }
+        let [w0, w1, w2] = edge_weights(
+            self.direction,
+            self.moment,
+            &block.edge_moment,
+            &block.edge_direction,
+        );
+        let sum = w0 + w1 + w2;
+        let inside = (w0.simd_ge(zero) & w1.simd_ge(zero) & w2.simd_ge(zero))
+            | (w0.simd_le(zero) & w1.simd_le(zero) & w2.simd_le(zero));
+        let accept = (in_range & inside & sum.simd_ne(zero)).to_bitmask();
+        (accept != 0).then_some((accept, t, w1, w2, sum))
+    }
+}
+
+/// A stack entry: child index, block count (0: inner node), entry distance.
+type Entry = (u32, u32, f32);
+
+/// Traversal stack with inline storage and a heap spill for deep trees.
+struct Stack {
+    inline: [Entry; INLINE_STACK],
+    len: usize,
+    spill: Vec<Entry>,
+}
+
+impl Stack {
+    fn new() -> Self {
+        Self {
+            inline: [(0, 0, 0.0); INLINE_STACK],
+            len: 0,
+            spill: Vec::new(),
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, entry: Entry) {
+        if self.len < INLINE_STACK {
+            self.inline[self.len] = entry;
+            self.len += 1;
+        } else {
+            self.spill.push(entry);
+        }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<Entry> {
+        if let Some(top) = self.spill.pop() {
+            return Some(top);
+        }
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        Some(self.inline[self.len])
+    }
+
+    fn clear(&mut self) {
+        self.len = 0;
+        self.spill.clear();
+    }
+}
+
+/// A reusable traversal stack for [`WideBvh`] queries (one per packet of
+/// queries saves re-initialising it per ray).
+pub struct WideStack(Stack);
+
+impl WideStack {
+    /// An empty stack.
+    pub fn new() -> Self {
+        Self(Stack::new())
+    }
+}
+
+impl Default for WideStack {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The 8-wide tree; see the module documentation.
+#[derive(Debug, Clone, Default)]
+pub struct WideBvh {
+    nodes: Vec<WideNode>,
+    blocks: Vec<TriangleBlock>,
+}
+
+/// Surface area of a box (half of it: only comparisons matter).
+fn half_area(node: &Bvh2Node) -> f32 {
+    let extent = node.aabb().max - node.aabb().min;
+    extent.x * extent.y + extent.y * extent.z + extent.z * extent.x
+}
+
+impl WideBvh {
+    /// Collapses `bvh2` (whose leaves index `prepared`) into a wide tree.
+    pub(super) fn build(bvh2: &Bvh2, prepared: &[PreparedTriangle]) -> Self {
+        let nodes2 = &bvh2.nodes;
+        if nodes2.is_empty() || prepared.is_empty() {
+            return Self::default();
+        }
+        // Triangles under every binary node, children before parents
+        // (reversed pre-order; iterative: degenerate trees are deep).
+        let mut order = Vec::with_capacity(nodes2.len());
+        let mut pending = vec![0usize];
+        while let Some(index) = pending.pop() {
+            order.push(index);
+            if let Some(node) = nodes2.get(index).filter(|n| !n.is_leaf()) {
+                let left = node.first_index as usize;
+                pending.extend([left, left + 1].into_iter().filter(|&c| c < nodes2.len()));
+            }
+        }
+        let mut count = vec![0usize; nodes2.len()];
+        for &index in order.iter().rev() {
+            let node = &nodes2[index];
+            count[index] = if node.is_leaf() {
+                node.prim_count as usize
+            } else {
+                let left = node.first_index as usize;
+                count.get(left).copied().unwrap_or(0) + count.get(left + 1).copied().unwrap_or(0)
+            };
+        }
+        let opens = |index: usize| !nodes2[index].is_leaf() && count[index] > WIDTH;
+        let children_of = |index: usize| {
+            let left = nodes2[index].first_index as usize;
+            [left, left + 1].into_iter().filter(|&c| c < nodes2.len())
+        };
+
+        let mut wide = Self::default();
+        let empty = WideNode {
+            min: [f32x8::ZERO; 3],
+            max: [f32x8::ZERO; 3],
+            index: [0; WIDTH],
+            blocks: [0; WIDTH],
+            used: 0,
+        };
+        wide.nodes.push(empty);
+        let mut work = vec![(0usize, 0usize)];
+        while let Some((wide_index, root2)) = work.pop() {
+            let mut children: Vec<usize> = if opens(root2) {
+                children_of(root2).collect()
+            } else {
+                vec![root2]
+            };
+            while children.len() < WIDTH {
+                let Some(k) =
+                    (0..children.len())
+                        .filter(|&k| opens(children[k]))
+                        .max_by(|&a, &b| {
+                            half_area(&nodes2[children[a]])
+                                .total_cmp(&half_area(&nodes2[children[b]]))
+                        })
+                else {
+                    break;
+                };
+                let opened = children.swap_remove(k);
+                children.extend(children_of(opened));
+            }
+            let mut node = empty;
+            for (k, &child) in children.iter().enumerate() {
+                let aabb = nodes2[child].aabb();
+                for axis in 0..3 {
+                    let mut min = node.min[axis].to_array();
+                    let mut max = node.max[axis].to_array();
+                    min[k] = aabb.min[axis];
+                    max[k] = aabb.max[axis];
+                    node.min[axis] = f32x8::new(min);
+                    node.max[axis] = f32x8::new(max);
+                }
+                node.used |= 1 << k;
+                if opens(child) {
+                    node.index[k] = super::index_u32(wide.nodes.len());
+                    work.push((wide.nodes.len(), child));
+                    wide.nodes.push(empty);
+                } else {
+                    let slots = Self::leaf_slots(nodes2, child);
+                    node.index[k] = super::index_u32(wide.blocks.len());
+                    node.blocks[k] = super::index_u32(slots.len().div_ceil(WIDTH));
+                    for chunk in slots.chunks(WIDTH) {
+                        wide.blocks.push(TriangleBlock::new(prepared, chunk));
+                    }
+                }
+            }
+            wide.nodes[wide_index] = node;
+        }
+        wide
+    }
+
+    /// The triangle slots under binary node `index`, in leaf order.
+    fn leaf_slots(nodes2: &[Bvh2Node], index: usize) -> Vec<u32> {
+        let mut slots = Vec::new();
+        let mut pending = vec![index];
+        while let Some(i) = pending.pop() {
+            let Some(node) = nodes2.get(i) else {
+                continue;
+            };
+            if node.is_leaf() {
+                slots.extend(node.first_index..node.first_index + node.prim_count);
+            } else {
+                let left = node.first_index as usize;
+                pending.extend([left + 1, left]);
+            }
+        }
+        slots
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Bytes held by the nodes and triangle blocks.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.capacity() * size_of::<WideNode>()
+            + self.blocks.capacity() * size_of::<TriangleBlock>()
+    }
+
+    /// Closest hit of `ray` in `(0, ray.t_max)`: the triangle slot and the
+    /// hit. `stack` is scratch space.
+    pub(super) fn intersect(&self, ray: &Ray, stack: &mut WideStack) -> Option<(u32, ScalarHit)> {
+        let stack = &mut stack.0;
+        stack.clear();
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let splat = SplatRay::new(ray);
+        let mut best: Option<(u32, ScalarHit)> = None;
+        let mut t_max = ray.t_max;
+        let mut current: Entry = (0, 0, 0.0);
+        loop {
+            let (index, blocks, _) = current;
+            let mut next = None;
+            if blocks == 0 {
+                if let Some(node) = self.nodes.get(index as usize) {
+                    next = Self::visit_children(node, &splat, t_max, stack);
+                }
+            } else {
+                for block in self.block_range(index, blocks) {
+                    if let Some((accept, t, w1, w2, sum)) = splat.block(block, t_max) {
+                        let t_lanes = t.to_array();
+                        let mut lane = accept.trailing_zeros() as usize;
+                        let mut rest = accept & (accept - 1);
+                        while rest != 0 {
+                            let k = rest.trailing_zeros() as usize;
+                            if t_lanes[k] < t_lanes[lane] {
+                                lane = k;
+                            }
+                            rest &= rest - 1;
+                        }
+                        let at = |v: f32x8| v.to_array()[lane];
+                        let sum = at(sum);
+                        t_max = t_lanes[lane];
+                        best = Some((
+                            block.slot[lane],
+                            ScalarHit {
+                                t: t_max,
+                                u: at(w1) / sum,
+                                v: at(w2) / sum,
+                            },
+                        ));
+                    }
+                }
+            }
+            if next.is_none() {
+                while let Some(entry) = stack.pop() {
+                    if entry.2 < t_max {
+                        next = Some(entry);
+                        break;
+                    }
+                }
+            }
+            match next {
+                Some(entry) => current = entry,
+                None => return best,
+            }
+        }
+    }
+
+    /// Whether `ray` hits anything in `(0, ray.t_max)`.
+    pub(super) fn occluded(&self, ray: &Ray, stack: &mut WideStack) -> bool {
+        let stack = &mut stack.0;
+        stack.clear();
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let splat = SplatRay::new(ray);
+        stack.push((0, 0, 0.0));
+        while let Some((index, blocks, _)) = stack.pop() {
+            if blocks == 0 {
+                let Some(node) = self.nodes.get(index as usize) else {
+                    continue;
+                };
+                let (_, mut hits) = splat.children(node, ray.t_max);
+                while hits != 0 {
+                    let k = hits.trailing_zeros() as usize;
+                    stack.push((node.index[k], node.blocks[k], 0.0));
+                    hits &= hits - 1;
+                }
+            } else if self
+                .block_range(index, blocks)
+                .iter()
+                .any(|block| splat.block(block, ray.t_max).is_some())
+            {
+                return true;
+            }
+        }
+        false
+    }
+
+    fn block_range(&self, first: u32, count: u32) -> &[TriangleBlock] {
+        let first = first as usize;
+        self.blocks
+            .get(first..first + count as usize)
+            .unwrap_or_default()
+    }
+
+    /// Tests a node's children; returns the nearest hit child and pushes the
+    /// others, farthest first.
+    #[inline(always)]
+    fn visit_children(
+        node: &WideNode,
+        ray: &SplatRay,
+        t_max: f32,
+        stack: &mut Stack,
+    ) -> Option<Entry> {
+        let (entry, hits) = ray.children(node, t_max);
+        let child = |k: usize, entry: f32| (node.index[k], node.blocks[k], entry);
+        match hits.count_ones() {
+            0 => None,
+            1 => {
+                let k = hits.trailing_zeros() as usize;
+                Some(child(k, 0.0))
+            }
+            count => {
+                // Insertion sort by descending entry (ties: higher child
+                // first), so the nearest child comes last.
+                let entries = entry.to_array();
+                let mut sorted = [(0.0f32, 0usize); WIDTH];
+                let mut rest = hits;
+                for filled in 0..count as usize {
+                    let k = rest.trailing_zeros() as usize;
+                    rest &= rest - 1;
+                    let mut at = filled;
+                    while at > 0 && sorted[at - 1].0 < entries[k] {
+                        sorted[at] = sorted[at - 1];
+                        at -= 1;
+                    }
+                    sorted[at] = (entries[k], k);
+                }
+                let (last, others) = sorted[..count as usize].split_last()?;
+                for &(e, k) in others {
+                    stack.push(child(k, e));
+                }
+                Some(child(last.1, 0.0))
+            }
+        }
+    }
+
+    /// Checks the invariants against the parent's prepared triangles and
+    /// their vertices: every node is reached once from the root, every child
+    /// box bounds its subtree (node boxes, leaf triangles), unused child and
+    /// triangle lanes are empty, every triangle slot is in exactly one block
+    /// and its block data equals its prepared triangle.
+    pub(super) fn validate(
+        &self,
+        prepared: &[PreparedTriangle],
+        vertices: &[[Vec3; 3]],
+    ) -> Result<(), String> {
+        if prepared.is_empty() {
+            return if self.nodes.is_empty() && self.blocks.is_empty() {
+                Ok(())
+            } else {
+                Err("wide BVH has nodes but there are no triangles".to_owned())
+            };
+        }
+        let mut node_seen = vec![false; self.nodes.len()];
+        let mut block_seen = vec![false; self.blocks.len()];
+        let mut slot_seen = vec![false; prepared.len()];
+        let mut pending = vec![0usize];
+        while let Some(index) = pending.pop() {
+            let node = self
+                .nodes
+                .get(index)
+                .ok_or_else(|| format!("wide node {index} out of range"))?;
+            if std::mem::replace(&mut node_seen[index], true) {
+                return Err(format!("wide node {index} is reached twice"));
+            }
+            if node.used == 0 {
+                return Err(format!("wide node {index} has no children"));
+            }
+            let lane = |v: [f32x8; 3], k: usize| {
+                Vec3::new(v[0].to_array()[k], v[1].to_array()[k], v[2].to_array()[k])
+            };
+            for k in 0..WIDTH {
+                if node.used & (1 << k) == 0 {
+                    if node.index[k] != 0 || node.blocks[k] != 0 {
+                        return Err(format!("wide node {index} has data in unused child {k}"));
+                    }
+                    continue;
+                }
+                let (min, max) = (lane(node.min, k), lane(node.max, k));
+                if !(min.is_finite() && max.is_finite() && min.cmple(max).all()) {
+                    return Err(format!("wide node {index} child {k} has an invalid box"));
+                }
+                let inside = |a: Vec3, b: Vec3| min.cmple(a).all() && b.cmple(max).all();
+                if node.blocks[k] == 0 {
+                    let child = node.index[k] as usize;
+                    let inner = self
+                        .nodes
+                        .get(child)
+                        .ok_or_else(|| format!("wide node {index} child {k} out of range"))?;
+                    for c in 0..WIDTH {
+                        if inner.used & (1 << c) != 0
+                            && !inside(lane(inner.min, c), lane(inner.max, c))
+                        {
+                            return Err(format!("wide node {index} does not bound child {k}"));
+                        }
+                    }
+                    pending.push(child);
+                    continue;
+                }
+                let first = node.index[k] as usize;
+                let end = first + node.blocks[k] as usize;
+                if end > self.blocks.len() {
+                    return Err(format!("wide node {index} child {k}: blocks out of range"));
+                }
+                let blocks = self.blocks[first..end].iter();
+                for (b, (seen, block)) in
+                    (first..).zip(block_seen[first..end].iter_mut().zip(blocks))
+                {
+                    if std::mem::replace(seen, true) {
+                        return Err(format!("triangle block {b} is referenced twice"));
+                    }
+                    let used = block.used_bits();
+                    if used == 0 || used & (used + 1) != 0 {
+                        return Err(format!("triangle block {b} has gaps: {used:#b}"));
+                    }
+                    for t in 0..WIDTH {
+                        let slot = block.slot[t];
+                        if used & (1 << t) == 0 {
+                            if slot != u32::MAX {
+                                return Err(format!("block {b} lane {t} is unused but has a slot"));
+                            }
+                            continue;
+                        }
+                        let seen = slot_seen
+                            .get_mut(slot as usize)
+                            .ok_or_else(|| format!("block {b} slot {slot} out of range"))?;
+                        if std::mem::replace(seen, true) {
+                            return Err(format!("triangle slot {slot} is in two blocks"));
+                        }
+                        let [a, bb, c] = vertices[slot as usize];
+                        if !inside(a.min(bb).min(c), a.max(bb).max(c)) {
+                            return Err(format!(
+                                "wide node {index} child {k} does not bound triangle slot {slot}"
+                            ));
+                        }
+                        let expected = PreparedTriangle {
+                            vertices: [[0.0; 3]; 3],
+                            ..prepared[slot as usize]
+                        };
+                        if block.lane(t) != expected {
+                            return Err(format!("block {b} lane {t}: stale triangle data"));
+                        }
+                    }
+                }
+            }
+        }
+        if let Some(n) = node_seen.iter().position(|&s| !s) {
+            return Err(format!("wide node {n} is not reachable"));
+        }
+        if let Some(b) = block_seen.iter().position(|&s| !s) {
+            return Err(format!("triangle block {b} is not referenced"));
+        }
+        if let Some(s) = slot_seen.iter().position(|&s| !s) {
+            return Err(format!("triangle slot {s} is in no block"));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Bvh;
+    use super::*;
+
+    /// A soup of `count` small triangles in the unit cube (SplitMix64).
+    fn soup(count: usize) -> Vec<[Vec3; 3]> {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut unit = move || {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        (0..count)
+            .map(|_| {
+                let centre = Vec3::new(unit(), unit(), unit());
+                let mut corner = || centre + 0.1 * Vec3::new(unit(), unit(), unit());
+                [corner(), corner(), corner()]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn collapse_keeps_every_triangle_once_and_fills_nodes() {
+        for count in [1, 5, 8, 9, 64, 65, 500] {
+            let bvh = Bvh::build(&soup(count));
+            bvh.validate().unwrap();
+            let wide = &bvh.wide;
+            let slots: usize = wide
+                .blocks
+                .iter()
+                .map(|b| b.used_bits().count_ones() as usize)
+                .sum();
+            assert_eq!(slots, count - bvh.skipped_triangles());
+            if count >= 500 {
+                // Inner nodes below the root; nodes hold 3+ children and
+                // blocks 4+ triangles on average (binary subtrees of up to 8
+                // triangles are not opened, so nodes near the leaves have few
+                // children; measured 3.6 and 5.7).
+                let nodes = wide.nodes.len();
+                assert!(nodes > 1);
+                let children: u32 = wide.nodes.iter().map(|n| n.used.count_ones()).sum();
+                assert!(
+                    children as usize >= 3 * nodes,
+                    "{children} children, {nodes} nodes"
+                );
+                assert!(
+                    slots >= 4 * wide.blocks.len(),
+                    "{slots} in {}",
+                    wide.blocks.len()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn validate_detects_corruption() {
+        let bvh = Bvh::build(&soup(300));
+        bvh.validate().unwrap();
+        let leaf_child = |b: &Bvh| {
+            b.wide
+                .nodes
+                .iter()
+                .enumerate()
+                .find_map(|(i, n)| (0..WIDTH).find(|&k| n.blocks[k] > 0).map(|k| (i, k)))
+                .unwrap()
+        };
+
+        // Stale triangle data in a block.
+        let mut broken = bvh.clone();
+        let mut plane = broken.wide.blocks[0].plane.to_array();
+        plane[0] += 1.0;
+        broken.wide.blocks[0].plane = f32x8::new(plane);
+        assert!(broken.validate().unwrap_err().contains("stale"));
+
+        // A triangle in two blocks (and another in none).
+        let mut broken = bvh.clone();
+        broken.wide.blocks[1].slot[0] = broken.wide.blocks[0].slot[0];
+        assert!(broken.validate().is_err());
+
+        // A leaf box that no longer bounds its triangles.
+        let mut broken = bvh.clone();
+        let (node, k) = leaf_child(&broken);
+        let mut max = broken.wide.nodes[node].max[0].to_array();
+        max[k] = broken.wide.nodes[node].min[0].to_array()[k];
+        broken.wide.nodes[node].max[0] = f32x8::new(max);
+        assert!(broken.validate().unwrap_err().contains("bound"));
+
+        // A child dropped: its triangles are in no block.
+        let mut broken = bvh.clone();
+        let (node, k) = leaf_child(&broken);
+        broken.wide.nodes[node].used &= !(1 << k);
+        assert!(broken.validate().is_err());
+
+        // An unreferenced block.
+        let mut broken = bvh;
+        let extra = broken.wide.blocks[0];
+        broken.wide.blocks.push(extra);
+        assert!(broken.validate().is_err());
+    }
+
+    #[test]
+    fn single_rays_match_the_oracle_bit_for_bit() {
+        let bvh = Bvh::build(&soup(500));
+        let mut stack = WideStack::new();
+        let mut hits = 0;
+        for i in 0..2000 {
+            // From a sphere around the soup towards a point inside it.
+            let a = i as f32 * 0.618_034;
+            let centre = Vec3::splat(0.55);
+            let origin = centre + 2.0 * Vec3::new(a.sin() * a.cos(), a.sin() * a.sin(), a.cos());
+            let target = Vec3::new((3.1 * a).fract(), (5.7 * a).fract(), (7.3 * a).fract());
+            let ray = Ray {
+                origin,
+                direction: target - origin,
+                t_max: if i % 3 == 0 { 0.9 } else { f32::INFINITY },
+            };
+            let oracle = bvh.intersect(&ray);
+            let wide = bvh.intersect_wide(&ray, &mut stack);
+            assert_eq!(bvh.occluded_wide(&ray, &mut stack), wide.is_some());
+            match (oracle, wide) {
+                (Some(o), Some(w)) if o.triangle == w.triangle => {
+                    assert_eq!(
+                        [o.t, o.u, o.v].map(f32::to_bits),
+                        [w.t, w.u, w.v].map(f32::to_bits)
+                    );
+                    hits += 1;
+                }
+                (None, None) => {}
+                (o, w) => panic!("ray {i}: oracle {o:?}, wide {w:?}"),
+            }
+        }
+        assert!(hits > 200, "{hits}");
+    }
+}
