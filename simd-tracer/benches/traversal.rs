@@ -340,10 +340,22 @@ fn bench_scene(c: &mut Criterion, name: &str, triangles: &[[Vec3; 3]], camera: (
                 black_box(bvh.intersect_packet_wide(black_box(&packets[i])))
             })
         });
+        group.bench_function("closest/flat", |b| {
+            b.iter(|| {
+                i = (i + 1) % n;
+                black_box(bvh.intersect_packet_flat(black_box(&packets[i])))
+            })
+        });
         group.bench_function("occluded/packet", |b| {
             b.iter(|| {
                 i = (i + 1) % n;
                 black_box(bvh.occluded_packet(black_box(&shadow[i])))
+            })
+        });
+        group.bench_function("occluded/flat", |b| {
+            b.iter(|| {
+                i = (i + 1) % n;
+                black_box(bvh.occluded_packet_flat(black_box(&shadow[i])))
             })
         });
         group.bench_function("occluded/per_ray", |b| {

@@ -98,16 +98,25 @@
 //!   triangles per SIMD test (`wide_tree`), each triangle lane bit-identical
 //!   to the scalar test.
 //!
+//! * Flat ([`Bvh::intersect_packet_flat`], [`Bvh::occluded_packet_flat`]):
+//!   a packet against every triangle with the packet test's acceptance
+//!   folded into selects — no tree, no data-dependent branches (an
+//!   incoherent packet's branches on node and triangle masks mispredict;
+//!   for a few dozen triangles testing them all is cheaper). Each lane's hit
+//!   is the minimum of the scalar test over all triangles.
+//!
 //! The renderer sends camera rays through packets and incoherent rays
-//! (bounces, shadows) through [`Bvh::intersect_incoherent`] /
-//! [`Bvh::occluded_incoherent`]: packets up to [`WIDE_MIN_TRIANGLES`]
-//! triangles, the wide tree above (measurements at the constant).
+//! through [`Bvh::intersect_incoherent`] (bounces) and
+//! [`Bvh::occluded_incoherent`] (shadows): up to [`WIDE_MIN_TRIANGLES`]
+//! triangles bounces flat and shadows as packets, above it both through
+//! the wide tree (measurements at the constant).
 //!
 //! Hits agree between the paths up to genuine ties: two triangles at the
 //! same `t` (a shared edge or vertex) may be reported in either order, and
 //! near-ties at a box boundary may prune differently (the wide tree skips
-//! the binary tree's boxes below its leaves, so it can find a hit on a
-//! triangle's edge that box rounding culls for the others, never lose one).
+//! the binary tree's boxes below its leaves and the flat test has no boxes,
+//! so they can find a hit on a triangle's edge that box rounding culls for
+//! the binary tree, never lose one).
 
 use std::cell::RefCell;
 use std::ops::{Add, Div, Mul, Sub};
@@ -151,21 +160,33 @@ const OBVHS_VALIDATE_MAX_DEPTH: usize = 1024;
 /// Stack entries kept inline before spilling to the heap.
 const INLINE_STACK: usize = 64;
 
-/// How a packet query traverses the tree.
+/// How a packet query finds its hits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Traversal {
     /// The 8 rays together through the binary tree.
     Packet,
     /// One ray at a time through the 8-wide tree.
     Wide,
+    /// The 8 rays against every triangle, without a tree or branches.
+    Flat,
 }
 
 /// Scenes with more triangles than this send incoherent rays (bounces,
-/// shadows) through the 8-wide tree: one full wide node of full leaf blocks.
-/// Measured (`benches/traversal.rs`, one thread): at 36 triangles (Cornell
-/// box) packets are faster (bounce rays 0.90 vs 1.02 µs per 8, shadow rays
-/// 0.49 vs 0.73 µs); from 146 triangles on the wide tree is (1.11 vs 1.50 µs
-/// at 146, 1.85 vs 4.60 µs at 2 912, 3.85 vs 7.89 µs at 48 896).
+/// shadows) one by one through the 8-wide tree. Smaller scenes test bounce
+/// rays as packets against every triangle (flat) and shadow rays as packets
+/// through the binary tree; camera rays always go as packets through the
+/// binary tree. The bound is one full wide node of full leaf blocks.
+/// Measured (`benches/traversal.rs`, one thread, per 8 incoherent rays,
+/// closest / shadow): 36 triangles (Cornell box) flat 0.48 / 0.39 µs, wide
+/// 1.02 / 0.68 µs, packet 1.00 / 0.51 µs; 146 triangles flat 2.05 / 1.52,
+/// wide 1.31 / 0.84, packet 1.50 / 0.97; 2 912 triangles wide 1.85 / 1.14
+/// vs packet 4.60 / 2.75; 48 896 triangles wide 3.85 / 2.98 vs packet
+/// 7.89 / 6.77. Flat costs about 14 ns per triangle and packet, so it
+/// crosses the wide tree near this bound. In the Cornell render the shadow
+/// rays, all aimed at the ceiling light, are cheaper as packets than flat
+/// (the tree culls most boxes; flat tests every triangle of an unblocked
+/// packet): flat shadows were slower there than the bench's random
+/// occlusion rays suggest.
 pub const WIDE_MIN_TRIANGLES: usize = WIDE_WIDTH * WIDE_WIDTH;
 
 /// Bytes the BVH keeps per non-degenerate triangle: the prepared edge-test
@@ -228,8 +249,10 @@ pub struct Bvh {
     bvh2: Bvh2,
     /// The same tree collapsed to 8 children per node, for single rays.
     wide: WideBvh,
-    /// How incoherent rays traverse ([`WIDE_MIN_TRIANGLES`]).
-    incoherent: Traversal,
+    /// How bounce rays find their hits ([`WIDE_MIN_TRIANGLES`]).
+    bounce: Traversal,
+    /// How shadow rays find their blockers ([`WIDE_MIN_TRIANGLES`]).
+    shadow: Traversal,
     /// Non-degenerate triangles in BVH (leaf) order.
     triangles: Vec<PreparedTriangle>,
     /// Their vertices, same order (for validation).
@@ -491,6 +514,44 @@ impl PacketRays {
         (hit.select(entry, f32x8::INFINITY), hit)
     }
 
+    /// The edge-function test without early exits: the acceptance mask of
+    /// every lane (the scalar test's conditions) with `t`, `w1`, `w2`, `Σw`.
+    #[inline(always)]
+    fn terms_all(
+        &self,
+        triangle: &PreparedTriangle,
+        t_max: f32x8,
+    ) -> (f32x8, f32x8, f32x8, f32x8, f32x8) {
+        let zero = f32x8::ZERO;
+        let (num, den) = plane_terms(
+            self.origin,
+            self.direction,
+            triangle.normal.map(f32x8::splat),
+            f32x8::splat(triangle.plane),
+        );
+        let t = num / den;
+        let steep = den
+            .abs()
+            .simd_gt(f32x8::splat(triangle.grazing) * self.direction_length);
+        let [w0, w1, w2] = edge_weights(
+            self.direction,
+            self.moment,
+            &triangle.edge_moment.map(|e| e.map(f32x8::splat)),
+            &triangle.edge_direction.map(|e| e.map(f32x8::splat)),
+        );
+        let sum = w0 + w1 + w2;
+        let inside = (w0.simd_ge(zero) & w1.simd_ge(zero) & w2.simd_ge(zero))
+            | (w0.simd_le(zero) & w1.simd_le(zero) & w2.simd_le(zero));
+        let accept = steep & t.simd_gt(zero) & t.simd_lt(t_max) & inside & sum.simd_ne(zero);
+        (accept, t, w1, w2, sum)
+    }
+
+    /// The acceptance mask of [`PacketRays::terms_all`].
+    #[inline(always)]
+    fn accept_all(&self, triangle: &PreparedTriangle, t_max: f32x8) -> f32x8 {
+        self.terms_all(triangle, t_max).0
+    }
+
     /// Edge-function test against all lanes in `lanes` (a mask). Returns the
     /// mask of lanes that accept a hit with `t ∈ (0, t_max)`, with `t` and
     /// the unnormalised weights `w1`, `w2` and their normaliser `Σw`.
@@ -653,16 +714,17 @@ impl Bvh {
         let triangles_prepared: Vec<PreparedTriangle> =
             vertices.iter().map(PreparedTriangle::new).collect();
         let wide = WideBvh::build(&bvh2, &triangles_prepared);
-        let incoherent = if triangles_prepared.len() > WIDE_MIN_TRIANGLES {
-            Traversal::Wide
+        let (bounce, shadow) = if triangles_prepared.len() > WIDE_MIN_TRIANGLES {
+            (Traversal::Wide, Traversal::Wide)
         } else {
-            Traversal::Packet
+            (Traversal::Flat, Traversal::Packet)
         };
 
         Bvh {
             bvh2,
             wide,
-            incoherent,
+            bounce,
+            shadow,
             triangles: triangles_prepared,
             vertices,
             original,
@@ -696,26 +758,33 @@ impl Bvh {
         self.wide.memory_bytes()
     }
 
-    /// How incoherent rays traverse this tree ([`WIDE_MIN_TRIANGLES`]).
-    pub fn incoherent_traversal(&self) -> Traversal {
-        self.incoherent
+    /// How bounce rays find their hits ([`WIDE_MIN_TRIANGLES`]).
+    pub fn bounce_traversal(&self) -> Traversal {
+        self.bounce
     }
 
-    /// Closest hits of incoherent rays (bounces): packet or wide traversal
-    /// by [`Bvh::incoherent_traversal`]; both give the same hits up to ties.
+    /// How shadow rays find their blockers ([`WIDE_MIN_TRIANGLES`]).
+    pub fn shadow_traversal(&self) -> Traversal {
+        self.shadow
+    }
+
+    /// Closest hits of incoherent rays (bounces) by
+    /// [`Bvh::bounce_traversal`]; every traversal gives the same hits up to
+    /// ties and edge hits that box rounding culls (module docs).
     pub fn intersect_incoherent(&self, packet: &RayPacket) -> PacketHit {
-        match self.incoherent {
+        match self.bounce {
             Traversal::Packet => self.intersect_packet(packet),
             Traversal::Wide => self.intersect_packet_wide(packet),
+            Traversal::Flat => self.intersect_packet_flat(packet),
         }
     }
 
-    /// Occlusion of incoherent rays (shadows), like
-    /// [`Bvh::intersect_incoherent`].
+    /// Occlusion of incoherent rays (shadows) by [`Bvh::shadow_traversal`].
     pub fn occluded_incoherent(&self, packet: &RayPacket) -> LaneMask {
-        match self.incoherent {
+        match self.shadow {
             Traversal::Packet => self.occluded_packet(packet),
             Traversal::Wide => self.occluded_packet_wide(packet),
+            Traversal::Flat => self.occluded_packet_flat(packet),
         }
     }
 
@@ -942,6 +1011,23 @@ impl Bvh {
             u: h.u,
             v: h.v,
             triangle: self.original.get(slot).copied().unwrap_or(NO_TRIANGLE),
+        })
+    }
+
+    /// The scalar edge-function test of `ray` against one input triangle,
+    /// without the tree (an oracle for the traversals: a reported hit must
+    /// equal this test of its triangle bit for bit). `None` for a miss, a
+    /// degenerate triangle or an index out of range. Linear in the number
+    /// of triangles (it searches the input index).
+    pub fn hit_on(&self, ray: &Ray, triangle: u32) -> Option<Hit> {
+        let slot = self.original.iter().position(|&o| o == triangle)?;
+        let d = ray.direction.to_array();
+        let h = self.triangle_scalar(slot, ray, dot(d, d).sqrt(), ray.t_max)?;
+        Some(Hit {
+            t: h.t,
+            u: h.u,
+            v: h.v,
+            triangle,
         })
     }
 
@@ -1197,6 +1283,70 @@ impl Bvh {
             triangle,
             hit,
         }
+    }
+
+    /// Closest hits of a packet against every triangle, without the tree
+    /// and without branches on the data: each triangle is the packet test
+    /// with its acceptance folded into selects. Same output convention and
+    /// the same hits as [`Bvh::intersect_packet`] (each lane's hit is the
+    /// scalar test's minimum over all triangles).
+    pub fn intersect_packet_flat(&self, packet: &RayPacket) -> PacketHit {
+        let rays = PacketRays::new(packet);
+        let active = packet.active.to_simd();
+        let zero = f32x8::ZERO;
+        let mut t_max = active.select(packet.t_max, f32x8::NEG_INFINITY);
+        let (mut w1_best, mut w2_best, mut sum_best) = (zero, zero, f32x8::ONE);
+        let mut slot_best = f32x8::splat(f32::from_bits(u32::MAX));
+        for (slot, triangle) in self.triangles.iter().enumerate() {
+            let (accept, t, w1, w2, sum) = rays.terms_all(triangle, t_max);
+            t_max = accept.select(t, t_max);
+            w1_best = accept.select(w1, w1_best);
+            w2_best = accept.select(w2, w2_best);
+            sum_best = accept.select(sum, sum_best);
+            slot_best = accept.select(f32x8::splat(f32::from_bits(index_u32(slot))), slot_best);
+        }
+        let slots = slot_best.to_array().map(f32::to_bits);
+        let mut hit = LaneMask::NONE;
+        let triangle = core::array::from_fn(|lane| {
+            let slot = slots[lane];
+            if slot != u32::MAX && packet.active.contains(lane) {
+                hit = hit.with(lane);
+                self.original
+                    .get(slot as usize)
+                    .copied()
+                    .unwrap_or(NO_TRIANGLE)
+            } else {
+                NO_TRIANGLE
+            }
+        });
+        let hit_simd = hit.to_simd();
+        PacketHit {
+            t: hit_simd.select(t_max, packet.t_max),
+            u: hit_simd.select(w1_best / sum_best, zero),
+            v: hit_simd.select(w2_best / sum_best, zero),
+            triangle,
+            hit,
+        }
+    }
+
+    /// Occlusion of a packet against every triangle without the tree (the
+    /// occlusion twin of [`Bvh::intersect_packet_flat`]); stops when every
+    /// active lane is blocked.
+    pub fn occluded_packet_flat(&self, packet: &RayPacket) -> LaneMask {
+        let rays = PacketRays::new(packet);
+        let wanted = u32::from(packet.active.0);
+        let mut blocked = 0u32;
+        let t_max = packet
+            .active
+            .to_simd()
+            .select(packet.t_max, f32x8::NEG_INFINITY);
+        for triangle in &self.triangles {
+            blocked |= rays.accept_all(triangle, t_max).to_bitmask();
+            if blocked & wanted == wanted {
+                break;
+            }
+        }
+        LaneMask((blocked & wanted) as u8)
     }
 
     /// Occlusion of a packet's active lanes, one ray at a time through the

@@ -2,14 +2,14 @@
 //! public so that ordinary tests replay the committed corpora on stable
 //! Rust. Each panics only if an invariant is broken.
 //!
-//! * [`traversal`]: packet, wide-tree and scalar traversal agree on
+//! * [`traversal`]: packet, wide-tree, flat and scalar traversal agree on
 //!   arbitrary finite triangles and rays (same hit or miss; same triangle,
-//!   or the same `t` up to rounding; the wide tree may also find hits the
-//!   oracle's box rounding culls, never lose one).
+//!   or the same `t` up to rounding; the wide tree and the flat test may
+//!   also find hits the oracle's box rounding culls, never lose one).
 //! * [`obj`]: arbitrary OBJ and MTL text through the loader and the scene
 //!   build: `Err` or a valid scene, never a panic.
 
-use crate::bvh::{Bvh, WideStack};
+use crate::bvh::{Bvh, Hit, WideStack};
 use crate::camera::Camera;
 use crate::obj::{ObjSource, load_obj};
 use crate::packet::{LANES, Ray, RayPacket};
@@ -92,27 +92,57 @@ pub fn traversal(bytes: &[u8]) {
     let packet = RayPacket::from_rays(&rays);
     let hits = bvh.intersect_packet(&packet);
     let blocked = bvh.occluded_packet(&packet);
+    let flat = bvh.intersect_packet_flat(&packet);
+    let flat_blocked = bvh.occluded_packet_flat(&packet);
     let mut stack = WideStack::new();
     for (lane, ray) in rays.iter().enumerate() {
         let scalar = bvh.intersect(ray);
         // The wide tree tests a superset of the oracle's triangles (it skips
-        // inner boxes below its leaves) with the bit-identical test: it hits
-        // whenever the oracle does, with the same bits on the same triangle,
-        // and its occlusion agrees with its own hits. (Where a hit distance
-        // is rounding noise it may lie outside its leaf's box, so the two
-        // traversal orders can settle on different triangles: `agrees`.)
+        // the binary tree's boxes below its leaves) with the bit-identical
+        // test. So: it hits whenever the oracle does; its hit is exactly the
+        // scalar test of its triangle; and it agrees with the oracle's hit
+        // (same triangle, same `t` up to rounding, or a tie) or is nearer —
+        // a hit the oracle's box rounding culled, e.g. on a triangle's edge.
+        // Its occlusion agrees with its own hits.
         let wide = bvh.intersect_wide(ray, &mut stack);
         assert_eq!(bvh.occluded_wide(ray, &mut stack), wide.is_some());
+        if let Some(w) = wide {
+            let own = bvh.hit_on(ray, w.triangle);
+            assert_eq!(
+                own.map(|h| [h.t, h.u, h.v].map(f32::to_bits)),
+                Some([w.t, w.u, w.v].map(f32::to_bits)),
+                "lane {lane}: wide {w:?} is not its triangle's hit"
+            );
+        }
+        // Flat: the minimum of the scalar test over all triangles.
+        let flat_hit = flat.hit.contains(lane).then(|| Hit {
+            t: flat.t.to_array()[lane],
+            u: flat.u.to_array()[lane],
+            v: flat.v.to_array()[lane],
+            triangle: flat.triangle[lane],
+        });
+        assert_eq!(flat_blocked.contains(lane), flat_hit.is_some());
+        match flat_hit {
+            Some(f) => {
+                assert_eq!(
+                    bvh.hit_on(ray, f.triangle)
+                        .map(|h| [h.t, h.u, h.v].map(f32::to_bits)),
+                    Some([f.t, f.u, f.v].map(f32::to_bits)),
+                    "lane {lane}: flat {f:?} is not its triangle's hit"
+                );
+                for other in [scalar, wide].into_iter().flatten() {
+                    assert!(f.t <= other.t, "lane {lane}: flat {f:?} beyond {other:?}");
+                }
+            }
+            None => assert!(
+                scalar.is_none() && wide.is_none(),
+                "lane {lane}: flat misses"
+            ),
+        }
         if let Some(h) = scalar {
             let w = wide.unwrap_or_else(|| panic!("lane {lane}: wide tree misses {h:?}"));
-            if w.triangle == h.triangle {
-                assert_eq!(
-                    [w.t, w.u, w.v].map(f32::to_bits),
-                    [h.t, h.u, h.v].map(f32::to_bits)
-                );
-            }
             assert!(
-                agrees(ray, &triangles, (w.triangle, w.t), (h.triangle, h.t)),
+                w.t < h.t || agrees(ray, &triangles, (w.triangle, w.t), (h.triangle, h.t)),
                 "lane {lane}: wide {w:?} vs {h:?}"
             );
         }
