@@ -28,7 +28,7 @@
 use crate::light::{emits_towards, light_pdf_solid_angle};
 use crate::material::{Bsdf, LaneSpectrum, Material, ShadingPoint};
 use crate::packet::{LANES, LaneMask, RayPacket};
-use crate::rng::Rng;
+use crate::rng::RngPacket;
 use crate::scene::{Scene, SpectrumId};
 use crate::simd::Vec3x8;
 use crate::transport::Transport;
@@ -177,12 +177,8 @@ impl RayCounts {
 /// Every stream is advanced: a lane outside `active` has ended its path
 /// for good (a packet's active set only shrinks), so its stream is never
 /// read again, and drawing in all 8 lanes spares a branch per lane.
-fn uniforms(rngs: &mut [Rng; LANES], active: LaneMask) -> [f32; LANES] {
-    let drawn: [f32; LANES] = core::array::from_fn(|lane| rngs[lane].next_f32());
-    active
-        .to_simd()
-        .select(f32x8::new(drawn), f32x8::ZERO)
-        .to_array()
+fn uniforms(rngs: &mut RngPacket, active: LaneMask) -> f32x8 {
+    active.to_simd().select(rngs.next_f32x8(), f32x8::ZERO)
 }
 
 /// Ray origins moved off the surface along `n`, relative to the
@@ -207,7 +203,7 @@ pub fn trace<T: Transport>(
     scene: &Scene,
     settings: &IntegratorSettings,
     camera_rays: &RayPacket,
-    rngs: &mut [Rng; LANES],
+    rngs: &mut RngPacket,
     wavelengths: &mut T::Wavelengths,
     counts: &mut RayCounts,
 ) -> T::Spectra {
@@ -336,11 +332,8 @@ pub fn trace<T: Transport>(
         });
 
         // Next-event estimation: one light sample per lane, one shadow packet.
-        let u_light = uniforms(rngs, active);
-        let (u, v) = (
-            f32x8::new(uniforms(rngs, active)),
-            f32x8::new(uniforms(rngs, active)),
-        );
+        let u_light = uniforms(rngs, active).to_array();
+        let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
         let light =
             scene
                 .lights
@@ -390,11 +383,8 @@ pub fn trace<T: Transport>(
         }
 
         // BSDF sampling for the continuation.
-        let (u, v) = (
-            f32x8::new(uniforms(rngs, active)),
-            f32x8::new(uniforms(rngs, active)),
-        );
-        let u_lobe = uniforms(rngs, active);
+        let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
+        let u_lobe = uniforms(rngs, active).to_array();
         let sample = Bsdf::sample_packet(scene, &bsdfs, &points, active, normal, wo, &u_lobe, u, v);
         active = active
             .and(sample.valid)
@@ -443,10 +433,11 @@ pub fn trace<T: Transport>(
         // Russian roulette.
         if depth > settings.rr_depth {
             let mean = transport.mean(&throughput).to_array();
+            let u_survive = rngs.next_f32x8().to_array();
             let mut survival = [1.0f32; LANES];
             for lane in active.iter() {
                 let q = mean[lane].min(RR_MAX_SURVIVAL);
-                if q > 0.0 && rngs[lane].next_f32() < q {
+                if q > 0.0 && u_survive[lane] < q {
                     survival[lane] = 1.0 / q;
                 } else {
                     active = active.without(lane);

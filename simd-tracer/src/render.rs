@@ -15,7 +15,7 @@
 use crate::filter::Filter;
 use crate::integrator::{IntegratorSettings, RayCounts, trace};
 use crate::packet::{LANES, LaneMask, RayPacket};
-use crate::rng::{Purpose, Rng};
+use crate::rng::{Purpose, Rng, RngPacket};
 use crate::scene::Scene;
 use crate::simd::Vec3x8;
 use crate::transport::Transport;
@@ -141,25 +141,21 @@ fn camera_packet<P>(
     settings: &RenderSettings,
     tile: &Tile<P>,
     lanes: &[Option<(u32, u32)>; LANES],
-    path_rngs: &mut [Rng; LANES],
+    path_rngs: &mut RngPacket,
 ) -> RayPacket {
-    let mut u = [0.0f32; LANES];
-    let mut v = [0.0f32; LANES];
+    // Drawn in every lane; lanes without a pixel are never read again.
+    let (u, v) = (path_rngs.next_f32x8(), path_rngs.next_f32x8());
     let mut pixel_x = [0.0f32; LANES];
     let mut pixel_y = [0.0f32; LANES];
     let mut active = LaneMask::NONE;
     for (lane, slot) in lanes.iter().enumerate() {
         if let Some((lx, ly)) = *slot {
-            u[lane] = path_rngs[lane].next_f32();
-            v[lane] = path_rngs[lane].next_f32();
             pixel_x[lane] = (tile.x0 + lx) as f32 + 0.5;
             pixel_y[lane] = (tile.y0 + ly) as f32 + 0.5;
             active = active.with(lane);
         }
     }
-    let (dx, dy) = settings
-        .filter
-        .sample_offset_x8(f32x8::new(u), f32x8::new(v));
+    let (dx, dy) = settings.filter.sample_offset_x8(u, v);
     let direction = scene.camera.direction_x8(
         f32x8::new(pixel_x) + dx,
         f32x8::new(pixel_y) + dy,
@@ -197,10 +193,10 @@ fn render_tile<T: Transport>(
             let pixel_index = |(lx, ly): (u32, u32)| {
                 u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx)
             };
-            let mut path_rngs: [Rng; LANES] = core::array::from_fn(|lane| {
+            let mut path_rngs = RngPacket::new(core::array::from_fn(|lane| {
                 let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
                 Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Path)
-            });
+            }));
             let packet = camera_packet(scene, settings, tile, &lanes, &mut path_rngs);
             let mut wavelengths = transport.sample_wavelengths(|lane| {
                 let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);

@@ -7,6 +7,11 @@
 //! which thread renders it or in which order: the image depends only on the
 //! seed. Separate purposes (path decisions vs wavelengths) keep the path
 //! geometry identical across spectral transports.
+//!
+//! [`RngPacket`] is the 8-lane twin: the streams of a packet's ray lanes in
+//! structure-of-arrays form, advanced together (the loop over lanes
+//! vectorises; AVX2 has no 64-bit multiply, LLVM composes it from 32-bit
+//! ones), each lane bit-identical to its scalar [`Rng`].
 
 /// Which decisions a stream drives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -16,6 +21,9 @@ pub enum Purpose {
     /// Wavelength sampling of the sampled transports.
     Wavelengths = 2,
 }
+
+use crate::packet::LANES;
+use wide::f32x8;
 
 const PCG_MULTIPLIER: u64 = 6_364_136_223_846_793_005;
 
@@ -59,15 +67,69 @@ impl Rng {
         self.state = old
             .wrapping_mul(PCG_MULTIPLIER)
             .wrapping_add(self.increment);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        let rotation = (old >> 59) as u32;
-        xorshifted.rotate_right(rotation)
+        pcg_output(old)
     }
 
     /// A uniform `f32` in `[0, 1)` (24 random bits).
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+        to_unit_f32(self.next_u32())
     }
+}
+
+/// The streams of the 8 ray lanes of a packet (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RngPacket {
+    state: [u64; LANES],
+    increment: [u64; LANES],
+}
+
+impl RngPacket {
+    /// Packs one stream per ray lane.
+    pub fn new(lanes: [Rng; LANES]) -> Self {
+        Self {
+            state: lanes.map(|r| r.state),
+            increment: lanes.map(|r| r.increment),
+        }
+    }
+
+    /// The stream of ray lane `lane` in its current state.
+    pub fn lane(&self, lane: usize) -> Rng {
+        Rng {
+            state: self.state[lane],
+            increment: self.increment[lane],
+        }
+    }
+
+    /// The next uniform `f32` in `[0, 1)` of every lane ([`Rng::next_f32`]
+    /// lane by lane).
+    #[inline]
+    pub fn next_f32x8(&mut self) -> f32x8 {
+        let mut out = [0.0f32; LANES];
+        for ((value, state), increment) in out
+            .iter_mut()
+            .zip(self.state.iter_mut())
+            .zip(&self.increment)
+        {
+            let old = *state;
+            *state = old.wrapping_mul(PCG_MULTIPLIER).wrapping_add(*increment);
+            *value = to_unit_f32(pcg_output(old));
+        }
+        f32x8::new(out)
+    }
+}
+
+/// PCG32's XSH-RR output function of a state.
+#[inline(always)]
+fn pcg_output(old: u64) -> u32 {
+    let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+    let rotation = (old >> 59) as u32;
+    xorshifted.rotate_right(rotation)
+}
+
+/// The top 24 bits as a uniform `f32` in `[0, 1)`.
+#[inline(always)]
+fn to_unit_f32(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
 #[cfg(test)]
@@ -103,5 +165,20 @@ mod tests {
         assert!((mean - 0.5).abs() < 0.02);
         let mut r = a;
         assert!((0..1000).all(|_| (0.0..1.0).contains(&r.next_f32())));
+    }
+
+    #[test]
+    fn packet_lanes_equal_their_scalar_streams() {
+        let lanes: [Rng; LANES] =
+            core::array::from_fn(|lane| Rng::for_sample(9, lane as u64 * 31, 2, Purpose::Path));
+        let mut packet = RngPacket::new(lanes);
+        let mut scalar = lanes;
+        for _ in 0..1000 {
+            let drawn = packet.next_f32x8().to_array();
+            for (lane, rng) in scalar.iter_mut().enumerate() {
+                assert_eq!(drawn[lane].to_bits(), rng.next_f32().to_bits());
+                assert_eq!(packet.lane(lane), *rng);
+            }
+        }
     }
 }

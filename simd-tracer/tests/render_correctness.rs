@@ -11,7 +11,7 @@ use simd_tracer::integrator::{IntegratorSettings, trace};
 use simd_tracer::material::Material;
 use simd_tracer::packet::{LANES, Ray, RayPacket};
 use simd_tracer::render::{RenderResult, RenderSettings, render};
-use simd_tracer::rng::{Purpose, Rng};
+use simd_tracer::rng::{Purpose, Rng, RngPacket};
 use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::transport::{
@@ -403,7 +403,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
         let wavelength_rngs: [Rng; LANES] = core::array::from_fn(|lane| {
             Rng::for_sample(3, packet_index * 8 + lane as u64, 0, Purpose::Wavelengths)
         });
-        let mut rngs = seeds;
+        let mut rngs = RngPacket::new(seeds);
         let mut counts = Default::default();
         let f = trace(
             &fourier,
@@ -414,7 +414,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
             &mut (),
             &mut counts,
         );
-        let mut rngs = seeds;
+        let mut rngs = RngPacket::new(seeds);
         let mut w = sampled.sample_wavelengths(|lane| wavelength_rngs[lane]);
         let s = trace(
             &sampled,
