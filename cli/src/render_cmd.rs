@@ -178,7 +178,7 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores; the image does not depend on it).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Stop after the pass during which this many seconds have passed.
+    /// Stop after the batch of passes during which this many seconds have passed (batches last up to half a second and are sized not to run past the limit).
     #[arg(long)]
     pub time_limit: Option<f64>,
     /// Output files; the format follows the extension (.png: 8-bit sRGB,

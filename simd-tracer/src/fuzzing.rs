@@ -173,9 +173,24 @@ pub fn traversal(bytes: &[u8]) {
 /// triangle, or the same `t` up to a relative 1e-4, or — different
 /// triangles at different `t`, a tie on a shared edge or vertex — hit points
 /// within the rounding error of the `f32` hit distances along the ray.
+///
+/// Also when either hit point lies outside its own triangle's bounding box
+/// (computed exactly): the edge functions accepted it through rounding (e.g.
+/// products of subnormal coordinates that vanish), and a box test may then
+/// place the triangle's box entry beyond the hit, so whether a traversal
+/// finds it depends on the order it visits the boxes in (found by fuzzing:
+/// a hit at `t = 5` whose box, 1.8e-38 off the ray, is entered at 5.98).
 fn agrees(ray: &Ray, triangles: &[[Vec3; 3]], a: (u32, f32), b: (u32, f32)) -> bool {
     let (same, close) = (a.0 == b.0, (a.1 - b.1).abs() <= 1e-4 * b.1.abs().max(1e-30));
-    same || close || {
+    let off_box = |(i, t): (u32, f32)| {
+        triangles.get(i as usize).is_some_and(|v| {
+            let point = ray.origin.as_dvec3() + f64::from(t) * ray.direction.as_dvec3();
+            let [p, q, r] = v.map(Vec3::as_dvec3);
+            let (lo, hi) = (p.min(q).min(r), p.max(q).max(r));
+            !(point.cmpge(lo).all() && point.cmple(hi).all())
+        })
+    };
+    same || close || off_box(a) || off_box(b) || {
         let bound = [a, b].map(|(i, t)| {
             triangles
                 .get(i as usize)

@@ -1,5 +1,11 @@
 //! Progressive rendering: passes of one sample per pixel over 16 × 16 tiles
-//! in parallel (rayon), packets of 8 pixels (4 × 2) per trace.
+//! in parallel (rayon), packets of 8 pixels (4 × 2) per trace. Passes run in
+//! batches: each tile takes every pass of a batch in a row, so its pixels
+//! stay in cache (a 512² Fourier film is 32 MiB; one pass at a time streamed
+//! it through memory every pass). A batch is one pass for transports whose
+//! passes interact (control variates end every pass over all pixels) and
+//! otherwise as many passes as fit in half a second at the measured speed,
+//! up to 16.
 //!
 //! Determinism: every sample draws its random numbers from streams keyed by
 //! (seed, pixel, pass) ([`crate::rng`]), the filter is importance-sampled so
@@ -7,8 +13,9 @@
 //! per pass: the image depends only on the seed, never on the thread count
 //! or scheduling (tested bit for bit).
 //!
-//! After each pass the `progress` callback sees the totals and may stop the
-//! render; a time limit stops after the pass that crosses it. Samples with
+//! After each batch the `progress` callback sees the totals and may stop
+//! the render; a time limit stops after the batch that crosses it (batches
+//! are sized not to run past the limit at the measured speed). Samples with
 //! NaN or infinite values never reach the film: they are counted in
 //! [`RenderResult::rejected`].
 
@@ -47,7 +54,7 @@ pub struct RenderSettings {
     pub filter: Filter,
     /// Worker threads (`None`: all cores).
     pub threads: Option<usize>,
-    /// Stop after the pass during which this much time has passed.
+    /// Stop after the batch of passes during which this much time has passed.
     pub time_limit: Option<Duration>,
 }
 
@@ -86,7 +93,7 @@ impl core::fmt::Display for RenderError {
 
 impl std::error::Error for RenderError {}
 
-/// Render progress after a pass.
+/// Render progress after a batch of passes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Progress {
     /// Passes finished.
@@ -171,6 +178,27 @@ fn camera_packet<P>(
     }
 }
 
+/// Wall time a batch of passes aims at: the progress callback (and so the
+/// CLI's progress display, Ctrl-C and the time limit) sees the render at
+/// least this often, give or take one pass.
+const BATCH_TARGET: Duration = Duration::from_millis(500);
+/// Most passes per batch.
+const MAX_BATCH: u32 = 16;
+
+/// Passes in the next batch: as many as fit in [`BATCH_TARGET`] at the
+/// last batch's speed (at most [`MAX_BATCH`], and not past a time limit).
+fn next_batch(batch: u32, took: Duration, settings: &RenderSettings, elapsed: Duration) -> u32 {
+    let per_pass = took.as_secs_f64() / f64::from(batch.max(1));
+    let mut budget = BATCH_TARGET.as_secs_f64();
+    if let Some(limit) = settings.time_limit {
+        budget = budget.min(limit.saturating_sub(elapsed).as_secs_f64());
+    }
+    if per_pass <= 0.0 {
+        return MAX_BATCH;
+    }
+    ((budget / per_pass).floor() as u32).clamp(1, MAX_BATCH)
+}
+
 fn render_tile<T: Transport>(
     transport: &T,
     scene: &Scene,
@@ -226,8 +254,8 @@ fn render_tile<T: Transport>(
     }
 }
 
-/// Renders `scene` with `transport`. `progress` runs after every pass and
-/// returns whether to continue.
+/// Renders `scene` with `transport`. `progress` runs after every batch of
+/// passes (module docs) and returns whether to continue.
 pub fn render<T: Transport>(
     transport: &T,
     scene: &Scene,
@@ -263,19 +291,29 @@ pub fn render<T: Transport>(
     }
     let pixel_count = u64::from(settings.width) * u64::from(settings.height);
     let mut passes = 0;
-    for pass in 0..settings.spp {
+    let mut batch = 1;
+    while passes < settings.spp {
+        let first = passes;
+        let end = first.saturating_add(batch).min(settings.spp);
+        let batch_start = Instant::now();
         pool.install(|| {
-            tiles
-                .par_iter_mut()
-                .for_each(|tile| render_tile(transport, scene, settings, pass, tile));
+            tiles.par_iter_mut().for_each(|tile| {
+                for pass in first..end {
+                    render_tile(transport, scene, settings, pass, tile);
+                }
+            });
         });
-        let shared = transport.pass_shared(&mut tiles.iter().flat_map(|tile| tile.pixels.iter()));
-        for tile in &mut tiles {
-            for pixel in &mut tile.pixels {
-                transport.end_pass(pixel, &shared);
+        if transport.passes_interact() {
+            debug_assert_eq!(end, first + 1);
+            let shared =
+                transport.pass_shared(&mut tiles.iter().flat_map(|tile| tile.pixels.iter()));
+            for tile in &mut tiles {
+                for pixel in &mut tile.pixels {
+                    transport.end_pass(pixel, &shared);
+                }
             }
         }
-        passes = pass + 1;
+        passes = end;
         let elapsed = start.elapsed();
         let keep_going = progress(&Progress {
             passes_done: passes,
@@ -285,6 +323,9 @@ pub fn render<T: Transport>(
         });
         if !keep_going || settings.time_limit.is_some_and(|limit| elapsed >= limit) {
             break;
+        }
+        if !transport.passes_interact() {
+            batch = next_batch(batch, batch_start.elapsed(), settings, elapsed);
         }
     }
     let mut xyz = vec![Xyz::default(); pixel_count as usize];
@@ -321,4 +362,67 @@ pub fn render<T: Transport>(
         rays,
         elapsed: start.elapsed(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn batches_fill_half_a_second_within_bounds() {
+        let settings = RenderSettings::default();
+        let ms = Duration::from_millis;
+        // 4 passes took 200 ms: 50 ms each, 10 fit in 500 ms.
+        assert_eq!(next_batch(4, ms(200), &settings, ms(1000)), 10);
+        // Slow passes: never fewer than one.
+        assert_eq!(next_batch(1, ms(2000), &settings, ms(2000)), 1);
+        // Fast passes: at most MAX_BATCH.
+        assert_eq!(next_batch(2, ms(1), &settings, ms(10)), MAX_BATCH);
+        assert_eq!(next_batch(1, Duration::ZERO, &settings, ms(10)), MAX_BATCH);
+        // Not past a time limit: 100 ms left at 30 ms per pass.
+        let limited = RenderSettings {
+            time_limit: Some(ms(1100)),
+            ..RenderSettings::default()
+        };
+        assert_eq!(next_batch(1, ms(30), &limited, ms(1000)), 3);
+        assert_eq!(next_batch(1, ms(30), &limited, ms(1200)), 1);
+    }
+
+    #[test]
+    fn progress_reports_every_batch_up_to_the_requested_passes() -> Result<(), RenderError> {
+        use crate::transport::{Buffer, FourierTransport};
+        use spectral_core::xyz::XyzRoute;
+        let range = spectral_core::SpectralRange::VISIBLE;
+        let (Ok(scene), Ok(transport)) = (
+            crate::scenes::cornell_box(range),
+            FourierTransport::<4>::new(range, Buffer::Spectral, XyzRoute::Zeroth),
+        ) else {
+            panic!("Cornell box and transport");
+        };
+        let settings = RenderSettings {
+            width: 16,
+            height: 8,
+            spp: 37,
+            ..RenderSettings::default()
+        };
+        let mut seen = Vec::new();
+        let result = render(&transport, &scene, &settings, &mut |p| {
+            seen.push(p.passes_done);
+            true
+        })?;
+        assert_eq!(result.passes, 37);
+        assert_eq!(seen.first(), Some(&1));
+        assert_eq!(seen.last(), Some(&37));
+        assert!(
+            seen.windows(2)
+                .all(|w| w[0] < w[1] && w[1] - w[0] <= MAX_BATCH)
+        );
+        // Tiny passes: batches grow to the maximum.
+        assert!(seen.len() < 37, "{seen:?}");
+
+        // Stopping after the first batch keeps exactly its passes.
+        let first = render(&transport, &scene, &settings, &mut |_| false)?;
+        assert_eq!(first.passes, 1);
+        Ok(())
+    }
 }

@@ -106,6 +106,13 @@ pub trait Transport: Sync {
         Self::Pixel: 'a;
     /// Ends a pass (a control-variate batch).
     fn end_pass(&self, pixel: &mut Self::Pixel, shared: &Self::PassShared);
+    /// Whether ending a pass does anything ([`Transport::end_pass`] reads
+    /// state shared by all pixels). When it does not, the renderer may run
+    /// several passes per tile in a row (same image, fewer trips of the
+    /// film through the caches).
+    fn passes_interact(&self) -> bool {
+        false
+    }
     /// The pixel's XYZ.
     fn resolve(&self, pixel: &Self::Pixel) -> Xyz;
     /// The pixel's mean Fourier coefficients, if the transport keeps them.
@@ -704,6 +711,10 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
                 Some(pooled.map(|p| p.alpha()))
             }
         }
+    }
+
+    fn passes_interact(&self) -> bool {
+        true
     }
 
     fn end_pass(&self, pixel: &mut Self::Pixel, shared: &Self::PassShared) {
