@@ -172,34 +172,32 @@ pub struct FourierPixel<const N: usize> {
     count: f64,
 }
 
-/// Writes `scale ·` the first `N` Fourier coefficients of a spectral
-/// reference into `row` (zero if the reference dangles). Scene spectra are
-/// read in place; textures and angular tables fill a temporary.
-fn reference_fourier<const N: usize>(
+/// Coefficient chunks of [`LANES`] each in a scene spectrum's
+/// [`MAX_COEFFS`] (the gather transposes one `LANES × LANES` block per chunk).
+const CHUNKS: usize = MAX_COEFFS / LANES;
+
+/// Calls `with` on all [`MAX_COEFFS`] Fourier coefficients of a spectral
+/// reference (zeros if the reference dangles). Scene spectra are read in
+/// place; textures and angular tables fill a temporary.
+fn with_reference_fourier<R>(
     scene: &Scene,
     reference: &SpectralRef,
-    scale: f32,
-    row: &mut [f32; N],
-) {
-    let mut write = |coeffs: &[f32; MAX_COEFFS]| {
-        for (r, &value) in row.iter_mut().zip(coeffs) {
-            *r = scale * value;
-        }
-    };
+    with: impl FnOnce(&[f32; MAX_COEFFS]) -> R,
+) -> R {
     match *reference {
-        SpectralRef::Scene(id) => write(
+        SpectralRef::Scene(id) => with(
             scene
                 .spectra
                 .get(id as usize)
                 .map_or(&[0.0; MAX_COEFFS], |s| s.coefficients_f32()),
         ),
-        SpectralRef::Texture { texture, u, v } => write(
+        SpectralRef::Texture { texture, u, v } => with(
             &scene
                 .textures
                 .get(texture as usize)
                 .map_or([0.0; MAX_COEFFS], |t| t.fourier_at(u, v)),
         ),
-        SpectralRef::Angular { id, cos, thickness } => write(
+        SpectralRef::Angular { id, cos, thickness } => with(
             &scene
                 .angular
                 .get(id as usize)
@@ -226,20 +224,41 @@ fn reference_value(scene: &Scene, reference: &SpectralRef, lambda_nm: f32) -> f3
     }
 }
 
+/// The lanes' spectral factors `constant + scale · of` as packet-wide
+/// coefficients: per lane, `scale ·` each chunk of [`LANES`] coefficients
+/// is one 8-wide product, and a `LANES × LANES` transpose per chunk turns
+/// lanes-by-coefficients into coefficients-by-lanes (the same products and
+/// sums as lane by lane, so the same bits).
 fn gather_fourier<const N: usize>(
     scene: &Scene,
     lanes: &[LaneSpectrum; LANES],
 ) -> FourierSpectrum<f32x8, N> {
-    let mut rows = [[0.0f32; N]; LANES];
-    for (row, lane) in rows.iter_mut().zip(lanes) {
-        if let Some(reference) = &lane.of {
-            reference_fourier(scene, reference, lane.scale, row);
+    let chunks = N.div_ceil(LANES);
+    debug_assert!(chunks <= CHUNKS);
+    // rows[chunk][lane]: coefficients chunk·LANES .. (chunk + 1)·LANES of a lane.
+    let mut rows = [[f32x8::ZERO; LANES]; CHUNKS];
+    for (lane, spectrum) in lanes.iter().enumerate() {
+        if let Some(reference) = &spectrum.of {
+            let scale = f32x8::splat(spectrum.scale);
+            with_reference_fourier(scene, reference, |coeffs| {
+                let (blocks, _) = coeffs.as_chunks::<LANES>();
+                for (row, block) in rows.iter_mut().zip(blocks).take(chunks) {
+                    row[lane] = scale * f32x8::new(*block);
+                }
+            });
         }
-        row[0] += lane.constant;
     }
-    FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
-        f32x8::new(core::array::from_fn(|lane| rows[lane][j]))
-    }))
+    let mut coeffs = [f32x8::ZERO; N];
+    for (chunk, row) in rows.iter().enumerate().take(chunks) {
+        let columns = f32x8::transpose(*row);
+        for (coefficient, column) in coeffs.iter_mut().skip(chunk * LANES).zip(columns) {
+            *coefficient = column;
+        }
+    }
+    if let Some(first) = coeffs.first_mut() {
+        *first += f32x8::new(lanes.map(|l| l.constant));
+    }
+    FourierSpectrum::from_coeffs(coeffs)
 }
 
 impl<const N: usize> Transport for FourierTransport<N> {
@@ -728,5 +747,75 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
 
     fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
         Xyz::from_array(core::array::from_fn(|r| pixel.channels[r].estimate()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spectral_core::SpectralRange;
+
+    /// `constant + scale · coefficient` lane by lane (the scalar oracle).
+    fn gather_by_lane<const N: usize>(
+        scene: &Scene,
+        lanes: &[LaneSpectrum; LANES],
+    ) -> [[f32; LANES]; N] {
+        let mut out = [[0.0f32; LANES]; N];
+        for (lane, spectrum) in lanes.iter().enumerate() {
+            let mut row = [0.0f32; N];
+            if let Some(reference) = &spectrum.of {
+                with_reference_fourier(scene, reference, |coeffs| {
+                    for (r, &c) in row.iter_mut().zip(coeffs) {
+                        *r = spectrum.scale * c;
+                    }
+                });
+            }
+            row[0] += spectrum.constant;
+            for (j, value) in row.into_iter().enumerate() {
+                out[j][lane] = value;
+            }
+        }
+        out
+    }
+
+    fn check<const N: usize>(scene: &Scene, lanes: &[LaneSpectrum; LANES]) {
+        let packed = gather_fourier::<N>(scene, lanes);
+        let expected = gather_by_lane::<N>(scene, lanes);
+        for (j, row) in expected.iter().enumerate() {
+            assert_eq!(
+                packed.coeffs[j].to_array().map(f32::to_bits),
+                row.map(f32::to_bits),
+                "N = {N}, coefficient {j}"
+            );
+        }
+    }
+
+    #[test]
+    fn gather_matches_the_lane_by_lane_oracle_bit_for_bit() {
+        let Ok(scene) = crate::scenes::cornell_box(SpectralRange::VISIBLE) else {
+            panic!("Cornell box");
+        };
+        let spectra = scene.spectra.len() as u32;
+        assert!(spectra >= 3);
+        let lanes: [LaneSpectrum; LANES] = core::array::from_fn(|lane| match lane % 4 {
+            0 => LaneSpectrum::scene(lane as u32 % spectra),
+            1 => LaneSpectrum::complement(SpectralRef::Scene((lane as u32 + 1) % spectra)),
+            2 => LaneSpectrum {
+                constant: 0.25 * lane as f32,
+                scale: -1.5 + lane as f32,
+                of: Some(SpectralRef::Scene((lane as u32 + 2) % spectra)),
+            },
+            // A constant lane and a dangling reference (zeros).
+            _ if lane == 3 => LaneSpectrum {
+                constant: 0.7,
+                ..LaneSpectrum::ZERO
+            },
+            _ => LaneSpectrum::scene(spectra + 5),
+        });
+        check::<4>(&scene, &lanes);
+        check::<8>(&scene, &lanes);
+        check::<12>(&scene, &lanes);
+        check::<16>(&scene, &lanes);
+        check::<32>(&scene, &lanes);
     }
 }
