@@ -241,9 +241,8 @@ fn gather_fourier<const N: usize>(
         if let Some(reference) = &spectrum.of {
             let scale = f32x8::splat(spectrum.scale);
             with_reference_fourier(scene, reference, |coeffs| {
-                let (blocks, _) = coeffs.as_chunks::<LANES>();
-                for (row, block) in rows.iter_mut().zip(blocks).take(chunks) {
-                    row[lane] = scale * f32x8::new(*block);
+                for (row, block) in rows.iter_mut().zip(coeffs.chunks_exact(LANES)).take(chunks) {
+                    row[lane] = scale * f32x8::new(block.try_into().unwrap_or([0.0; LANES]));
                 }
             });
         }
