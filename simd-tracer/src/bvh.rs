@@ -468,6 +468,33 @@ fn to_obvhs_triangle(vertices: &[Vec3; 3]) -> ObvhsTriangle {
     }
 }
 
+/// The hits of a packet's active lanes found one ray at a time by `hit`,
+/// in the packet convention (`t_max`, `u = v = 0` and [`NO_TRIANGLE`] in
+/// lanes without a hit).
+fn hits_by_lane(packet: &RayPacket, mut hit: impl FnMut(&Ray) -> Option<Hit>) -> PacketHit {
+    let mut t = packet.t_max.to_array();
+    let mut u = [0.0f32; LANES];
+    let mut v = [0.0f32; LANES];
+    let mut triangle = [NO_TRIANGLE; LANES];
+    let mut found = LaneMask::NONE;
+    for lane in packet.active.iter() {
+        if let Some(h) = hit(&packet.ray(lane)) {
+            t[lane] = h.t;
+            u[lane] = h.u;
+            v[lane] = h.v;
+            triangle[lane] = h.triangle;
+            found = found.with(lane);
+        }
+    }
+    PacketHit {
+        t: f32x8::new(t),
+        u: f32x8::new(u),
+        v: f32x8::new(v),
+        triangle,
+        hit: found,
+    }
+}
+
 fn index_u32(index: usize) -> u32 {
     u32::try_from(index).unwrap_or(u32::MAX)
 }
@@ -514,25 +541,27 @@ impl PacketRays {
         (hit.select(entry, f32x8::INFINITY), hit)
     }
 
-    /// The edge-function test without early exits: the acceptance mask of
-    /// every lane (the scalar test's conditions) with `t`, `w1`, `w2`, `Σw`.
+    /// The plane part of the edge-function test: `t = num / den` and the
+    /// not-grazing mask.
     #[inline(always)]
-    fn terms_all(
-        &self,
-        triangle: &PreparedTriangle,
-        t_max: f32x8,
-    ) -> (f32x8, f32x8, f32x8, f32x8, f32x8) {
-        let zero = f32x8::ZERO;
+    fn plane(&self, triangle: &PreparedTriangle) -> (f32x8, f32x8) {
         let (num, den) = plane_terms(
             self.origin,
             self.direction,
             triangle.normal.map(f32x8::splat),
             f32x8::splat(triangle.plane),
         );
-        let t = num / den;
         let steep = den
             .abs()
             .simd_gt(f32x8::splat(triangle.grazing) * self.direction_length);
+        (num / den, steep)
+    }
+
+    /// The edge part: `w1`, `w2`, `Σw` and the mask of lanes inside the
+    /// three edges (all `w ≥ 0` or all `≤ 0`) with `Σw ≠ 0`.
+    #[inline(always)]
+    fn edges(&self, triangle: &PreparedTriangle) -> (f32x8, f32x8, f32x8, f32x8) {
+        let zero = f32x8::ZERO;
         let [w0, w1, w2] = edge_weights(
             self.direction,
             self.moment,
@@ -542,7 +571,20 @@ impl PacketRays {
         let sum = w0 + w1 + w2;
         let inside = (w0.simd_ge(zero) & w1.simd_ge(zero) & w2.simd_ge(zero))
             | (w0.simd_le(zero) & w1.simd_le(zero) & w2.simd_le(zero));
-        let accept = steep & t.simd_gt(zero) & t.simd_lt(t_max) & inside & sum.simd_ne(zero);
+        (w1, w2, sum, inside & sum.simd_ne(zero))
+    }
+
+    /// The edge-function test without early exits: the acceptance mask of
+    /// every lane (the scalar test's conditions) with `t`, `w1`, `w2`, `Σw`.
+    #[inline(always)]
+    fn terms_all(
+        &self,
+        triangle: &PreparedTriangle,
+        t_max: f32x8,
+    ) -> (f32x8, f32x8, f32x8, f32x8, f32x8) {
+        let (t, steep) = self.plane(triangle);
+        let (w1, w2, sum, inside) = self.edges(triangle);
+        let accept = steep & t.simd_gt(f32x8::ZERO) & t.simd_lt(t_max) & inside;
         (accept, t, w1, w2, sum)
     }
 
@@ -568,31 +610,13 @@ impl PacketRays {
         t_max: f32x8,
         lanes: f32x8,
     ) -> Option<(f32x8, f32x8, f32x8, f32x8, f32x8)> {
-        let zero = f32x8::ZERO;
-        let (num, den) = plane_terms(
-            self.origin,
-            self.direction,
-            triangle.normal.map(f32x8::splat),
-            f32x8::splat(triangle.plane),
-        );
-        let t = num / den;
-        let steep = den
-            .abs()
-            .simd_gt(f32x8::splat(triangle.grazing) * self.direction_length);
-        let in_range = lanes & steep & t.simd_gt(zero) & t.simd_lt(t_max);
+        let (t, steep) = self.plane(triangle);
+        let in_range = lanes & steep & t.simd_gt(f32x8::ZERO) & t.simd_lt(t_max);
         if !in_range.any() {
             return None;
         }
-        let [w0, w1, w2] = edge_weights(
-            self.direction,
-            self.moment,
-            &triangle.edge_moment.map(|e| e.map(f32x8::splat)),
-            &triangle.edge_direction.map(|e| e.map(f32x8::splat)),
-        );
-        let sum = w0 + w1 + w2;
-        let inside = (w0.simd_ge(zero) & w1.simd_ge(zero) & w2.simd_ge(zero))
-            | (w0.simd_le(zero) & w1.simd_le(zero) & w2.simd_le(zero));
-        let accept = in_range & inside & sum.simd_ne(zero);
+        let (w1, w2, sum, inside) = self.edges(triangle);
+        let accept = in_range & inside;
         accept.any().then_some((accept, t, w1, w2, sum))
     }
 }
@@ -1205,27 +1229,7 @@ impl Bvh {
     /// [`Bvh::intersect`]), for comparison and as a fallback for incoherent
     /// rays. Same output convention as [`Bvh::intersect_packet`].
     pub fn intersect_lanes(&self, packet: &RayPacket) -> PacketHit {
-        let mut t = packet.t_max.to_array();
-        let mut u = [0.0f32; LANES];
-        let mut v = [0.0f32; LANES];
-        let mut triangle = [NO_TRIANGLE; LANES];
-        let mut hit = LaneMask::NONE;
-        for lane in packet.active.iter() {
-            if let Some(h) = self.intersect(&packet.ray(lane)) {
-                t[lane] = h.t;
-                u[lane] = h.u;
-                v[lane] = h.v;
-                triangle[lane] = h.triangle;
-                hit = hit.with(lane);
-            }
-        }
-        PacketHit {
-            t: f32x8::new(t),
-            u: f32x8::new(u),
-            v: f32x8::new(v),
-            triangle,
-            hit,
-        }
+        hits_by_lane(packet, |ray| self.intersect(ray))
     }
 
     /// Per-ray occlusion of a packet (each active lane through
@@ -1262,27 +1266,7 @@ impl Bvh {
     /// the 8-wide tree. Same output convention as [`Bvh::intersect_packet`].
     pub fn intersect_packet_wide(&self, packet: &RayPacket) -> PacketHit {
         let mut stack = WideStack::new();
-        let mut t = packet.t_max.to_array();
-        let mut u = [0.0f32; LANES];
-        let mut v = [0.0f32; LANES];
-        let mut triangle = [NO_TRIANGLE; LANES];
-        let mut hit = LaneMask::NONE;
-        for lane in packet.active.iter() {
-            if let Some(h) = self.intersect_wide(&packet.ray(lane), &mut stack) {
-                t[lane] = h.t;
-                u[lane] = h.u;
-                v[lane] = h.v;
-                triangle[lane] = h.triangle;
-                hit = hit.with(lane);
-            }
-        }
-        PacketHit {
-            t: f32x8::new(t),
-            u: f32x8::new(u),
-            v: f32x8::new(v),
-            triangle,
-            hit,
-        }
+        hits_by_lane(packet, |ray| self.intersect_wide(ray, &mut stack))
     }
 
     /// Closest hits of a packet against every triangle, without the tree
