@@ -621,22 +621,20 @@ impl PacketRays {
     }
 }
 
-/// Traversal stack of (node index, per-lane entry distance); inline storage
-/// with a heap spill for pathological depths. One per thread is reused by
-/// every packet traversal ([`with_node_stack`]): a fresh one costs a 2 KiB
-/// memset, which profiling showed at about 5 % of a Cornell-box render.
-struct NodeStack {
-    nodes: [u32; INLINE_STACK],
-    entries: [f32x8; INLINE_STACK],
+/// A traversal stack: inline storage for [`INLINE_STACK`] entries and a
+/// heap spill for pathological depths (used by the packet traversal and the
+/// wide tree).
+struct InlineStack<T> {
+    inline: [T; INLINE_STACK],
     len: usize,
-    spill: Vec<(u32, f32x8)>,
+    spill: Vec<T>,
 }
 
-impl NodeStack {
-    fn new() -> Self {
+impl<T: Copy> InlineStack<T> {
+    /// An empty stack; `fill` initialises the inline slots.
+    fn new(fill: T) -> Self {
         Self {
-            nodes: [0; INLINE_STACK],
-            entries: [f32x8::ZERO; INLINE_STACK],
+            inline: [fill; INLINE_STACK],
             len: 0,
             spill: Vec::new(),
         }
@@ -648,18 +646,17 @@ impl NodeStack {
     }
 
     #[inline(always)]
-    fn push(&mut self, node: u32, entry: f32x8) {
+    fn push(&mut self, entry: T) {
         if self.len < INLINE_STACK {
-            self.nodes[self.len] = node;
-            self.entries[self.len] = entry;
+            self.inline[self.len] = entry;
             self.len += 1;
         } else {
-            self.spill.push((node, entry));
+            self.spill.push(entry);
         }
     }
 
     #[inline(always)]
-    fn pop(&mut self) -> Option<(u32, f32x8)> {
+    fn pop(&mut self) -> Option<T> {
         if let Some(top) = self.spill.pop() {
             return Some(top);
         }
@@ -667,12 +664,22 @@ impl NodeStack {
             return None;
         }
         self.len -= 1;
-        Some((self.nodes[self.len], self.entries[self.len]))
+        Some(self.inline[self.len])
     }
 }
 
+/// The packet traversal's stack of (node index, per-lane entry distance).
+/// One per thread is reused by every packet traversal
+/// ([`with_node_stack`]): a fresh one costs a memset of a few KiB, which
+/// profiling showed at about 5 % of a Cornell-box render.
+type NodeStack = InlineStack<(u32, f32x8)>;
+
+fn new_node_stack() -> NodeStack {
+    InlineStack::new((0, f32x8::ZERO))
+}
+
 thread_local! {
-    static NODE_STACK: RefCell<NodeStack> = RefCell::new(NodeStack::new());
+    static NODE_STACK: RefCell<NodeStack> = RefCell::new(new_node_stack());
 }
 
 /// Runs `f` with this thread's empty traversal stack (a fresh one if it is
@@ -684,7 +691,7 @@ fn with_node_stack<R>(f: impl FnOnce(&mut NodeStack) -> R) -> R {
             stack.clear();
             f(&mut stack)
         }
-        Err(_) => f(&mut NodeStack::new()),
+        Err(_) => f(&mut new_node_stack()),
     })
 }
 
@@ -1108,10 +1115,10 @@ impl Bvh {
                                     let left_first = left_entry.simd_lt(right_entry).to_bitmask();
                                     let right_first = right_entry.simd_lt(left_entry).to_bitmask();
                                     if left_first.count_ones() >= right_first.count_ones() {
-                                        stack.push(index_u32(left + 1), right_entry);
+                                        stack.push((index_u32(left + 1), right_entry));
                                         next = Some((left, left_hit));
                                     } else {
-                                        stack.push(index_u32(left), left_entry);
+                                        stack.push((index_u32(left), left_entry));
                                         next = Some((left + 1, right_hit));
                                     }
                                 }

@@ -35,8 +35,8 @@
 //! at the first accepted lane.
 
 use super::{
-    Bvh2, Bvh2Node, PreparedTriangle, ScalarHit, cross, dot, edge_weights, plane_terms,
-    safe_inverse,
+    Bvh2, Bvh2Node, InlineStack, PreparedTriangle, ScalarHit, cross, dot, edge_weights,
+    plane_terms, safe_inverse,
 };
 use crate::packet::Ray;
 use glam::Vec3;
@@ -45,9 +45,6 @@ use wide::f32x8;
 /// Children per node and triangles per leaf block (the SIMD axis of this
 /// module, distinct from the packet's ray lanes).
 pub const WIDTH: usize = 8;
-
-/// Stack entries kept inline before spilling to the heap.
-const INLINE_STACK: usize = 64;
 
 /// A node: the boxes of up to [`WIDTH`] children in structure-of-arrays
 /// form and what each child is.
@@ -204,58 +201,14 @@ impl SplatRay {
 /// A stack entry: child index, block count (0: inner node), entry distance.
 type Entry = (u32, u32, f32);
 
-/// Traversal stack with inline storage and a heap spill for deep trees.
-struct Stack {
-    inline: [Entry; INLINE_STACK],
-    len: usize,
-    spill: Vec<Entry>,
-}
-
-impl Stack {
-    fn new() -> Self {
-        Self {
-            inline: [(0, 0, 0.0); INLINE_STACK],
-            len: 0,
-            spill: Vec::new(),
-        }
-    }
-
-    #[inline(always)]
-    fn push(&mut self, entry: Entry) {
-        if self.len < INLINE_STACK {
-            self.inline[self.len] = entry;
-            self.len += 1;
-        } else {
-            self.spill.push(entry);
-        }
-    }
-
-    #[inline(always)]
-    fn pop(&mut self) -> Option<Entry> {
-        if let Some(top) = self.spill.pop() {
-            return Some(top);
-        }
-        if self.len == 0 {
-            return None;
-        }
-        self.len -= 1;
-        Some(self.inline[self.len])
-    }
-
-    fn clear(&mut self) {
-        self.len = 0;
-        self.spill.clear();
-    }
-}
-
 /// A reusable traversal stack for [`WideBvh`] queries (one per packet of
 /// queries saves re-initialising it per ray).
-pub struct WideStack(Stack);
+pub struct WideStack(InlineStack<Entry>);
 
 impl WideStack {
     /// An empty stack.
     pub fn new() -> Self {
-        Self(Stack::new())
+        Self(InlineStack::new((0, 0, 0.0)))
     }
 }
 
@@ -507,7 +460,7 @@ impl WideBvh {
         node: &WideNode,
         ray: &SplatRay,
         t_max: f32,
-        stack: &mut Stack,
+        stack: &mut InlineStack<Entry>,
     ) -> Option<Entry> {
         let (entry, hits) = ray.children(node, t_max);
         let child = |k: usize, entry: f32| (node.index[k], node.blocks[k], entry);
