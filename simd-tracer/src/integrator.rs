@@ -25,14 +25,15 @@
 //! (Mitsuba's default 5) with survival probability
 //! `min(0.95, mean spectral throughput)`.
 
-use crate::light::{emits_towards, light_pdf_solid_angle};
-use crate::material::{Bsdf, LaneSpectrum, Material, ShadingPoint};
+use crate::material::{Bsdf, BsdfEvalPacket, BsdfSamplePacket, LaneSpectrum, ShadingPoint};
+use crate::packet::PacketHit;
 use crate::packet::{LANES, LaneMask, RayPacket};
 use crate::rng::RngPacket;
 use crate::scene::{Scene, SpectrumId};
 use crate::simd::Vec3x8;
+use crate::surface::SurfacePacket;
 use crate::transport::Transport;
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use wide::f32x8;
 
 /// Depth and roulette settings.
@@ -151,11 +152,6 @@ impl<S: Copy> EmissionSums<S> {
     }
 }
 
-fn power_heuristic(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
-}
-
 /// Rays cast, by kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct RayCounts {
@@ -193,6 +189,101 @@ fn power_heuristic_x8(a: f32x8, b: f32x8) -> f32x8 {
     let (a2, b2) = (a * a, b * b);
     let sum = a2 + b2;
     sum.simd_gt(f32x8::ZERO).select(a2 / sum, f32x8::ZERO)
+}
+
+/// How a packet's BSDFs are evaluated and sampled.
+enum Shading<'a> {
+    /// Every active lane is Lambert with a spectrum albedo: 8-wide, with
+    /// no per-lane material call and no texture coordinates.
+    Lambert([LaneSpectrum; LANES]),
+    /// Lane by lane through the materials (8-wide where all are Lambert).
+    General {
+        bsdfs: [Option<&'a Bsdf>; LANES],
+        points: [ShadingPoint; LANES],
+    },
+}
+
+impl<'a> Shading<'a> {
+    /// The per-lane materials and shading points of the hits in `active`
+    /// (`front`: lanes that hit the front face).
+    fn general<T: Transport>(
+        scene: &'a Scene,
+        transport: &T,
+        wavelengths: &T::Wavelengths,
+        hit: &PacketHit,
+        active: LaneMask,
+        normal: Vec3x8,
+        front: f32x8,
+    ) -> Self {
+        let bsdfs: [Option<&Bsdf>; LANES] = core::array::from_fn(|lane| {
+            if active.contains(lane) {
+                scene
+                    .triangle_material
+                    .get(hit.triangle[lane] as usize)
+                    .and_then(|&m| scene.materials.get(m as usize))
+                    .map(|m| &m.bsdf)
+            } else {
+                None
+            }
+        });
+        let (normal_lanes, front) = (normal.to_lanes(), front.to_bitmask());
+        let (hit_u, hit_v) = (hit.u.to_array(), hit.v.to_array());
+        let points = core::array::from_fn(|lane| {
+            let uv = scene
+                .uvs
+                .get(hit.triangle[lane] as usize)
+                .map_or(Vec2::ZERO, |[a, b, c]| {
+                    *a * (1.0 - hit_u[lane] - hit_v[lane]) + *b * hit_u[lane] + *c * hit_v[lane]
+                });
+            ShadingPoint {
+                n: normal_lanes[lane],
+                front: front & (1 << lane) != 0,
+                uv,
+                hero_nm: transport.hero_wavelength(wavelengths, lane),
+            }
+        });
+        Self::General { bsdfs, points }
+    }
+
+    /// [`Bsdf::eval_packet`] for the lanes in `valid`.
+    fn eval(
+        &self,
+        scene: &Scene,
+        valid: LaneMask,
+        n: Vec3x8,
+        wo: Vec3x8,
+        wi: Vec3x8,
+    ) -> BsdfEvalPacket {
+        match self {
+            Self::Lambert(albedo) => Bsdf::eval_lambert_packet(albedo, n, wi),
+            Self::General { bsdfs, points } => {
+                Bsdf::eval_packet(scene, bsdfs, points, valid, n, wo, wi)
+            }
+        }
+    }
+
+    /// [`Bsdf::sample_packet`] for the lanes in `active`.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the shading twin of `Bsdf::sample_packet`"
+    )]
+    fn sample(
+        &self,
+        scene: &Scene,
+        active: LaneMask,
+        n: Vec3x8,
+        wo: Vec3x8,
+        u_lobe: &[f32; LANES],
+        u: f32x8,
+        v: f32x8,
+    ) -> BsdfSamplePacket {
+        match self {
+            Self::Lambert(albedo) => Bsdf::sample_lambert_packet(albedo, active, n, u, v),
+            Self::General { bsdfs, points } => {
+                Bsdf::sample_packet(scene, bsdfs, points, active, n, wo, u_lobe, u, v)
+            }
+        }
+    }
 }
 
 /// Traces one packet and returns the radiance each lane carries back.
@@ -242,94 +333,44 @@ pub fn trace<T: Transport>(
             break;
         }
 
-        // Shading frame, 8-wide.
+        // Shading frame, 8-wide, from the hit triangles' records.
+        let surface = SurfacePacket::gather(&scene.surfaces, &hit.triangle, active);
         let direction = Vec3x8::from_array(rays.direction);
         let direction_length = direction.length();
         let wo = -direction * (f32x8::ONE / direction_length);
         let position = direction.mul_add(hit.t, Vec3x8::from_array(rays.origin));
-        let n_geometric = Vec3x8::from_fn(|lane| {
-            scene
-                .normals
-                .get(hit.triangle[lane] as usize)
-                .copied()
-                .unwrap_or(Vec3::Z)
-        });
-        let cos_o = n_geometric.dot(wo);
-        let normal = Vec3x8::select(cos_o.simd_ge(f32x8::ZERO), n_geometric, -n_geometric);
-        let materials: [Option<&Material>; LANES] = core::array::from_fn(|lane| {
-            if active.contains(lane) {
-                scene
-                    .triangle_material
-                    .get(hit.triangle[lane] as usize)
-                    .and_then(|&m| scene.materials.get(m as usize))
-            } else {
-                None
-            }
-        });
+        let cos_o = surface.normal.dot(wo);
+        let front = cos_o.simd_ge(f32x8::ZERO);
+        let normal = Vec3x8::select(front, surface.normal, -surface.normal);
 
-        // Emission at the hit points, MIS-weighted against NEE.
-        let mut emission = [None; LANES];
-        let mut emission_weight = [0.0f32; LANES];
-        let (cos_o_lanes, t, length, previous) = (
-            cos_o.to_array(),
-            hit.t.to_array(),
-            direction_length.to_array(),
-            previous_pdf.to_array(),
-        );
-        for lane in active.iter() {
-            let Some(material) = materials[lane] else {
-                continue;
-            };
-            let Some(e) = material.emission else {
-                continue;
-            };
-            if !emits_towards(material.two_sided, cos_o_lanes[lane]) {
-                continue;
-            }
-            let triangle = hit.triangle[lane];
-            emission[lane] = Some(e);
-            emission_weight[lane] = if previous[lane] > 0.0 {
-                let distance = t[lane] * length[lane];
-                let p_light = light_pdf_solid_angle(
-                    scene.lights.pmf_of_triangle(triangle),
-                    scene.area(triangle as usize),
-                    distance * distance,
-                    cos_o_lanes[lane],
-                );
-                power_heuristic(previous[lane], p_light)
-            } else {
-                1.0
-            };
+        // Emission at the hit points, MIS-weighted against NEE (weight 1
+        // after a camera ray or a delta lobe: no MIS).
+        let emits = surface.emits_towards(cos_o).and(active);
+        if !emits.is_empty() {
+            let distance = hit.t * direction_length;
+            let p_light = surface.light_pdf(distance * distance, cos_o);
+            let weight = previous_pdf
+                .simd_gt(f32x8::ZERO)
+                .select(power_heuristic_x8(previous_pdf, p_light), f32x8::ONE);
+            let emission =
+                core::array::from_fn(|lane| emits.contains(lane).then_some(surface.emission[lane]));
+            emitted.add(
+                transport,
+                scene,
+                wavelengths,
+                &throughput,
+                &emission,
+                &emits.to_simd().select(weight, f32x8::ZERO).to_array(),
+            );
         }
-        emitted.add(
-            transport,
-            scene,
-            wavelengths,
-            &throughput,
-            &emission,
-            &emission_weight,
-        );
         if depth >= settings.max_depth {
             break;
         }
-        let bsdfs: [Option<&Bsdf>; LANES] = materials.map(|m| m.map(|m| &m.bsdf));
         let origin = offset_x8(position, normal);
-        let (normal_lanes, front) = (normal.to_lanes(), cos_o.simd_ge(f32x8::ZERO).to_bitmask());
-        let (hit_u, hit_v) = (hit.u.to_array(), hit.v.to_array());
-        let points: [ShadingPoint; LANES] = core::array::from_fn(|lane| {
-            let uv = scene
-                .uvs
-                .get(hit.triangle[lane] as usize)
-                .map_or(Vec2::ZERO, |[a, b, c]| {
-                    *a * (1.0 - hit_u[lane] - hit_v[lane]) + *b * hit_u[lane] + *c * hit_v[lane]
-                });
-            ShadingPoint {
-                n: normal_lanes[lane],
-                front: front & (1 << lane) != 0,
-                uv,
-                hero_nm: transport.hero_wavelength(wavelengths, lane),
-            }
-        });
+        let shading = match surface.lambert(active) {
+            Some(albedo) => Shading::Lambert(albedo),
+            None => Shading::general(scene, transport, wavelengths, &hit, active, normal, front),
+        };
 
         // Next-event estimation: one light sample per lane, one shadow packet.
         let u_light = uniforms(rngs, active).to_array();
@@ -342,22 +383,13 @@ pub fn trace<T: Transport>(
         let distance_sq = to_light.length_squared();
         let wi = to_light * (f32x8::ONE / distance_sq.sqrt());
         let cos_light = -light.normal.dot(wi);
-        let eval = Bsdf::eval_packet(scene, &bsdfs, &points, light.valid, normal, wo, wi);
+        let eval = shading.eval(scene, light.valid, normal, wo, wi);
         let p_light = light.pmf * distance_sq / (light.area * cos_light.abs());
-        let mut nee_light = [None; LANES];
-        let mut emits = LaneMask::NONE;
-        for lane in light.valid.iter() {
-            let light_material = scene
-                .triangle_material
-                .get(light.triangle[lane] as usize)
-                .and_then(|&m| scene.materials.get(m as usize));
-            if let Some(m) = light_material {
-                if emits_towards(m.two_sided, cos_light.to_array()[lane]) {
-                    nee_light[lane] = m.emission;
-                    emits = emits.with(lane);
-                }
-            }
-        }
+        let light_surface = SurfacePacket::gather(&scene.surfaces, &light.triangle, light.valid);
+        let emits = light_surface.emits_towards(cos_light).and(light.valid);
+        let nee_light: [Option<SpectrumId>; LANES] = core::array::from_fn(|lane| {
+            emits.contains(lane).then_some(light_surface.emission[lane])
+        });
         let usable = eval.value.simd_gt(f32x8::ZERO)
             & p_light.simd_gt(f32x8::ZERO)
             & distance_sq.simd_gt(f32x8::ZERO);
@@ -385,7 +417,7 @@ pub fn trace<T: Transport>(
         // BSDF sampling for the continuation.
         let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
         let u_lobe = uniforms(rngs, active).to_array();
-        let sample = Bsdf::sample_packet(scene, &bsdfs, &points, active, normal, wo, &u_lobe, u, v);
+        let sample = shading.sample(scene, active, normal, wo, &u_lobe, u, v);
         active = active
             .and(sample.valid)
             .and(LaneMask::from_simd(sample.weight.simd_gt(f32x8::ZERO)));
@@ -404,9 +436,10 @@ pub fn trace<T: Transport>(
         if nee_weight.iter().any(|&w| w > 0.0) {
             // Angle-independent BSDFs (Lambert) have the same factor for the
             // NEE direction: reuse the product.
-            let shared = (0..LANES).all(|lane| {
-                nee_weight[lane] == 0.0 || eval.spectrum[lane] == sample.spectrum[lane]
-            });
+            let shared = matches!(shading, Shading::Lambert(_))
+                || (0..LANES).all(|lane| {
+                    nee_weight[lane] == 0.0 || eval.spectrum[lane] == sample.spectrum[lane]
+                });
             let through_bsdf = if shared {
                 throughput_bsdf
             } else {

@@ -29,6 +29,7 @@ pub mod scenes;
 pub mod shapes;
 pub mod simd;
 pub mod spectra;
+pub mod surface;
 pub mod texture;
 pub mod transport;
 

@@ -931,6 +931,44 @@ pub fn sample_cosine_x8(n: Vec3x8, u: f32x8, v: f32x8) -> Vec3x8 {
 }
 
 impl Bsdf {
+    /// Cosine sampling for a packet whose lanes are all Lambertian with
+    /// albedos `albedo` (8-wide; the weight is 1 and the albedo rides in
+    /// the spectral part).
+    pub fn sample_lambert_packet(
+        albedo: &[LaneSpectrum; LANES],
+        active: LaneMask,
+        n: Vec3x8,
+        u: f32x8,
+        v: f32x8,
+    ) -> BsdfSamplePacket {
+        let wi = sample_cosine_x8(n, u, v);
+        let cos = wi.dot(n);
+        let valid = LaneMask::from_simd(cos.simd_gt(f32x8::ZERO)).and(active);
+        BsdfSamplePacket {
+            wi,
+            pdf: cos * f32x8::splat(FRAC_1_PI),
+            weight: valid.to_simd().select(f32x8::ONE, f32x8::ZERO),
+            spectrum: *albedo,
+            valid,
+            terminate_secondary: LaneMask::NONE,
+        }
+    }
+
+    /// `f cos θi` and the pdf for a packet whose lanes are all Lambertian
+    /// with albedos `albedo` (8-wide).
+    pub fn eval_lambert_packet(
+        albedo: &[LaneSpectrum; LANES],
+        n: Vec3x8,
+        wi: Vec3x8,
+    ) -> BsdfEvalPacket {
+        let value = wi.dot(n).max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI);
+        BsdfEvalPacket {
+            value,
+            pdf: value,
+            spectrum: *albedo,
+        }
+    }
+
     /// Samples every active lane: 8-wide when all are Lambertian, else lane
     /// by lane through [`Bsdf::sample`]. `bsdfs[lane]` is `None` only for
     /// inactive lanes.
@@ -947,17 +985,7 @@ impl Bsdf {
         v: f32x8,
     ) -> BsdfSamplePacket {
         if let Some(spectrum) = all_lambert(bsdfs, points, active) {
-            let wi = sample_cosine_x8(n, u, v);
-            let cos = wi.dot(n);
-            let valid = LaneMask::from_simd(cos.simd_gt(f32x8::ZERO)).and(active);
-            return BsdfSamplePacket {
-                wi,
-                pdf: cos * f32x8::splat(FRAC_1_PI),
-                weight: valid.to_simd().select(f32x8::ONE, f32x8::ZERO),
-                spectrum,
-                valid,
-                terminate_secondary: LaneMask::NONE,
-            };
+            return Self::sample_lambert_packet(&spectrum, active, n, u, v);
         }
         let (wol, ul, vl) = (wo.to_lanes(), u.to_array(), v.to_array());
         let mut wi = [Vec3::Z; LANES];
@@ -1010,12 +1038,7 @@ impl Bsdf {
         wi: Vec3x8,
     ) -> BsdfEvalPacket {
         if let Some(spectrum) = all_lambert(bsdfs, points, active) {
-            let value = wi.dot(n).max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI);
-            return BsdfEvalPacket {
-                value,
-                pdf: value,
-                spectrum,
-            };
+            return Self::eval_lambert_packet(&spectrum, n, wi);
         }
         let (wol, wil) = (wo.to_lanes(), wi.to_lanes());
         let mut value = [0.0f32; LANES];

@@ -12,6 +12,7 @@ use crate::camera::Camera;
 use crate::light::LightSet;
 use crate::material::Material;
 use crate::spectra::{SceneSpectrum, SpectrumSource};
+use crate::surface::Surface;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use spectral_core::{SpectralError, SpectralRange};
@@ -101,6 +102,8 @@ pub struct Scene {
     pub bvh: Bvh,
     /// Emissive triangles and their sampling distribution.
     pub lights: LightSet,
+    /// One shading record per triangle (derived from the fields above).
+    pub surfaces: Vec<Surface>,
     skipped_triangles: usize,
 }
 
@@ -108,6 +111,19 @@ impl Scene {
     /// Triangles dropped at build time as degenerate.
     pub fn skipped_triangles(&self) -> usize {
         self.skipped_triangles
+    }
+
+    /// Checks [`Scene::surfaces`] against the triangles, materials and
+    /// lights they were derived from ([`crate::surface::validate`]).
+    pub fn validate_surfaces(&self) -> Result<(), String> {
+        crate::surface::validate(
+            &self.surfaces,
+            &self.normals,
+            &self.areas,
+            &self.triangle_material,
+            &self.materials,
+            &self.lights,
+        )
     }
 
     /// Area of triangle `index` (0 for an unknown index).
@@ -129,7 +145,8 @@ impl Scene {
             + vec_bytes(&self.normals)
             + vec_bytes(&self.areas)
             + vec_bytes(&self.triangle_material)
-            + vec_bytes(&self.uvs);
+            + vec_bytes(&self.uvs)
+            + vec_bytes(&self.surfaces);
         let kept = self.bvh.input_triangles() - self.bvh.skipped_triangles();
         let bvh = self.bvh.node_count() * BVH_NODE_BYTES
             + kept * BVH_TRIANGLE_BYTES
@@ -352,12 +369,12 @@ impl SceneBuilder {
         {
             return Err(SceneError::Reference("environment".into(), "spectrum", env));
         }
-        let normals = self
+        let normals: Vec<Vec3> = self
             .triangles
             .iter()
             .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize())
             .collect();
-        let areas = self
+        let areas: Vec<f32> = self
             .triangles
             .iter()
             .map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length())
@@ -370,6 +387,15 @@ impl SceneBuilder {
             &self.materials,
             &self.spectra,
         );
+        // Material ids were checked above, so every triangle has a record.
+        let surfaces = (0u32..)
+            .zip(normals.iter().zip(&areas))
+            .zip(&self.triangle_material)
+            .filter_map(|((index, (&normal, &area)), &id)| {
+                let material = self.materials.get(id as usize)?;
+                Some(Surface::new(index, normal, area, id, material, &lights))
+            })
+            .collect();
         Ok(Scene {
             range: self.range,
             spectra: self.spectra,
@@ -385,6 +411,7 @@ impl SceneBuilder {
             environment: self.environment,
             bvh,
             lights,
+            surfaces,
             skipped_triangles: self.skipped,
         })
     }
