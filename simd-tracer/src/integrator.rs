@@ -375,20 +375,17 @@ pub fn trace<T: Transport>(
         // Next-event estimation: one light sample per lane, one shadow packet.
         let u_light = uniforms(rngs, active).to_array();
         let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
-        let light =
-            scene
-                .lights
-                .sample_packet(&scene.triangles, &scene.normals, active, &u_light, u, v);
+        let light = scene.lights.sample_packet(active, &u_light, u, v);
         let to_light = light.point - origin;
         let distance_sq = to_light.length_squared();
         let wi = to_light * (f32x8::ONE / distance_sq.sqrt());
-        let cos_light = -light.normal.dot(wi);
+        let cos_light = -light.surface.normal.dot(wi);
         let eval = shading.eval(scene, light.valid, normal, wo, wi);
-        let p_light = light.pmf * distance_sq / (light.area * cos_light.abs());
-        let light_surface = SurfacePacket::gather(&scene.surfaces, &light.triangle, light.valid);
-        let emits = light_surface.emits_towards(cos_light).and(light.valid);
+        let p_light =
+            light.surface.light_pmf * distance_sq / (light.surface.area * cos_light.abs());
+        let emits = light.surface.emits_towards(cos_light).and(light.valid);
         let nee_light: [Option<SpectrumId>; LANES] = core::array::from_fn(|lane| {
-            emits.contains(lane).then_some(light_surface.emission[lane])
+            emits.contains(lane).then_some(light.surface.emission[lane])
         });
         let usable = eval.value.simd_gt(f32x8::ZERO)
             & p_light.simd_gt(f32x8::ZERO)

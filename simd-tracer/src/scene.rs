@@ -9,7 +9,7 @@
 use crate::angular::{AngularFunction, AngularSpectrum};
 use crate::bvh::Bvh;
 use crate::camera::Camera;
-use crate::light::LightSet;
+use crate::light::{Light, LightSet};
 use crate::material::Material;
 use crate::spectra::{SceneSpectrum, SpectrumSource};
 use crate::surface::Surface;
@@ -188,10 +188,9 @@ pub const BVH_NODE_BYTES: usize = size_of::<obvhs::bvh2::node::Bvh2Node>() + siz
 /// ([`crate::bvh::BYTES_PER_TRIANGLE`], derived from the BVH's own types).
 pub const BVH_TRIANGLE_BYTES: usize = crate::bvh::BYTES_PER_TRIANGLE;
 
-/// Bytes the light set keeps per emissive triangle: its triangle index,
-/// area, CDF and PMF entries (its per-triangle light index is counted per
-/// triangle).
-pub const LIGHT_BYTES: usize = 4 * size_of::<u32>();
+/// Bytes the light set keeps per emissive triangle: its [`Light`] record
+/// and CDF entry (its per-triangle light index is counted per triangle).
+pub const LIGHT_BYTES: usize = size_of::<Light>() + size_of::<f32>();
 
 /// Incremental construction of a [`Scene`].
 #[derive(Debug)]
@@ -381,21 +380,17 @@ impl SceneBuilder {
             .collect();
         let bvh = Bvh::build(&self.triangles);
         bvh.validate().map_err(SceneError::Bvh)?;
-        let lights = LightSet::new(
-            &self.triangles,
-            &self.triangle_material,
-            &self.materials,
-            &self.spectra,
-        );
         // Material ids were checked above, so every triangle has a record.
-        let surfaces = (0u32..)
-            .zip(normals.iter().zip(&areas))
+        let mut surfaces: Vec<Surface> = normals
+            .iter()
+            .zip(&areas)
             .zip(&self.triangle_material)
-            .filter_map(|((index, (&normal, &area)), &id)| {
+            .filter_map(|((&normal, &area), &id)| {
                 let material = self.materials.get(id as usize)?;
-                Some(Surface::new(index, normal, area, id, material, &lights))
+                Some(Surface::new(normal, area, id, material))
             })
             .collect();
+        let lights = LightSet::new(&self.triangles, &mut surfaces, &self.spectra);
         Ok(Scene {
             range: self.range,
             spectra: self.spectra,

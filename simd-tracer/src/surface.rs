@@ -58,21 +58,15 @@ impl Surface {
         lambert_albedo: NO_ID,
     };
 
-    /// The record of triangle `index`.
-    pub fn new(
-        index: u32,
-        normal: Vec3,
-        area: f32,
-        material_id: MaterialId,
-        material: &Material,
-        lights: &LightSet,
-    ) -> Self {
+    /// The record of a triangle with this normal, area and material; its
+    /// light-selection probability is 0 until [`LightSet::new`] fills it in.
+    pub fn new(normal: Vec3, area: f32, material_id: MaterialId, material: &Material) -> Self {
         Self {
             normal,
             material: material_id,
             emission: material.emission.unwrap_or(NO_ID),
             two_sided: material.two_sided,
-            light_pmf: lights.pmf_of_triangle(index),
+            light_pmf: 0.0,
             area,
             lambert_albedo: match material.bsdf {
                 Bsdf::Lambert {
@@ -111,6 +105,11 @@ impl SurfacePacket {
                 records[lane] = *surface;
             }
         }
+        Self::from_records(&records)
+    }
+
+    /// Eight records in structure-of-arrays form.
+    pub fn from_records(records: &[Surface; LANES]) -> Self {
         Self {
             normal: Vec3x8::from_fn(|lane| records[lane].normal),
             emission: records.map(|r| r.emission),
@@ -161,7 +160,8 @@ impl SurfacePacket {
 }
 
 /// Checks a record table against its sources: one record per triangle,
-/// each equal to [`Surface::new`] of its triangle.
+/// each equal to [`Surface::new`] of its triangle with the light set's
+/// selection probability.
 pub fn validate(
     surfaces: &[Surface],
     normals: &[Vec3],
@@ -183,9 +183,12 @@ pub fn validate(
             areas.get(index),
             triangle_material.get(index),
         ) {
-            (Some(&normal), Some(&area), Some(&id)) => materials
-                .get(id as usize)
-                .map(|m| Surface::new(index as u32, normal, area, id, m, lights)),
+            (Some(&normal), Some(&area), Some(&id)) => {
+                materials.get(id as usize).map(|m| Surface {
+                    light_pmf: lights.pmf_of_triangle(index as u32),
+                    ..Surface::new(normal, area, id, m)
+                })
+            }
             _ => None,
         };
         if expected.as_ref() != Some(surface) {
