@@ -9,9 +9,8 @@
 //! geometry identical across spectral transports.
 //!
 //! [`RngPacket`] is the 8-lane twin: the streams of a packet's ray lanes in
-//! structure-of-arrays form, advanced together (the loop over lanes
-//! vectorises; AVX2 has no 64-bit multiply, LLVM composes it from 32-bit
-//! ones), each lane bit-identical to its scalar [`Rng`].
+//! structure-of-arrays form, advanced together in 32-bit halves (AVX2 has
+//! no 64-bit multiply), each lane bit-identical to its scalar [`Rng`].
 
 /// Which decisions a stream drives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -23,7 +22,8 @@ pub enum Purpose {
 }
 
 use crate::packet::LANES;
-use wide::f32x8;
+use wide::bytemuck::cast;
+use wide::{f32x8, i32x8, u32x8};
 
 const PCG_MULTIPLIER: u64 = 6_364_136_223_846_793_005;
 
@@ -76,45 +76,80 @@ impl Rng {
     }
 }
 
-/// The streams of the 8 ray lanes of a packet (see the module docs).
+/// The streams of the 8 ray lanes of a packet (see the module docs): each
+/// 64-bit state and increment as its low and high 32-bit halves, one
+/// `u32x8` per half, so the LCG step and the output permutation are 8-wide
+/// 32-bit integer operations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RngPacket {
-    state: [u64; LANES],
-    increment: [u64; LANES],
+    state_lo: u32x8,
+    state_hi: u32x8,
+    increment_lo: u32x8,
+    increment_hi: u32x8,
+}
+
+/// Low and high 32-bit halves of 8 lanes of `u64`.
+fn split(values: [u64; LANES]) -> (u32x8, u32x8) {
+    (
+        u32x8::new(values.map(|v| v as u32)),
+        u32x8::new(values.map(|v| (v >> 32) as u32)),
+    )
 }
 
 impl RngPacket {
     /// Packs one stream per ray lane.
     pub fn new(lanes: [Rng; LANES]) -> Self {
+        let (state_lo, state_hi) = split(lanes.map(|r| r.state));
+        let (increment_lo, increment_hi) = split(lanes.map(|r| r.increment));
         Self {
-            state: lanes.map(|r| r.state),
-            increment: lanes.map(|r| r.increment),
+            state_lo,
+            state_hi,
+            increment_lo,
+            increment_hi,
         }
     }
 
     /// The stream of ray lane `lane` in its current state.
     pub fn lane(&self, lane: usize) -> Rng {
+        let join = |lo: u32x8, hi: u32x8| {
+            u64::from(lo.to_array()[lane]) | (u64::from(hi.to_array()[lane]) << 32)
+        };
         Rng {
-            state: self.state[lane],
-            increment: self.increment[lane],
+            state: join(self.state_lo, self.state_hi),
+            increment: join(self.increment_lo, self.increment_hi),
         }
     }
 
     /// The next uniform `f32` in `[0, 1)` of every lane ([`Rng::next_f32`]
     /// lane by lane).
+    ///
+    /// With `s = 2³²·s_hi + s_lo` and the multiplier `M = 2³²·M_hi + M_lo`,
+    /// `s·M mod 2⁶⁴ = s_lo·M_lo + 2³²·(s_lo·M_hi + s_hi·M_lo mod 2³²)`; the
+    /// increment's low half carries into the high half where the low sum
+    /// wraps. The output `rotr32((s ^ s >> 18) >> 27, s >> 59)` takes bits
+    /// 27…58 of `s ^ (s >> 18)`, spread over both halves.
     #[inline]
     pub fn next_f32x8(&mut self) -> f32x8 {
-        let mut out = [0.0f32; LANES];
-        for ((value, state), increment) in out
-            .iter_mut()
-            .zip(self.state.iter_mut())
-            .zip(&self.increment)
-        {
-            let old = *state;
-            *state = old.wrapping_mul(PCG_MULTIPLIER).wrapping_add(*increment);
-            *value = to_unit_f32(pcg_output(old));
-        }
-        f32x8::new(out)
+        let (lo, hi) = (self.state_lo, self.state_hi);
+        let multiplier_lo = u32x8::splat(PCG_MULTIPLIER as u32);
+        let multiplier_hi = u32x8::splat((PCG_MULTIPLIER >> 32_u32) as u32);
+        let (product_lo, carry_hi) = lo.mul_keep_low_high(multiplier_lo);
+        let product_hi = carry_hi + lo * multiplier_hi + hi * multiplier_lo;
+        let next_lo = product_lo + self.increment_lo;
+        // All ones (−1) where the low sum wrapped: subtracting adds the carry.
+        let wrapped = next_lo.simd_lt(product_lo);
+        self.state_lo = next_lo;
+        self.state_hi = product_hi + self.increment_hi - wrapped;
+
+        let mixed_lo = lo ^ ((lo >> 18_u32) | (hi << 14_u32));
+        let mixed_hi = hi ^ (hi >> 18_u32);
+        let xorshifted = (mixed_lo >> 27_u32) | (mixed_hi << 5_u32);
+        let rotation = hi >> 27_u32;
+        let bits = xorshifted.unbounded_shr(rotation)
+            | xorshifted.unbounded_shl(u32x8::splat(32) - rotation);
+        // 24 bits: exact as `i32`, and as `f32`.
+        let top: i32x8 = cast(bits >> 8_u32);
+        f32x8::from_i32x8(top) * f32x8::splat(UNIT_F32_SCALE)
     }
 }
 
@@ -126,10 +161,13 @@ fn pcg_output(old: u64) -> u32 {
     xorshifted.rotate_right(rotation)
 }
 
+/// `2⁻²⁴`: the spacing of the uniform `f32`s made of 24 random bits.
+const UNIT_F32_SCALE: f32 = 1.0 / (1u32 << 24) as f32;
+
 /// The top 24 bits as a uniform `f32` in `[0, 1)`.
 #[inline(always)]
 fn to_unit_f32(bits: u32) -> f32 {
-    (bits >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    (bits >> 8) as f32 * UNIT_F32_SCALE
 }
 
 #[cfg(test)]
