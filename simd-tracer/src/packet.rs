@@ -6,7 +6,8 @@
 //! lanes are the same rays.
 
 use glam::Vec3;
-use wide::f32x8;
+use wide::bytemuck::cast;
+use wide::{f32x8, u32x8};
 
 /// Rays per packet.
 pub const LANES: usize = 8;
@@ -80,16 +81,13 @@ impl LaneMask {
         Self(mask.to_bitmask() as u8)
     }
 
-    /// As an `f32x8` mask (all bits set in selected lanes).
+    /// As an `f32x8` mask (all bits set in selected lanes): the mask
+    /// broadcast to every lane, lane `i` keeping bit `i`, compared with it.
+    #[inline]
     pub fn to_simd(self) -> f32x8 {
-        let bits: [f32; LANES] = core::array::from_fn(|lane| {
-            if self.contains(lane) {
-                f32::from_bits(u32::MAX)
-            } else {
-                0.0
-            }
-        });
-        f32x8::new(bits)
+        const LANE_BITS: u32x8 = u32x8::new([1, 2, 4, 8, 16, 32, 64, 128]);
+        let bits = u32x8::splat(u32::from(self.0)) & LANE_BITS;
+        cast(bits.simd_eq(LANE_BITS))
     }
 }
 
@@ -184,6 +182,13 @@ mod tests {
         assert_eq!(LaneMask::first(8), LaneMask::ALL);
         assert_eq!(m.without(1).with(7), LaneMask(0b1000_0101));
         assert_eq!(LaneMask::from_simd(m.to_simd()), m);
+        for bits in 0..=u8::MAX {
+            let mask = LaneMask(bits).to_simd().to_array();
+            for (lane, value) in mask.iter().enumerate() {
+                let expected = if bits & (1 << lane) != 0 { u32::MAX } else { 0 };
+                assert_eq!(value.to_bits(), expected);
+            }
+        }
         assert_eq!(m.count(), 3);
         assert!(LaneMask::NONE.is_empty());
         assert_eq!(m.and_not(LaneMask(1)), LaneMask(0b110));

@@ -121,8 +121,10 @@ pub trait Transport: Sync {
     }
 }
 
+/// Whether every value is finite (without early exit: the check is a
+/// branch-free pass over a few values).
 fn all_finite(values: &[f32]) -> bool {
-    values.iter().all(|v| v.is_finite())
+    values.iter().fold(true, |finite, v| finite & v.is_finite())
 }
 
 // ---------------------------------------------------------------- Fourier
@@ -315,9 +317,19 @@ impl<const N: usize> Transport for FourierTransport<N> {
     }
 
     fn samples(&self, radiance: &Self::Spectra, _wavelengths: &()) -> [Self::Sample; LANES] {
-        let coeffs: [[f32; N]; LANES] = core::array::from_fn(|lane| {
-            core::array::from_fn(|j| radiance.coeffs[j].to_array()[lane])
-        });
+        // Coefficients-by-lanes to lanes-by-coefficients, one 8 × 8
+        // transpose per chunk of 8 coefficients.
+        let mut coeffs = [[0.0f32; N]; LANES];
+        for (chunk, planes) in radiance.coeffs.chunks(LANES).enumerate() {
+            let block: [f32x8; LANES] =
+                core::array::from_fn(|j| planes.get(j).copied().unwrap_or(f32x8::ZERO));
+            for (lane, row) in f32x8::transpose(block).iter().enumerate() {
+                let row = row.to_array();
+                for (c, &value) in coeffs[lane][chunk * LANES..].iter_mut().zip(&row) {
+                    *c = value;
+                }
+            }
+        }
         let xyz: [[f32; 3]; LANES] = match (self.buffer, self.route) {
             (Buffer::Spectral, _) => [[0.0; 3]; LANES],
             (Buffer::Xyz, XyzRoute::Mese) => core::array::from_fn(|lane| {
@@ -816,5 +828,43 @@ mod tests {
         check::<12>(&scene, &lanes);
         check::<16>(&scene, &lanes);
         check::<32>(&scene, &lanes);
+    }
+
+    /// The spectral-buffer samples hold each lane's coefficients, for `N`
+    /// below, at and above one chunk of 8.
+    fn check_samples<const N: usize>() {
+        let Ok(transport) =
+            FourierTransport::<N>::new(SpectralRange::VISIBLE, Buffer::Spectral, XyzRoute::Series)
+        else {
+            panic!("transport");
+        };
+        let radiance = FourierSpectrum::<f32x8, N>::from_coeffs(core::array::from_fn(|j| {
+            f32x8::new(core::array::from_fn(|lane| (100 * j + lane) as f32 - 0.5))
+        }));
+        let samples = transport.samples(&radiance, &());
+        for (lane, sample) in samples.iter().enumerate() {
+            for (j, &c) in sample.coeffs.iter().enumerate() {
+                assert_eq!(
+                    c,
+                    radiance.coeffs[j].to_array()[lane],
+                    "N = {N}, lane {lane}, coefficient {j}"
+                );
+            }
+            assert!(FourierTransport::<N>::sample_is_finite(sample));
+        }
+        let mut broken = radiance;
+        broken.coeffs[N - 1] = f32x8::new([0.0, f32::NAN, 0.0, f32::INFINITY, 0.0, 0.0, 0.0, 0.0]);
+        let samples = transport.samples(&broken, &());
+        let finite = samples.map(|s| FourierTransport::<N>::sample_is_finite(&s));
+        assert_eq!(finite, [true, false, true, false, true, true, true, true]);
+    }
+
+    #[test]
+    fn fourier_samples_match_the_lanes() {
+        check_samples::<4>();
+        check_samples::<8>();
+        check_samples::<12>();
+        check_samples::<16>();
+        check_samples::<32>();
     }
 }
