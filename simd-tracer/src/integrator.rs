@@ -484,3 +484,48 @@ pub fn trace<T: Transport>(
     }
     emitted.finish(transport, scene, wavelengths)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use glam::Vec3;
+
+    /// The 8-wide MIS weight and ray offset equal their scalar formulas lane
+    /// by lane, bit for bit (zeros, both-zero and huge pdfs included).
+    #[test]
+    fn packet_helpers_match_scalar_oracles() {
+        let mut rng = Rng::new(5, 6);
+        for _ in 0..2000 {
+            let draw = |rng: &mut Rng| -> f32 {
+                match rng.next_u32() % 5 {
+                    0 => 0.0,
+                    1 => 1e30 * rng.next_f32(),
+                    _ => 10.0 * rng.next_f32(),
+                }
+            };
+            let a: [f32; LANES] = core::array::from_fn(|_| draw(&mut rng));
+            let b: [f32; LANES] = core::array::from_fn(|_| draw(&mut rng));
+            let weight = power_heuristic_x8(f32x8::new(a), f32x8::new(b)).to_array();
+            let p: [Vec3; LANES] = core::array::from_fn(|_| {
+                Vec3::new(draw(&mut rng), -draw(&mut rng), draw(&mut rng))
+            });
+            let n: [Vec3; LANES] = core::array::from_fn(|_| {
+                Vec3::new(rng.next_f32(), rng.next_f32(), 1.0).normalize()
+            });
+            let offset = offset_x8(Vec3x8::from_lanes(&p), Vec3x8::from_lanes(&n));
+            for lane in 0..LANES {
+                let (a2, b2) = (a[lane] * a[lane], b[lane] * b[lane]);
+                let expected = if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 };
+                assert_eq!(weight[lane].to_bits(), expected.to_bits());
+                let scale = p[lane].abs().max_element().max(1.0) * RAY_EPSILON;
+                let expected = Vec3::new(
+                    n[lane].x.mul_add(scale, p[lane].x),
+                    n[lane].y.mul_add(scale, p[lane].y),
+                    n[lane].z.mul_add(scale, p[lane].z),
+                );
+                assert_eq!(offset.lane(lane), expected);
+            }
+        }
+    }
+}
