@@ -1074,18 +1074,7 @@ mod tests {
     fn cosine_sampling_packet_matches_scalar_oracle() {
         let mut rng = Rng::new(21, 4);
         for round in 0..2000 {
-            let normals: [Vec3; LANES] = core::array::from_fn(|_| {
-                let v = Vec3::new(
-                    2.0 * rng.next_f32() - 1.0,
-                    2.0 * rng.next_f32() - 1.0,
-                    2.0 * rng.next_f32() - 1.0,
-                );
-                if v.length_squared() > 1e-6 {
-                    v.normalize()
-                } else {
-                    Vec3::Z
-                }
-            });
+            let normals: [Vec3; LANES] = core::array::from_fn(|_| random_unit(&mut rng));
             let mut u: [f32; LANES] = core::array::from_fn(|_| rng.next_f32());
             let v: [f32; LANES] = core::array::from_fn(|_| rng.next_f32());
             if round == 0 {
