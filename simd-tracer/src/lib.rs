@@ -7,7 +7,9 @@
 //!
 //! ```text
 //! Scene -> Bvh -> RayPacket (8 rays, f32x8) -> PacketHit
-//!   -> Material eval/sample per lane -> Transport (FourierSpectrum<f32x8, N> products)
+//!   -> Surface records (normal, emission, light pdf, albedo; 8-wide)
+//!   -> BSDF eval/sample (8-wide for Lambert packets, else per lane)
+//!   -> Transport (FourierSpectrum<f32x8, N> products)
 //!   -> NEE + MIS -> Film (coefficients or XYZ per pixel) -> XYZ image
 //! ```
 
