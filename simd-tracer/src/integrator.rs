@@ -16,7 +16,7 @@
 //! When the NEE direction's spectral factor differs from the sampled one's
 //! (angle-dependent BSDFs) NEE uses its own product. MIS uses the power
 //! heuristic with the solid-angle pdfs of both strategies. The emission
-//! products `· ⊛ Le` are deferred ([`EmissionSums`]): by bilinearity they
+//! products `· ⊛ Le` are deferred (`EmissionSums`): by bilinearity they
 //! are summed per emission spectrum and formed once per path.
 //!
 //! Depth counts path segments like Mitsuba's `max_depth`: 1 renders only

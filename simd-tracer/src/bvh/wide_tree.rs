@@ -201,7 +201,7 @@ impl SplatRay {
 /// A stack entry: child index, block count (0: inner node), entry distance.
 type Entry = (u32, u32, f32);
 
-/// A reusable traversal stack for [`WideBvh`] queries (one per packet of
+/// A reusable traversal stack for 8-wide tree queries (one per packet of
 /// queries saves re-initialising it per ray).
 pub struct WideStack(InlineStack<Entry>);
 
