@@ -88,8 +88,6 @@ pub struct Scene {
     pub triangles: Vec<[Vec3; 3]>,
     /// Unit geometric normal of each triangle (right-handed, CCW front).
     pub normals: Vec<Vec3>,
-    /// Area of each triangle.
-    pub areas: Vec<f32>,
     /// Material of each triangle.
     pub triangle_material: Vec<MaterialId>,
     /// Texture coordinates of each triangle's vertices (zero if none).
@@ -118,8 +116,8 @@ impl Scene {
     pub fn validate_surfaces(&self) -> Result<(), String> {
         crate::surface::validate(
             &self.surfaces,
+            &self.triangles,
             &self.normals,
-            &self.areas,
             &self.triangle_material,
             &self.materials,
             &self.lights,
@@ -128,7 +126,7 @@ impl Scene {
 
     /// Area of triangle `index` (0 for an unknown index).
     pub fn area(&self, index: usize) -> f32 {
-        self.areas.get(index).copied().unwrap_or(0.0)
+        self.surfaces.get(index).map_or(0.0, |s| s.area)
     }
 
     /// Bytes of memory the scene holds: geometry, BVH, light distribution,
@@ -143,7 +141,6 @@ impl Scene {
         }
         let geometry = vec_bytes(&self.triangles)
             + vec_bytes(&self.normals)
-            + vec_bytes(&self.areas)
             + vec_bytes(&self.triangle_material)
             + vec_bytes(&self.uvs)
             + vec_bytes(&self.surfaces);
@@ -179,6 +176,11 @@ impl Scene {
             .sum();
         size_of::<Self>() + geometry + bvh + lights + spectra + angular + textures + materials
     }
+}
+
+/// Area of a triangle, `|(b − a) × (c − a)| / 2`.
+pub fn triangle_area([a, b, c]: &[Vec3; 3]) -> f32 {
+    0.5 * (*b - *a).cross(*c - *a).length()
 }
 
 /// Bytes the BVH keeps per node: obvhs' `Bvh2Node` and its parent index.
@@ -373,21 +375,16 @@ impl SceneBuilder {
             .iter()
             .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize())
             .collect();
-        let areas: Vec<f32> = self
-            .triangles
-            .iter()
-            .map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length())
-            .collect();
         let bvh = Bvh::build(&self.triangles);
         bvh.validate().map_err(SceneError::Bvh)?;
         // Material ids were checked above, so every triangle has a record.
         let mut surfaces: Vec<Surface> = normals
             .iter()
-            .zip(&areas)
+            .zip(&self.triangles)
             .zip(&self.triangle_material)
-            .filter_map(|((&normal, &area), &id)| {
+            .filter_map(|((&normal, vertices), &id)| {
                 let material = self.materials.get(id as usize)?;
-                Some(Surface::new(normal, area, id, material))
+                Some(Surface::new(normal, triangle_area(vertices), id, material))
             })
             .collect();
         let lights = LightSet::new(&self.triangles, &mut surfaces, &self.spectra);
@@ -399,7 +396,6 @@ impl SceneBuilder {
             materials: self.materials,
             triangles: self.triangles,
             normals,
-            areas,
             triangle_material: self.triangle_material,
             uvs: self.uvs,
             camera,

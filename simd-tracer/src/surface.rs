@@ -17,7 +17,7 @@ use crate::light::LightSet;
 use crate::light::{emits_towards, light_pdf_solid_angle};
 use crate::material::{Albedo, Bsdf, LaneSpectrum, Material};
 use crate::packet::{LANES, LaneMask};
-use crate::scene::{MaterialId, SpectrumId};
+use crate::scene::{MaterialId, SpectrumId, triangle_area};
 use crate::simd::Vec3x8;
 use glam::Vec3;
 use wide::f32x8;
@@ -164,8 +164,8 @@ impl SurfacePacket {
 /// selection probability.
 pub fn validate(
     surfaces: &[Surface],
+    triangles: &[[Vec3; 3]],
     normals: &[Vec3],
-    areas: &[f32],
     triangle_material: &[MaterialId],
     materials: &[Material],
     lights: &LightSet,
@@ -180,13 +180,13 @@ pub fn validate(
     for (index, surface) in surfaces.iter().enumerate() {
         let expected = match (
             normals.get(index),
-            areas.get(index),
+            triangles.get(index),
             triangle_material.get(index),
         ) {
-            (Some(&normal), Some(&area), Some(&id)) => {
+            (Some(&normal), Some(vertices), Some(&id)) => {
                 materials.get(id as usize).map(|m| Surface {
                     light_pmf: lights.pmf_of_triangle(index as u32),
-                    ..Surface::new(normal, area, id, m)
+                    ..Surface::new(normal, triangle_area(vertices), id, m)
                 })
             }
             _ => None,
@@ -270,7 +270,8 @@ mod tests {
         assert_eq!(lambert, [0, 0, 0, NO_ID, NO_ID]);
         for (index, surface) in s.iter().enumerate() {
             assert_eq!(surface.normal, scene.normals[index]);
-            assert_eq!(surface.area, scene.area(index));
+            assert_eq!(surface.area, triangle_area(&scene.triangles[index]));
+            assert_eq!(scene.area(index), surface.area);
             assert_eq!(surface.material, scene.triangle_material[index]);
             assert_eq!(
                 surface.light_pmf,
@@ -284,8 +285,8 @@ mod tests {
         let check = |surfaces: &[Surface]| {
             validate(
                 surfaces,
+                &scene.triangles,
                 &scene.normals,
-                &scene.areas,
                 &scene.triangle_material,
                 &scene.materials,
                 &scene.lights,
