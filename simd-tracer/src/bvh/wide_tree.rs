@@ -35,8 +35,8 @@
 //! at the first accepted lane.
 
 use super::{
-    Bvh2, Bvh2Node, InlineStack, PreparedTriangle, ScalarHit, cross, dot, edge_weights,
-    plane_terms, safe_inverse,
+    Bvh2, Bvh2Node, InlineStack, PreparedTriangle, ScalarHit, cross, dot, edge_weights, inside_x8,
+    plane_terms, safe_inverse, weight,
 };
 use crate::packet::Ray;
 use glam::Vec3;
@@ -190,10 +190,8 @@ impl SplatRay {
             &block.edge_moment,
             &block.edge_direction,
         );
-        let sum = w0 + w1 + w2;
-        let inside = (w0.simd_ge(zero) & w1.simd_ge(zero) & w2.simd_ge(zero))
-            | (w0.simd_le(zero) & w1.simd_le(zero) & w2.simd_le(zero));
-        let accept = (in_range & inside & sum.simd_ne(zero)).to_bitmask();
+        let (sum, inside) = inside_x8(w0, w1, w2);
+        let accept = (in_range & inside).to_bitmask();
         (accept != 0).then_some((accept, t, w1, w2, sum))
     }
 }
@@ -393,8 +391,8 @@ impl WideBvh {
                             block.slot[lane],
                             ScalarHit {
                                 t: t_max,
-                                u: at(w1) / sum,
-                                v: at(w2) / sum,
+                                u: weight(at(w1), sum, 0.0),
+                                v: weight(at(w2), sum, 0.0),
                             },
                         ));
                     }
