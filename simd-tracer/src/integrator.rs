@@ -1,6 +1,11 @@
-//! The path tracer for one packet of 8 rays: next-event estimation with
+//! The path tracer for packets of 8 rays: next-event estimation with
 //! light selection by power, MIS (power heuristic) with BSDF sampling,
 //! Russian roulette, and a maximum depth.
+//!
+//! Packets are traced in lockstep groups ([`trace_group`]): per bounce, the
+//! group's hits, then each packet's shading, light sample and BSDF sample,
+//! then the group's shadow rays, so that bounce and shadow rays can be
+//! compacted across the group's packets ([`crate::compaction`]).
 //!
 //! Per bounce, geometry and sampling decisions are scalar per ray lane (each
 //! lane has its own triangle, material and random numbers); the spectral
@@ -25,6 +30,7 @@
 //! (Mitsuba's default 5) with survival probability
 //! `min(0.95, mean spectral throughput)`.
 
+use crate::compaction;
 use crate::material::{Bsdf, BsdfEvalPacket, BsdfSamplePacket, LaneSpectrum, ShadingPoint};
 use crate::packet::PacketHit;
 use crate::packet::{LANES, LaneMask, RayPacket};
@@ -286,9 +292,17 @@ impl<'a> Shading<'a> {
     }
 }
 
+/// Packets traced together by [`trace_group`] in the renderer: their
+/// bounce and shadow rays are compacted across the group
+/// ([`crate::compaction`]). Four packets (32 lanes) fill about 90 % of the
+/// compacted lanes in the Cornell box; the group's path states (five
+/// emission sums and a throughput per packet) stay within the L1 cache.
+pub const GROUP: usize = 8;
+
 /// Traces one packet and returns the radiance each lane carries back.
 /// `rngs` drive path decisions per lane; `wavelengths` were drawn before;
-/// the rays cast are added to `counts`.
+/// the rays cast are added to `counts`. The same as a [`trace_group`] of
+/// one packet.
 pub fn trace<T: Transport>(
     transport: &T,
     scene: &Scene,
@@ -298,39 +312,162 @@ pub fn trace<T: Transport>(
     wavelengths: &mut T::Wavelengths,
     counts: &mut RayCounts,
 ) -> T::Spectra {
-    let mut emitted = EmissionSums::new(transport);
-    let mut throughput = transport.one();
-    let mut rays = *camera_rays;
-    let mut active = camera_rays.active;
-    // Solid-angle pdf of the BSDF sample that produced each lane's ray (0: no MIS).
-    let mut previous_pdf = f32x8::ZERO;
-    let mut depth = 1u32;
-    while !active.is_empty() {
-        rays.active = active;
-        counts.closest += active.count() as u64;
-        // Camera rays are coherent: packets; the rest by the scene's choice.
-        let hit = if depth == 1 {
-            scene.bvh.intersect_packet(&rays)
-        } else {
-            scene.bvh.intersect_incoherent(&rays)
-        };
+    let [radiance] = trace_group(
+        transport,
+        scene,
+        settings,
+        core::array::from_ref(camera_rays),
+        core::array::from_mut(rngs),
+        core::array::from_mut(wavelengths),
+        counts,
+    );
+    radiance
+}
 
+/// Traces `G` packets in lockstep, one bounce at a time, and returns the
+/// radiance each lane carries back. Camera rays go through the tree as
+/// packets; the bounce and shadow rays of all `G` packets are compacted
+/// into as few full packets as hold them ([`crate::compaction`]). Every
+/// lane's path, random numbers and result are those of tracing its packet
+/// alone ([`trace`]): the queries answer each lane independently, and each
+/// packet's work runs in the same order as alone (the light sample's
+/// contribution is added once the group's shadow rays are answered, after
+/// the BSDF sample that its product shares).
+pub fn trace_group<T: Transport, const G: usize>(
+    transport: &T,
+    scene: &Scene,
+    settings: &IntegratorSettings,
+    camera_rays: &[RayPacket; G],
+    rngs: &mut [RngPacket; G],
+    wavelengths: &mut [T::Wavelengths; G],
+    counts: &mut RayCounts,
+) -> [T::Spectra; G] {
+    let mut paths: [PathState<T::Spectra>; G] =
+        core::array::from_fn(|p| PathState::new(transport, camera_rays[p].active));
+    let mut rays = *camera_rays;
+    let mut hits = rays.each_ref().map(PacketHit::misses);
+    let mut shadows = rays;
+    let mut nee: [NeeSample<T::Spectra>; G] = core::array::from_fn(|_| NeeSample {
+        weight: [0.0; LANES],
+        light: [None; LANES],
+        through_bsdf: transport.zero(),
+    });
+    let mut depth = 1u32;
+    while paths.iter().any(|path| !path.active.is_empty()) {
+        for (path, rays) in paths.iter().zip(&mut rays) {
+            rays.active = path.active;
+            counts.closest += path.active.count() as u64;
+        }
+        // Camera rays are coherent: packets; the rest by the scene's choice.
+        if depth == 1 {
+            for (hit, rays) in hits.iter_mut().zip(&rays) {
+                *hit = scene.bvh.intersect_packet(rays);
+            }
+        } else {
+            compaction::intersect(&rays, &mut hits, |packet| {
+                scene.bvh.intersect_incoherent(packet)
+            });
+        }
+        for p in 0..G {
+            paths[p].bounce(
+                transport,
+                scene,
+                settings,
+                depth,
+                &mut rays[p],
+                &hits[p],
+                &mut shadows[p],
+                &mut nee[p],
+                &mut rngs[p],
+                &mut wavelengths[p],
+            );
+            counts.shadow += shadows[p].active.count() as u64;
+        }
+        let blocked =
+            compaction::occluded(&shadows, |packet| scene.bvh.occluded_incoherent(packet));
+        for p in 0..G {
+            if !shadows[p].active.is_empty() {
+                paths[p].add_light_sample(transport, scene, &wavelengths[p], &nee[p], blocked[p]);
+            }
+        }
+        depth = depth.saturating_add(1);
+    }
+    core::array::from_fn(|p| paths[p].emitted.finish(transport, scene, &wavelengths[p]))
+}
+
+/// One packet's paths between bounces.
+struct PathState<S> {
+    emitted: EmissionSums<S>,
+    throughput: S,
+    /// Lanes whose path goes on.
+    active: LaneMask,
+    /// Solid-angle pdf of the BSDF sample that produced each lane's ray (0:
+    /// no MIS).
+    previous_pdf: f32x8,
+}
+
+/// A packet's light samples (next-event estimation) waiting for the
+/// group's shadow rays: `through_bsdf ⊛ Le(light) · weight` per lane that
+/// is not blocked.
+struct NeeSample<S> {
+    weight: [f32; LANES],
+    light: [Option<SpectrumId>; LANES],
+    /// Throughput times the BSDF's spectral factor towards the light.
+    through_bsdf: S,
+}
+
+impl<S: Copy> PathState<S> {
+    fn new<T: Transport<Spectra = S>>(transport: &T, active: LaneMask) -> Self {
+        Self {
+            emitted: EmissionSums::new(transport),
+            throughput: transport.one(),
+            active,
+            previous_pdf: f32x8::ZERO,
+        }
+    }
+
+    /// One bounce at the hits of `rays`: escapes and emission, the light
+    /// sample (its shadow rays to `shadow`, inactive where there is none,
+    /// its contribution to `nee`), and the BSDF sample, throughput and
+    /// Russian roulette that make the next `rays`.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "one packet's share of the group's state"
+    )]
+    fn bounce<T: Transport<Spectra = S>>(
+        &mut self,
+        transport: &T,
+        scene: &Scene,
+        settings: &IntegratorSettings,
+        depth: u32,
+        rays: &mut RayPacket,
+        hit: &PacketHit,
+        shadow: &mut RayPacket,
+        nee: &mut NeeSample<S>,
+        rngs: &mut RngPacket,
+        wavelengths: &mut T::Wavelengths,
+    ) {
+        shadow.active = LaneMask::NONE;
+        if self.active.is_empty() {
+            return;
+        }
         // Escaped lanes see the environment (no NEE for it, so no MIS).
-        let missed = active.and_not(hit.hit);
+        let missed = self.active.and_not(hit.hit);
         if let (Some(env), false) = (scene.environment, missed.is_empty()) {
             let ids = core::array::from_fn(|lane| missed.contains(lane).then_some(env));
-            emitted.add(
+            self.emitted.add(
                 transport,
                 scene,
                 wavelengths,
-                &throughput,
+                &self.throughput,
                 &ids,
                 &[1.0; LANES],
             );
         }
-        active = active.and(hit.hit);
+        let mut active = self.active.and(hit.hit);
+        self.active = active;
         if active.is_empty() {
-            break;
+            return;
         }
 
         // Shading frame, 8-wide, from the hit triangles' records.
@@ -349,27 +486,29 @@ pub fn trace<T: Transport>(
         if !emits.is_empty() {
             let distance = hit.t * direction_length;
             let p_light = surface.light_pdf(distance * distance, cos_o);
-            let weight = previous_pdf
+            let weight = self
+                .previous_pdf
                 .simd_gt(f32x8::ZERO)
-                .select(power_heuristic_x8(previous_pdf, p_light), f32x8::ONE);
+                .select(power_heuristic_x8(self.previous_pdf, p_light), f32x8::ONE);
             let emission =
                 core::array::from_fn(|lane| emits.contains(lane).then_some(surface.emission[lane]));
-            emitted.add(
+            self.emitted.add(
                 transport,
                 scene,
                 wavelengths,
-                &throughput,
+                &self.throughput,
                 &emission,
                 &emits.to_simd().select(weight, f32x8::ZERO).to_array(),
             );
         }
         if depth >= settings.max_depth {
-            break;
+            self.active = LaneMask::NONE;
+            return;
         }
         let origin = offset_x8(position, normal);
         let shading = match surface.lambert(active) {
             Some(albedo) => Shading::Lambert(albedo),
-            None => Shading::general(scene, transport, wavelengths, &hit, active, normal, front),
+            None => Shading::general(scene, transport, wavelengths, hit, active, normal, front),
         };
 
         // Next-event estimation: one light sample per lane, one shadow packet.
@@ -384,32 +523,28 @@ pub fn trace<T: Transport>(
         let p_light =
             light.surface.light_pmf * distance_sq / (light.surface.area * cos_light.abs());
         let emits = light.surface.emits_towards(cos_light).and(light.valid);
-        let nee_light: [Option<SpectrumId>; LANES] = core::array::from_fn(|lane| {
-            emits.contains(lane).then_some(light.surface.emission[lane])
-        });
         let usable = eval.value.simd_gt(f32x8::ZERO)
             & p_light.simd_gt(f32x8::ZERO)
             & distance_sq.simd_gt(f32x8::ZERO);
         let nee_lanes = emits.and(LaneMask::from_simd(usable));
-        let mut nee_weight = nee_lanes
+        nee.weight = nee_lanes
             .to_simd()
             .select(
                 eval.value * power_heuristic_x8(p_light, eval.pdf) / p_light,
                 f32x8::ZERO,
             )
             .to_array();
-        if !nee_lanes.is_empty() {
-            let shadow = RayPacket {
-                origin: origin.to_array(),
-                direction: to_light.to_array(),
-                t_max: f32x8::splat(1.0 - SHADOW_EPSILON),
-                active: nee_lanes,
-            };
-            counts.shadow += nee_lanes.count() as u64;
-            for lane in scene.bvh.occluded_incoherent(&shadow).iter() {
-                nee_weight[lane] = 0.0;
-            }
-        }
+        nee.light = core::array::from_fn(|lane| {
+            nee_lanes
+                .contains(lane)
+                .then_some(light.surface.emission[lane])
+        });
+        *shadow = RayPacket {
+            origin: origin.to_array(),
+            direction: to_light.to_array(),
+            t_max: f32x8::splat(1.0 - SHADOW_EPSILON),
+            active: nee_lanes,
+        };
 
         // BSDF sampling for the continuation.
         let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
@@ -423,46 +558,34 @@ pub fn trace<T: Transport>(
         }
         let below = sample.wi.dot(normal).simd_lt(f32x8::ZERO);
         let next_origin = Vec3x8::select(below, offset_x8(position, -normal), origin);
-        previous_pdf = sample.pdf;
+        self.previous_pdf = sample.pdf;
 
-        // The one truncated product of the bounce: T ⊛ f(sampled direction).
-        let throughput_bsdf = transport.mul(
-            &throughput,
+        // The one truncated product of the bounce: T ⊛ f(sampled direction),
+        // formed in place for the light sample, which shares it where the
+        // BSDF's spectral factor does not depend on the direction.
+        nee.through_bsdf = transport.mul(
+            &self.throughput,
             &transport.gather(scene, wavelengths, &sample.spectrum),
         );
-        if nee_weight.iter().any(|&w| w > 0.0) {
-            // Angle-independent BSDFs (Lambert) have the same factor for the
-            // NEE direction: reuse the product.
-            let shared = matches!(shading, Shading::Lambert(_))
-                || (0..LANES).all(|lane| {
-                    nee_weight[lane] == 0.0 || eval.spectrum[lane] == sample.spectrum[lane]
-                });
-            let through_bsdf = if shared {
-                throughput_bsdf
-            } else {
-                transport.mul(
-                    &throughput,
-                    &transport.gather(scene, wavelengths, &eval.spectrum),
-                )
-            };
-            emitted.add(
-                transport,
-                scene,
-                wavelengths,
-                &through_bsdf,
-                &nee_light,
-                &nee_weight,
+        let weight = active.to_simd().select(sample.weight, f32x8::ZERO);
+        let shared = matches!(shading, Shading::Lambert(_))
+            || nee_lanes
+                .iter()
+                .all(|lane| eval.spectrum[lane] == sample.spectrum[lane]);
+        if shared {
+            self.throughput = transport.scale(&nee.through_bsdf, weight);
+        } else {
+            let throughput_bsdf = nee.through_bsdf;
+            nee.through_bsdf = transport.mul(
+                &self.throughput,
+                &transport.gather(scene, wavelengths, &eval.spectrum),
             );
+            self.throughput = transport.scale(&throughput_bsdf, weight);
         }
-        throughput = transport.scale(
-            &throughput_bsdf,
-            active.to_simd().select(sample.weight, f32x8::ZERO),
-        );
-        depth += 1;
 
-        // Russian roulette.
-        if depth > settings.rr_depth {
-            let mean = transport.mean(&throughput).to_array();
+        // Russian roulette, from the next segment on.
+        if depth.saturating_add(1) > settings.rr_depth {
+            let mean = transport.mean(&self.throughput).to_array();
             let u_survive = rngs.next_f32x8().to_array();
             let mut survival = [1.0f32; LANES];
             for lane in active.iter() {
@@ -473,16 +596,41 @@ pub fn trace<T: Transport>(
                     active = active.without(lane);
                 }
             }
-            throughput = transport.scale(&throughput, f32x8::new(survival));
+            self.throughput = transport.scale(&self.throughput, f32x8::new(survival));
         }
-        rays = RayPacket {
+        self.active = active;
+        *rays = RayPacket {
             origin: next_origin.to_array(),
             direction: sample.wi.to_array(),
             t_max: f32x8::splat(f32::INFINITY),
             active,
         };
     }
-    emitted.finish(transport, scene, wavelengths)
+
+    /// Adds the light samples of `nee` whose shadow rays are not `blocked`.
+    fn add_light_sample<T: Transport<Spectra = S>>(
+        &mut self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+        nee: &NeeSample<S>,
+        blocked: LaneMask,
+    ) {
+        let mut weight = nee.weight;
+        for lane in blocked.iter() {
+            weight[lane] = 0.0;
+        }
+        if weight.iter().any(|&w| w > 0.0) {
+            self.emitted.add(
+                transport,
+                scene,
+                wavelengths,
+                &nee.through_bsdf,
+                &nee.light,
+                &weight,
+            );
+        }
+    }
 }
 
 #[cfg(test)]

@@ -16,6 +16,7 @@
 pub mod angular;
 pub mod bvh;
 pub mod camera;
+pub mod compaction;
 pub mod filter;
 pub mod fuzzing;
 pub mod integrator;

@@ -170,6 +170,20 @@ pub struct PacketHit {
     pub hit: LaneMask,
 }
 
+impl PacketHit {
+    /// A miss in every lane: each lane's `t_max`, `u = v = 0` and
+    /// [`crate::bvh::NO_TRIANGLE`] (the convention of lanes without a hit).
+    pub fn misses(rays: &RayPacket) -> Self {
+        Self {
+            t: rays.t_max,
+            u: f32x8::ZERO,
+            v: f32x8::ZERO,
+            triangle: [crate::bvh::NO_TRIANGLE; LANES],
+            hit: LaneMask::NONE,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,5 +1,7 @@
 //! Progressive rendering: passes of one sample per pixel over 16 × 16 tiles
-//! in parallel (rayon), packets of 8 pixels (4 × 2) per trace. Passes run in
+//! in parallel (rayon), packets of 8 pixels (4 × 2), traced
+//! [`crate::integrator::GROUP`] packets at a time (their bounce and shadow
+//! rays compacted, [`crate::compaction`]). Passes run in
 //! batches: each tile takes every pass of a batch in a row, so its pixels
 //! stay in cache (a 512² Fourier film is 32 MiB; one pass at a time streamed
 //! it through memory every pass). A batch is one pass for transports whose
@@ -20,7 +22,7 @@
 //! [`RenderResult::rejected`].
 
 use crate::filter::Filter;
-use crate::integrator::{IntegratorSettings, RayCounts, trace};
+use crate::integrator::{GROUP, IntegratorSettings, RayCounts, trace_group};
 use crate::packet::{LANES, LaneMask, RayPacket};
 use crate::rng::{Purpose, Rng, RngPacket};
 use crate::scene::Scene;
@@ -206,41 +208,61 @@ fn render_tile<T: Transport>(
     pass: u32,
     tile: &mut Tile<T::Pixel>,
 ) {
-    for by in (0..tile.height).step_by(PACKET_HEIGHT as usize) {
-        for bx in (0..tile.width).step_by(PACKET_WIDTH as usize) {
-            let mut lanes: [Option<(u32, u32)>; LANES] = [None; LANES];
-            for (lane, slot) in lanes.iter_mut().enumerate() {
-                let (lx, ly) = (
-                    bx + lane as u32 % PACKET_WIDTH,
-                    by + lane as u32 / PACKET_WIDTH,
+    // The tile's packets in row-major order, traced GROUP at a time; the
+    // last group is padded with packets without pixels.
+    let columns = tile.width.div_ceil(PACKET_WIDTH);
+    let count = columns * tile.height.div_ceil(PACKET_HEIGHT);
+    let pixel_index = |(lx, ly): (u32, u32)| {
+        u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx)
+    };
+    for first in (0..count).step_by(GROUP) {
+        let lanes: [[Option<(u32, u32)>; LANES]; GROUP] = core::array::from_fn(|g| {
+            let mut lanes = [None; LANES];
+            let packet = first + g as u32;
+            if packet < count {
+                let (bx, by) = (
+                    packet % columns * PACKET_WIDTH,
+                    packet / columns * PACKET_HEIGHT,
                 );
-                if lx < tile.width && ly < tile.height {
-                    *slot = Some((lx, ly));
+                for (lane, slot) in lanes.iter_mut().enumerate() {
+                    let (lx, ly) = (
+                        bx + lane as u32 % PACKET_WIDTH,
+                        by + lane as u32 / PACKET_WIDTH,
+                    );
+                    if lx < tile.width && ly < tile.height {
+                        *slot = Some((lx, ly));
+                    }
                 }
             }
-            let pixel_index = |(lx, ly): (u32, u32)| {
-                u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx)
-            };
-            let mut path_rngs = RngPacket::new(core::array::from_fn(|lane| {
-                let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
-                Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Path)
-            }));
-            let packet = camera_packet(scene, settings, tile, &lanes, &mut path_rngs);
-            let mut wavelengths = transport.sample_wavelengths(|lane| {
-                let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
-                Rng::for_sample(settings.seed, pixel, u64::from(pass), Purpose::Wavelengths)
-            });
-            let radiance = trace(
-                transport,
-                scene,
-                &settings.integrator,
-                &packet,
-                &mut path_rngs,
-                &mut wavelengths,
-                &mut tile.rays,
-            );
-            let samples = transport.samples(&radiance, &wavelengths);
-            for (lane, slot) in lanes.iter().enumerate() {
+            lanes
+        });
+        let stream = |lanes: &[Option<(u32, u32)>; LANES], lane: usize, purpose: Purpose| {
+            let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
+            Rng::for_sample(settings.seed, pixel, u64::from(pass), purpose)
+        };
+        let mut path_rngs: [RngPacket; GROUP] = core::array::from_fn(|g| {
+            RngPacket::new(core::array::from_fn(|lane| {
+                stream(&lanes[g], lane, Purpose::Path)
+            }))
+        });
+        let camera_rays: [RayPacket; GROUP] = core::array::from_fn(|g| {
+            camera_packet(scene, settings, tile, &lanes[g], &mut path_rngs[g])
+        });
+        let mut wavelengths: [T::Wavelengths; GROUP] = core::array::from_fn(|g| {
+            transport.sample_wavelengths(|lane| stream(&lanes[g], lane, Purpose::Wavelengths))
+        });
+        let radiance = trace_group(
+            transport,
+            scene,
+            &settings.integrator,
+            &camera_rays,
+            &mut path_rngs,
+            &mut wavelengths,
+            &mut tile.rays,
+        );
+        for g in 0..GROUP {
+            let samples = transport.samples(&radiance[g], &wavelengths[g]);
+            for (lane, slot) in lanes[g].iter().enumerate() {
                 if let Some((lx, ly)) = *slot {
                     if T::sample_is_finite(&samples[lane]) {
                         let index = (ly * tile.width + lx) as usize;

@@ -1,0 +1,270 @@
+//! Ray compaction across packets: the active lanes of a group of packets
+//! are packed, in order, into as few full packets as hold them, one query
+//! runs per full packet, and the answers go back to the lanes they came
+//! from.
+//!
+//! # Why
+//!
+//! Paths end at different bounces (they escape or are absorbed), so a
+//! packet's active lanes thin out with depth: in the Cornell box 72 % of the
+//! lanes of a bounce packet and 55 % of a shadow packet are busy. The flat
+//! test costs the same for a packet with one lane as for one with eight, and
+//! packet traversal nearly so. Packing the lanes of [`GROUP`]-sized groups
+//! of packets traced in lockstep ([`crate::integrator::trace_group`]) fills
+//! the queries again.
+//!
+//! # Guarantee
+//!
+//! A lane's answer is the answer the query gives it in its own packet, as
+//! long as the query answers each lane independently of the others' rays:
+//! true of the flat test and of the 8-wide tree (each lane or ray is tested
+//! on its own, no early exits shared between lanes), and of packet
+//! occlusion (a lane visits exactly the nodes whose boxes its own ray
+//! enters, and whether it is blocked does not depend on the order). Packet
+//! *closest-hit* traversal may break exact ties by the packet's visiting
+//! order, so camera packets, which are full anyway, are not compacted.
+//!
+//! [`GROUP`]: crate::integrator::GROUP
+
+use crate::packet::{LANES, LaneMask, PacketHit, RayPacket};
+use wide::f32x8;
+
+/// The lanes `source` of one component (`field`) of `packets`: eight
+/// scalar loads from the packets' memory assembled in registers (writing
+/// lanes into an array and loading it as a vector would stall on store
+/// forwarding).
+#[inline(always)]
+fn gather<const G: usize>(
+    packets: &[RayPacket; G],
+    source: &[(usize, usize); LANES],
+    field: impl Fn(&RayPacket) -> &f32x8,
+) -> f32x8 {
+    f32x8::new(core::array::from_fn(|k| {
+        let (p, lane) = source[k];
+        field(&packets[p]).as_array()[lane]
+    }))
+}
+
+/// Where the lanes of a packed packet come from.
+enum Source<'a> {
+    /// All of packet `p`, lane for lane.
+    Whole(usize),
+    /// Lane `k` is lane `source[k].1` of packet `source[k].0`.
+    Lanes(&'a [(usize, usize); LANES]),
+}
+
+/// Calls `run(packed, source)` for each full packet (and a last partial
+/// one) of the active lanes of `packets`, packed in order, packet by packet
+/// and lane by lane. Unused lanes of the last packet are inactive copies of
+/// its first lane. Where packing would not save a query, each packet with
+/// active lanes runs as it is.
+fn for_each_packed<const G: usize>(
+    packets: &[RayPacket; G],
+    mut run: impl FnMut(&RayPacket, Source<'_>),
+) {
+    let mut source = [(0usize, 0usize); LANES];
+    let mut filled = 0;
+    // Packing only pays where it saves a query: otherwise each packet runs
+    // as it is (the identity packing).
+    let lanes: usize = packets.iter().map(|p| p.active.count()).sum();
+    let occupied = packets.iter().filter(|p| !p.active.is_empty()).count();
+    if lanes.div_ceil(LANES) == occupied {
+        for (p, packet) in packets.iter().enumerate() {
+            if !packet.active.is_empty() {
+                run(packet, Source::Whole(p));
+            }
+        }
+        return;
+    }
+    let mut flush = |source: &mut [(usize, usize); LANES], filled: usize| {
+        for k in filled..LANES {
+            source[k] = source[0];
+        }
+        let source = &*source;
+        let packed = RayPacket {
+            origin: [
+                gather(packets, source, |r| &r.origin[0]),
+                gather(packets, source, |r| &r.origin[1]),
+                gather(packets, source, |r| &r.origin[2]),
+            ],
+            direction: [
+                gather(packets, source, |r| &r.direction[0]),
+                gather(packets, source, |r| &r.direction[1]),
+                gather(packets, source, |r| &r.direction[2]),
+            ],
+            t_max: gather(packets, source, |r| &r.t_max),
+            active: LaneMask::first(filled),
+        };
+        run(&packed, Source::Lanes(source));
+    };
+    for (p, packet) in packets.iter().enumerate() {
+        for lane in packet.active.iter() {
+            source[filled] = (p, lane);
+            filled += 1;
+            if filled == LANES {
+                flush(&mut source, filled);
+                filled = 0;
+            }
+        }
+    }
+    if filled > 0 {
+        flush(&mut source, filled);
+    }
+}
+
+/// Closest hits of the active lanes of `packets` by `query`, run on the
+/// packed lanes, written to `hits` in the [`PacketHit`] convention ([`PacketHit::misses`] where nothing is hit).
+pub fn intersect<const G: usize>(
+    packets: &[RayPacket; G],
+    hits: &mut [PacketHit; G],
+    mut query: impl FnMut(&RayPacket) -> PacketHit,
+) {
+    for (hit, packet) in hits.iter_mut().zip(packets) {
+        *hit = PacketHit::misses(packet);
+    }
+    for_each_packed(packets, |packed, source| {
+        let found = query(packed);
+        let source = match source {
+            Source::Whole(p) => {
+                hits[p] = found;
+                return;
+            }
+            Source::Lanes(source) => source,
+        };
+        for k in found.hit.and(packed.active).iter() {
+            let (p, lane) = source[k];
+            let hit = &mut hits[p];
+            hit.t.as_mut_array()[lane] = found.t.as_array()[k];
+            hit.u.as_mut_array()[lane] = found.u.as_array()[k];
+            hit.v.as_mut_array()[lane] = found.v.as_array()[k];
+            hit.triangle[lane] = found.triangle[k];
+            hit.hit = hit.hit.with(lane);
+        }
+    });
+}
+
+/// Occlusion of the active lanes of `packets` by `query`, run on the packed
+/// lanes: each packet's mask of blocked lanes.
+pub fn occluded<const G: usize>(
+    packets: &[RayPacket; G],
+    mut query: impl FnMut(&RayPacket) -> LaneMask,
+) -> [LaneMask; G] {
+    let mut blocked = [LaneMask::NONE; G];
+    for_each_packed(packets, |packed, source| {
+        let found = query(packed).and(packed.active);
+        let source = match source {
+            Source::Whole(p) => {
+                blocked[p] = found;
+                return;
+            }
+            Source::Lanes(source) => source,
+        };
+        for k in found.iter() {
+            let (p, lane) = source[k];
+            blocked[p] = blocked[p].with(lane);
+        }
+    });
+    blocked
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::Bvh;
+    use crate::rng::Rng;
+    use glam::Vec3;
+
+    /// A closed box with a smaller box inside, as fan quads.
+    fn scene() -> Bvh {
+        let mut triangles = Vec::new();
+        for (min, max) in [
+            (Vec3::splat(-1.0), Vec3::splat(1.0)),
+            (Vec3::new(-0.4, -1.0, -0.3), Vec3::new(0.2, 0.1, 0.4)),
+        ] {
+            let c = |x: bool, y: bool, z: bool| {
+                Vec3::new(
+                    if x { max.x } else { min.x },
+                    if y { max.y } else { min.y },
+                    if z { max.z } else { min.z },
+                )
+            };
+            let (f, t) = (false, true);
+            for [a, b, cc, d] in [
+                [c(f, f, f), c(f, t, f), c(f, t, t), c(f, f, t)],
+                [c(t, f, f), c(t, f, t), c(t, t, t), c(t, t, f)],
+                [c(f, f, f), c(f, f, t), c(t, f, t), c(t, f, f)],
+                [c(f, t, f), c(t, t, f), c(t, t, t), c(f, t, t)],
+                [c(f, f, f), c(t, f, f), c(t, t, f), c(f, t, f)],
+                [c(f, f, t), c(f, t, t), c(t, t, t), c(t, f, t)],
+            ] {
+                triangles.push([a, b, cc]);
+                triangles.push([a, cc, d]);
+            }
+        }
+        Bvh::build(&triangles)
+    }
+
+    /// Random packets with random active lanes (some empty, some full),
+    /// short and unbounded rays, from inside the box.
+    fn packets<const G: usize>(rng: &mut Rng) -> [RayPacket; G] {
+        core::array::from_fn(|_| {
+            let mut unit = || 2.0 * rng.next_f32() - 1.0;
+            let origin: [f32x8; 3] =
+                core::array::from_fn(|_| f32x8::new(core::array::from_fn(|_| 0.95 * unit())));
+            let direction: [f32x8; 3] =
+                core::array::from_fn(|_| f32x8::new(core::array::from_fn(|_| unit())));
+            let t_max = f32x8::new(core::array::from_fn(|_| {
+                if unit() > 0.0 { f32::INFINITY } else { 0.5 }
+            }));
+            let active = match rng.next_u32() % 4 {
+                0 => LaneMask::NONE,
+                1 => LaneMask::ALL,
+                _ => LaneMask((rng.next_u32() & 0xff) as u8),
+            };
+            RayPacket {
+                origin,
+                direction,
+                t_max,
+                active,
+            }
+        })
+    }
+
+    /// Compacted queries give every lane the answer of its own packet's
+    /// query, bit for bit, for the flat test, the 8-wide tree and packet
+    /// occlusion; the queries run once per packed packet.
+    #[test]
+    fn compacted_queries_equal_per_packet_queries() {
+        let bvh = scene();
+        let mut rng = Rng::new(3, 4);
+        for _ in 0..300 {
+            let group: [RayPacket; 4] = packets(&mut rng);
+            let active: usize = group.iter().map(|p| p.active.count()).sum();
+            let mut calls = 0;
+            let mut hits = group.map(|p| bvh.intersect_packet_flat(&p));
+            intersect(&group, &mut hits, |p| {
+                calls += 1;
+                bvh.intersect_packet_flat(p)
+            });
+            assert_eq!(calls, active.div_ceil(LANES));
+            let mut wide_hits = hits;
+            intersect(&group, &mut wide_hits, |p| bvh.intersect_packet_wide(p));
+            let blocked = occluded(&group, |p| bvh.occluded_packet(p));
+            for (p, packet) in group.iter().enumerate() {
+                let own = bvh.intersect_packet_flat(packet);
+                let own_wide = bvh.intersect_packet_wide(packet);
+                for (mine, theirs) in [(&hits[p], &own), (&wide_hits[p], &own_wide)] {
+                    assert_eq!(mine.hit, theirs.hit);
+                    assert_eq!(mine.triangle, theirs.triangle);
+                    for (a, b) in [(mine.t, theirs.t), (mine.u, theirs.u), (mine.v, theirs.v)] {
+                        assert_eq!(
+                            a.to_array().map(f32::to_bits),
+                            b.to_array().map(f32::to_bits)
+                        );
+                    }
+                }
+                assert_eq!(blocked[p], bvh.occluded_packet(packet));
+            }
+        }
+    }
+}
