@@ -811,6 +811,91 @@ fn inside_x8(w0: f32x8, w1: f32x8, w2: f32x8) -> (f32x8, f32x8) {
     (sum, inside & sum.simd_ne(zero))
 }
 
+/// A slot's bits in every lane (the flat tests select them per lane).
+#[inline(always)]
+fn slot_lanes(slot: u32) -> f32x8 {
+    f32x8::splat(f32::from_bits(slot))
+}
+
+/// The running closest hit of the flat tests: per lane the nearest accepted
+/// `t` so far (the limit for the next triangle), its weights and its slot.
+struct FlatBest {
+    t_max: f32x8,
+    w1: f32x8,
+    w2: f32x8,
+    sum: f32x8,
+    slot: f32x8,
+}
+
+impl FlatBest {
+    #[inline(always)]
+    fn new(packet: &RayPacket) -> Self {
+        let zero = f32x8::ZERO;
+        Self {
+            t_max: packet
+                .active
+                .to_simd()
+                .select(packet.t_max, f32x8::NEG_INFINITY),
+            w1: zero,
+            w2: zero,
+            sum: f32x8::ONE,
+            slot: slot_lanes(u32::MAX),
+        }
+    }
+
+    /// Takes the lanes of `accept` from a triangle's test.
+    #[inline(always)]
+    fn keep(&mut self, (accept, t, w1, w2, sum): (f32x8, f32x8, f32x8, f32x8, f32x8), slot: f32x8) {
+        self.t_max = accept.select(t, self.t_max);
+        self.w1 = accept.select(w1, self.w1);
+        self.w2 = accept.select(w2, self.w2);
+        self.sum = accept.select(sum, self.sum);
+        self.slot = accept.select(slot, self.slot);
+    }
+
+    /// The hits in the packet convention; `original` maps slots to the
+    /// caller's triangle indices.
+    #[inline(always)]
+    fn finish(self, packet: &RayPacket, original: &[u32]) -> PacketHit {
+        let zero = f32x8::ZERO;
+        let slots = self.slot.to_array().map(f32::to_bits);
+        let mut hit = LaneMask::NONE;
+        let triangle = core::array::from_fn(|lane| {
+            let slot = slots[lane];
+            if slot != u32::MAX && packet.active.contains(lane) {
+                hit = hit.with(lane);
+                original.get(slot as usize).copied().unwrap_or(NO_TRIANGLE)
+            } else {
+                NO_TRIANGLE
+            }
+        });
+        let hit_simd = hit.to_simd();
+        PacketHit {
+            t: hit_simd.select(self.t_max, packet.t_max),
+            u: hit_simd.select(weight(self.w1, self.sum, zero), zero),
+            v: hit_simd.select(weight(self.w2, self.sum, zero), zero),
+            triangle,
+            hit,
+        }
+    }
+}
+
+/// A subset of a [`Bvh`]'s triangles ([`Bvh::subset`]), by slot.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct TriangleSubset(Vec<u32>);
+
+impl TriangleSubset {
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Whether the subset is empty.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
 /// A traversal stack: inline storage for [`INLINE_STACK`] entries and a
 /// heap spill for pathological depths (used by the packet traversal and the
 /// wide tree).
@@ -1544,62 +1629,59 @@ impl Bvh {
     /// the scalar test's minimum over all triangles).
     pub fn intersect_packet_flat(&self, packet: &RayPacket) -> PacketHit {
         let rays = PacketRays::new(packet);
-        let active = packet.active.to_simd();
-        let zero = f32x8::ZERO;
-        let mut t_max = active.select(packet.t_max, f32x8::NEG_INFINITY);
-        let (mut w1_best, mut w2_best, mut sum_best) = (zero, zero, f32x8::ONE);
-        let mut slot_best = f32x8::splat(f32::from_bits(u32::MAX));
-        let slot_lanes = |slot: u32| f32x8::splat(f32::from_bits(slot));
-        let mut keep = |(accept, t, w1, w2, sum): (f32x8, f32x8, f32x8, f32x8, f32x8),
-                        slot: f32x8,
-                        t_max: &mut f32x8| {
-            *t_max = accept.select(t, *t_max);
-            w1_best = accept.select(w1, w1_best);
-            w2_best = accept.select(w2, w2_best);
-            sum_best = accept.select(sum, sum_best);
-            slot_best = accept.select(slot, slot_best);
-        };
+        let mut best = FlatBest::new(packet);
         for &[first, second] in &self.flat_pairs {
             if let (Some(a), Some(b)) = (
                 self.triangles.get(first as usize),
                 self.triangles.get(second as usize),
             ) {
-                let (accept, t, w1, w2, sum, take_first) = rays.pair_all(a, b, t_max);
+                let (accept, t, w1, w2, sum, take_first) = rays.pair_all(a, b, best.t_max);
                 let slot = take_first.select(slot_lanes(first), slot_lanes(second));
-                keep((accept, t, w1, w2, sum), slot, &mut t_max);
+                best.keep((accept, t, w1, w2, sum), slot);
             }
         }
         for &single in &self.flat_singles {
             if let Some(triangle) = self.triangles.get(single as usize) {
-                keep(
-                    rays.terms_all(triangle, t_max),
-                    slot_lanes(single),
-                    &mut t_max,
-                );
+                best.keep(rays.terms_all(triangle, best.t_max), slot_lanes(single));
             }
         }
-        let slots = slot_best.to_array().map(f32::to_bits);
-        let mut hit = LaneMask::NONE;
-        let triangle = core::array::from_fn(|lane| {
-            let slot = slots[lane];
-            if slot != u32::MAX && packet.active.contains(lane) {
-                hit = hit.with(lane);
-                self.original
-                    .get(slot as usize)
-                    .copied()
-                    .unwrap_or(NO_TRIANGLE)
-            } else {
-                NO_TRIANGLE
+        best.finish(packet, &self.original)
+    }
+
+    /// The triangles among the input triangles `triangles` that the tree
+    /// holds (degenerate ones are left out), for
+    /// [`Bvh::intersect_packet_subset`].
+    pub fn subset(&self, triangles: &[u32]) -> TriangleSubset {
+        let mut wanted = vec![false; self.input_count];
+        for &triangle in triangles {
+            if let Some(w) = wanted.get_mut(triangle as usize) {
+                *w = true;
             }
-        });
-        let hit_simd = hit.to_simd();
-        PacketHit {
-            t: hit_simd.select(t_max, packet.t_max),
-            u: hit_simd.select(weight(w1_best, sum_best, zero), zero),
-            v: hit_simd.select(weight(w2_best, sum_best, zero), zero),
-            triangle,
-            hit,
         }
+        TriangleSubset(
+            (0..self.original.len())
+                .filter(|&slot| wanted.get(self.original[slot] as usize) == Some(&true))
+                .map(index_u32)
+                .collect(),
+        )
+    }
+
+    /// Closest hits of a packet among the triangles of `subset` only, each
+    /// tested as in [`Bvh::intersect_packet_flat`] (every lane's hit is the
+    /// scalar test's minimum over the subset). Same output convention.
+    pub fn intersect_packet_subset(
+        &self,
+        packet: &RayPacket,
+        subset: &TriangleSubset,
+    ) -> PacketHit {
+        let rays = PacketRays::new(packet);
+        let mut best = FlatBest::new(packet);
+        for &slot in &subset.0 {
+            if let Some(triangle) = self.triangles.get(slot as usize) {
+                best.keep(rays.terms_all(triangle, best.t_max), slot_lanes(slot));
+            }
+        }
+        best.finish(packet, &self.original)
     }
 
     /// Occlusion of a packet against every triangle without the tree (the

@@ -7,12 +7,12 @@
 //! dropped at build time and counted in [`Scene::skipped_triangles`].
 
 use crate::angular::{AngularFunction, AngularSpectrum};
-use crate::bvh::Bvh;
+use crate::bvh::{Bvh, TriangleSubset};
 use crate::camera::Camera;
 use crate::light::{Light, LightSet};
 use crate::material::Material;
 use crate::spectra::{SceneSpectrum, SpectrumSource};
-use crate::surface::Surface;
+use crate::surface::{NO_ID, Surface};
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use spectral_core::{SpectralError, SpectralRange};
@@ -102,7 +102,19 @@ pub struct Scene {
     pub lights: LightSet,
     /// One shading record per triangle (derived from the fields above).
     pub surfaces: Vec<Surface>,
+    /// The emissive triangles in the BVH, for the last segment of a path
+    /// (only an emitter hit counts there: [`crate::integrator`]).
+    pub emitters: TriangleSubset,
     skipped_triangles: usize,
+}
+
+/// The triangles whose records emit, as a subset of `bvh`.
+fn emitters(bvh: &Bvh, surfaces: &[Surface]) -> TriangleSubset {
+    let emissive: Vec<u32> = (0..surfaces.len())
+        .filter(|&k| surfaces[k].emission != NO_ID)
+        .filter_map(|k| u32::try_from(k).ok())
+        .collect();
+    bvh.subset(&emissive)
 }
 
 impl Scene {
@@ -113,6 +125,7 @@ impl Scene {
 
     /// Checks [`Scene::surfaces`] against the triangles, materials and
     /// lights they were derived from ([`crate::surface::validate`]).
+    /// Also checks [`Scene::emitters`] against the records.
     pub fn validate_surfaces(&self) -> Result<(), String> {
         crate::surface::validate(
             &self.surfaces,
@@ -121,7 +134,11 @@ impl Scene {
             &self.triangle_material,
             &self.materials,
             &self.lights,
-        )
+        )?;
+        if self.emitters != emitters(&self.bvh, &self.surfaces) {
+            return Err("the emitter subset does not match the shading records".to_owned());
+        }
+        Ok(())
     }
 
     /// Area of triangle `index` (0 for an unknown index).
@@ -148,7 +165,9 @@ impl Scene {
         let bvh = self.bvh.node_count() * BVH_NODE_BYTES
             + kept * BVH_TRIANGLE_BYTES
             + self.bvh.wide_memory_bytes();
-        let lights = self.lights.len() * LIGHT_BYTES + self.triangles.len() * size_of::<u32>();
+        let lights = self.lights.len() * LIGHT_BYTES
+            + self.triangles.len() * size_of::<u32>()
+            + self.emitters.len() * size_of::<u32>();
         let spectra: usize = self.spectra.iter().map(SceneSpectrum::memory_bytes).sum();
         let angular: usize = self
             .angular
@@ -388,6 +407,7 @@ impl SceneBuilder {
             })
             .collect();
         let lights = LightSet::new(&self.triangles, &mut surfaces, &self.spectra);
+        let emitters = emitters(&bvh, &surfaces);
         Ok(Scene {
             range: self.range,
             spectra: self.spectra,
@@ -403,6 +423,7 @@ impl SceneBuilder {
             bvh,
             lights,
             surfaces,
+            emitters,
             skipped_triangles: self.skipped,
         })
     }

@@ -280,6 +280,11 @@ mod tests {
         }
         assert!(s[0].light_pmf > 0.0 && s[1].light_pmf > 0.0 && s[4].light_pmf > 0.0);
         assert_eq!(s[2].light_pmf, 0.0);
+        // The emitter subset: triangles 0, 1 and 4; a stale one is caught.
+        assert_eq!(scene.emitters, scene.bvh.subset(&[0, 1, 4]));
+        let mut stale = self::scene()?;
+        stale.emitters = scene.bvh.subset(&[0, 1]);
+        assert!(stale.validate_surfaces().is_err());
 
         // Each kind of corruption is caught.
         let check = |surfaces: &[Surface]| {
