@@ -115,10 +115,11 @@
 //! A quad split along its diagonal as a fan, `(a, b, c)` then `(a, c, d)`
 //! (how tobj and the scene builders triangulate polygons), whose fourth
 //! vertex lies in the first triangle's plane to within a few `f32` rounding
-//! steps ([`COPLANAR_SINE`]), is a *fan pair*: the second triangle takes the
-//! first one's plane (normal, offset, grazing threshold) instead of its own,
-//! for every traversal and the scalar test alike (a change of the plane by
-//! rounding noise; it also makes the two halves meet exactly in `t`).
+//! steps (`COPLANAR_SINE`: 8 `f32` epsilons relative to the edge), is a
+//! *fan pair*: the second triangle takes the first one's plane (normal,
+//! offset, grazing threshold) instead of its own, for every traversal and
+//! the scalar test alike (a change of the plane by rounding noise; it also
+//! makes the two halves meet exactly in `t`).
 //! Pairs are found among consecutive input triangles. The flat test then
 //! evaluates a pair with one plane test and five edge functions instead of
 //! two and six: the diagonal's edge function for `(a, c)` is the exact
@@ -127,8 +128,8 @@
 //! evaluation in the sign of an exact zero, which changes no comparison;
 //! barycentric weights are formed as `w / Σw + 0`, which makes them
 //! bit-identical anyway). Measured on the Cornell box (18 planar quads): the
-//! flat test per pair costs 185 instructions against 2 × 120 for its two
-//! triangles, −6 % instructions per sample.
+//! flat test per pair cost 185 instructions against 2 × 120 for its two
+//! triangles (before fused multiply-adds), −6 % instructions per sample.
 //!
 //! The renderer sends camera rays through packets and incoherent rays
 //! through [`Bvh::intersect_incoherent`] (bounces) and
@@ -1623,7 +1624,7 @@ impl Bvh {
 
     /// Closest hits of a packet against every triangle, without the tree
     /// and without branches on the data: each fan pair
-    /// ([`PacketRays::pair_all`]) and each single triangle is the packet
+    /// (one plane test, five edge functions) and each single triangle is the packet
     /// test with its acceptance folded into selects. Same output convention
     /// and the same hits as [`Bvh::intersect_packet`] (each lane's hit is
     /// the scalar test's minimum over all triangles).

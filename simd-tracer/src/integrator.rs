@@ -29,9 +29,10 @@
 //! `u32::MAX` means unlimited. On the last segment only an emitter hit
 //! contributes, so in scenes without an environment and with few emissive
 //! triangles its rays are tested against the emitters alone, with a shadow
-//! ray up to an emitter hit (`last_segment_hits`; the same hits). Russian roulette starts at `rr_depth`
-//! (Mitsuba's default 5) with survival probability
-//! `min(0.95, mean spectral throughput)`.
+//! ray up to an emitter hit (`last_segment_hits`; the same hits).
+//!
+//! Russian roulette starts at `rr_depth` (Mitsuba's default 5) with
+//! survival probability `min(0.95, mean spectral throughput)`.
 
 use crate::bvh::NO_TRIANGLE;
 use crate::compaction;
