@@ -170,42 +170,10 @@ pub fn occluded<const G: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bvh::Bvh;
     use crate::rng::Rng;
-    use glam::Vec3;
-
-    /// A closed box with a smaller box inside, as fan quads.
-    fn scene() -> Bvh {
-        let mut triangles = Vec::new();
-        for (min, max) in [
-            (Vec3::splat(-1.0), Vec3::splat(1.0)),
-            (Vec3::new(-0.4, -1.0, -0.3), Vec3::new(0.2, 0.1, 0.4)),
-        ] {
-            let c = |x: bool, y: bool, z: bool| {
-                Vec3::new(
-                    if x { max.x } else { min.x },
-                    if y { max.y } else { min.y },
-                    if z { max.z } else { min.z },
-                )
-            };
-            let (f, t) = (false, true);
-            for [a, b, cc, d] in [
-                [c(f, f, f), c(f, t, f), c(f, t, t), c(f, f, t)],
-                [c(t, f, f), c(t, f, t), c(t, t, t), c(t, t, f)],
-                [c(f, f, f), c(f, f, t), c(t, f, t), c(t, f, f)],
-                [c(f, t, f), c(t, t, f), c(t, t, t), c(f, t, t)],
-                [c(f, f, f), c(t, f, f), c(t, t, f), c(f, t, f)],
-                [c(f, f, t), c(f, t, t), c(t, t, t), c(t, f, t)],
-            ] {
-                triangles.push([a, b, cc]);
-                triangles.push([a, cc, d]);
-            }
-        }
-        Bvh::build(&triangles)
-    }
 
     /// Random packets with random active lanes (some empty, some full),
-    /// short and unbounded rays, from inside the box.
+    /// short and unbounded rays, from inside the Cornell box.
     fn packets<const G: usize>(rng: &mut Rng) -> [RayPacket; G] {
         core::array::from_fn(|_| {
             let mut unit = || 2.0 * rng.next_f32() - 1.0;
@@ -235,7 +203,8 @@ mod tests {
     /// occlusion; the queries run once per packed packet.
     #[test]
     fn compacted_queries_equal_per_packet_queries() {
-        let bvh = scene();
+        let scene = crate::scenes::cornell_box(spectral_core::SpectralRange::VISIBLE).unwrap();
+        let bvh = &scene.bvh;
         let mut rng = Rng::new(3, 4);
         for _ in 0..300 {
             let group: [RayPacket; 4] = packets(&mut rng);
