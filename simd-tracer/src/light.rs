@@ -5,14 +5,21 @@
 //! the triangle (`b0 = 1 − √u`, `b1 = v √u`; Turk 1990). The solid-angle pdf
 //! of a point `y` seen from `x` is `P(light) · |x − y|² / (A cos θ_y)`, the
 //! same expression MIS uses when a BSDF-sampled ray hits the light.
+//!
+//! Scenes with at most [`LANES`] emissive triangles (a quad lamp is two)
+//! also hold the lights field by field in registers ([`LightRegisters`]):
+//! a packet then chooses its lights with one comparison per light and
+//! reads their records with one permute per field, instead of a search and
+//! a record copy per lane. Both paths give the scalar sample bit for bit.
 
 use crate::packet::{LANES, LaneMask};
-use crate::simd::Vec3x8;
+use crate::simd::{Vec3x8, lookup_f32x8, lookup_u32x8};
 use crate::spectra::SceneSpectrum;
 use crate::surface::{NO_ID, Surface, SurfacePacket};
 use glam::Vec3;
 use std::f32::consts::PI;
-use wide::f32x8;
+use wide::bytemuck::cast;
+use wide::{f32x8, u32x8};
 
 /// No light on this triangle.
 const NOT_A_LIGHT: u32 = u32::MAX;
@@ -36,6 +43,107 @@ pub struct LightSet {
     lights: Vec<Light>,
     cdf: Vec<f32>,
     light_of_triangle: Vec<u32>,
+    /// The lights in registers, if there are 1 to [`LANES`] of them.
+    registers: Option<LightRegisters>,
+}
+
+/// Up to [`LANES`] lights, each field in one register (lane `l`: light
+/// `l`; lanes past the last light repeat it), for
+/// [`LightSet::sample_packet`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct LightRegisters {
+    /// `cdf[l]` for the lights but the last (the search's comparisons).
+    cdf: [f32; LANES - 1],
+    /// Number of comparisons: lights − 1.
+    comparisons: usize,
+    /// Vertex `i`, component `axis`: `vertices[i][axis]`.
+    vertices: [[f32x8; 3]; 3],
+    normal: [f32x8; 3],
+    light_pmf: f32x8,
+    area: f32x8,
+    emission: u32x8,
+    lambert_albedo: u32x8,
+    triangle: u32x8,
+    /// 1 where the light is two-sided.
+    two_sided: u32x8,
+}
+
+impl LightRegisters {
+    /// The registers of `lights` with CDF `cdf`, if there are 1 to
+    /// [`LANES`] lights.
+    fn new(lights: &[Light], cdf: &[f32]) -> Option<Self> {
+        let last = lights.len().checked_sub(1)?;
+        if lights.len() > LANES || cdf.len() != lights.len() {
+            return None;
+        }
+        let light = |l: usize| &lights[l.min(last)];
+        let floats = |f: &dyn Fn(&Light) -> f32| f32x8::new(core::array::from_fn(|l| f(light(l))));
+        let words = |f: &dyn Fn(&Light) -> u32| u32x8::new(core::array::from_fn(|l| f(light(l))));
+        Some(Self {
+            cdf: core::array::from_fn(|l| cdf.get(l).copied().unwrap_or(1.0)),
+            comparisons: last,
+            vertices: core::array::from_fn(|i| {
+                core::array::from_fn(|axis| floats(&|light| light.vertices[i][axis]))
+            }),
+            normal: core::array::from_fn(|axis| floats(&|light| light.surface.normal[axis])),
+            light_pmf: floats(&|light| light.surface.light_pmf),
+            area: floats(&|light| light.surface.area),
+            emission: words(&|light| light.surface.emission),
+            lambert_albedo: words(&|light| light.surface.lambert_albedo),
+            triangle: words(&|light| light.triangle),
+            two_sided: words(&|light| u32::from(light.surface.two_sided)),
+        })
+    }
+
+    /// [`LightSet::sample_packet`] with the lights in registers.
+    fn sample_packet(
+        &self,
+        active: LaneMask,
+        u_light: &[f32; LANES],
+        u: f32x8,
+        v: f32x8,
+    ) -> LightSamplePacket {
+        // `partition_point(c <= u)` over a sorted CDF, capped at the last
+        // light: the number of the first `lights − 1` entries `<= u`.
+        let u_light = f32x8::new(*u_light);
+        let mut index = u32x8::ZERO;
+        for &c in &self.cdf[..self.comparisons] {
+            // A true comparison is all ones: −1 as a wrapping integer.
+            index -= cast::<f32x8, u32x8>(f32x8::splat(c).simd_le(u_light));
+        }
+        let lanes = active.to_simd();
+        let live: u32x8 = cast(lanes);
+        let float =
+            |table: f32x8, none: f32| lanes.select(lookup_f32x8(table, index), f32x8::splat(none));
+        let word =
+            |table: u32x8, none: u32| live.select(lookup_u32x8(table, index), u32x8::splat(none));
+        let [a, b, c] = self
+            .vertices
+            .map(|v| Vec3x8::from_array(v.map(|axis| float(axis, 0.0))));
+        let su = u.sqrt();
+        let b0 = f32x8::ONE - su;
+        let b1 = v * su;
+        let b2 = f32x8::ONE - b0 - b1;
+        let none = Surface::NONE;
+        let two_sided = word(self.two_sided, 0).simd_eq(u32x8::ONE);
+        LightSamplePacket {
+            point: a * b0 + b * b1 + c * b2,
+            triangle: word(self.triangle, 0).to_array(),
+            surface: SurfacePacket {
+                normal: Vec3x8::new(
+                    float(self.normal[0], none.normal.x),
+                    float(self.normal[1], none.normal.y),
+                    float(self.normal[2], none.normal.z),
+                ),
+                emission: word(self.emission, none.emission).to_array(),
+                two_sided: LaneMask::from_simd(cast(two_sided)),
+                light_pmf: float(self.light_pmf, none.light_pmf),
+                area: float(self.area, none.area),
+                lambert_albedo: word(self.lambert_albedo, none.lambert_albedo).to_array(),
+            },
+            valid: active,
+        }
+    }
 }
 
 /// A sampled point on a light.
@@ -98,7 +206,48 @@ impl LightSet {
         if let Some(last) = set.cdf.last_mut() {
             *last = 1.0;
         }
+        set.registers = LightRegisters::new(&set.lights, &set.cdf);
         set
+    }
+
+    /// Checks the invariants sampling relies on: one CDF entry per light,
+    /// non-decreasing, ending at 1; the triangle-to-light map inverting the
+    /// lights' triangles; the registers holding exactly the lights (present
+    /// for 1 to [`LANES`] lights).
+    pub fn validate(&self) -> Result<(), String> {
+        if self.cdf.len() != self.lights.len() {
+            return Err(format!(
+                "{} CDF entries for {} lights",
+                self.cdf.len(),
+                self.lights.len()
+            ));
+        }
+        if self.cdf.windows(2).any(|pair| pair[0] > pair[1]) {
+            return Err("the light CDF decreases".to_owned());
+        }
+        if self.cdf.last().is_some_and(|&last| last != 1.0) {
+            return Err("the light CDF does not end at 1".to_owned());
+        }
+        for (index, light) in (0u32..).zip(&self.lights) {
+            if self.light_of_triangle.get(light.triangle as usize) != Some(&index) {
+                return Err(format!("light {index} is not found from its triangle"));
+            }
+        }
+        let mapped = self
+            .light_of_triangle
+            .iter()
+            .filter(|&&l| l != NOT_A_LIGHT)
+            .count();
+        if mapped != self.lights.len() {
+            return Err(format!(
+                "{mapped} triangles map to lights, {} lights",
+                self.lights.len()
+            ));
+        }
+        if self.registers != LightRegisters::new(&self.lights, &self.cdf) {
+            return Err("the light registers do not hold the lights".to_owned());
+        }
+        Ok(())
     }
 
     /// Number of emissive triangles.
@@ -153,6 +302,9 @@ impl LightSet {
         u: f32x8,
         v: f32x8,
     ) -> LightSamplePacket {
+        if let Some(registers) = &self.registers {
+            return registers.sample_packet(active, u_light, u, v);
+        }
         let mut corners = [[Vec3::ZERO; LANES]; 3];
         let mut records = [Surface::NONE; LANES];
         let mut triangle = [0u32; LANES];
@@ -274,15 +426,63 @@ mod tests {
         assert!(LightSet::default().sample(0.5, 0.5, 0.5).is_none());
     }
 
-    /// Each active lane of a packet sample equals the scalar sample drawn
-    /// with the lane's numbers, bit for bit.
+    /// `count` lights of powers 1, 2, … (emission spectra `i + 1`), at
+    /// different places, and a grey triangle among them.
+    fn many_lights(count: usize) -> LightSet {
+        let range = SpectralRange::VISIBLE;
+        let spectra: Vec<SceneSpectrum> = (0..count)
+            .filter_map(|i| {
+                SceneSpectrum::new(SpectrumSource::Constant(i as f64 + 1.0), range).ok()
+            })
+            .collect();
+        assert_eq!(spectra.len(), count);
+        let mut triangles = Vec::new();
+        let mut surfaces = Vec::new();
+        for i in 0..=count {
+            let x = i as f32 * 1.5;
+            triangles.push([
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 1.0, 0.5, 0.0),
+                Vec3::new(x, 1.0, 0.25 * i as f32),
+            ]);
+            let mut material = Material::lambert("m", 0);
+            // Triangle 1 is grey; the others emit, every third two-sided.
+            if i != 1 {
+                material.emission = Some(surfaces.len().min(count - 1) as u32);
+                material.two_sided = i % 3 == 0;
+            }
+            surfaces.push(Surface::new(Vec3::Z, 0.5 + i as f32, i as u32, &material));
+        }
+        LightSet::new(&triangles, &mut surfaces, &spectra)
+    }
+
+    /// Each lane of a packet sample equals the scalar sample drawn with the
+    /// lane's numbers, bit for bit, and inactive lanes hold no light;
+    /// with the lights in registers (2 and 8 lights) and without (11).
     #[test]
     fn packet_samples_equal_scalar_samples() {
-        let (_, _, set) = lights();
+        let (_, _, two) = lights();
+        let sets = [two, many_lights(8), many_lights(11)];
+        assert!(sets[0].registers.is_some() && sets[1].registers.is_some());
+        assert!(sets[2].registers.is_none());
+        for set in &sets {
+            assert_eq!(set.validate(), Ok(()));
+            packet_samples_equal_scalar_samples_in(set);
+        }
+    }
+
+    fn packet_samples_equal_scalar_samples_in(set: &LightSet) {
         let mut rng = Rng::new(11, 5);
-        for _ in 0..1000 {
+        for round in 0..2000 {
             let active = LaneMask((rng.next_u32() & 0xff) as u8);
-            let u_light: [f32; LANES] = core::array::from_fn(|_| rng.next_f32());
+            let mut u_light: [f32; LANES] = core::array::from_fn(|_| rng.next_f32());
+            if round == 0 {
+                // The CDF's own values and the ends.
+                for (lane, u) in u_light.iter_mut().enumerate() {
+                    *u = set.cdf.get(lane).copied().unwrap_or(0.0);
+                }
+                u_light[LANES - 1] = 1.0 - f32::EPSILON;
+            }
             let (u, v): ([f32; LANES], [f32; LANES]) = (
                 core::array::from_fn(|_| rng.next_f32()),
                 core::array::from_fn(|_| rng.next_f32()),
@@ -293,6 +493,10 @@ mod tests {
                 let record = &packet.surface;
                 if !active.contains(lane) {
                     assert_eq!(record.emission[lane], NO_ID);
+                    assert_eq!(record.lambert_albedo[lane], NO_ID);
+                    assert_eq!(record.normal.lane(lane), Surface::NONE.normal);
+                    assert_eq!(record.area.to_array()[lane], 0.0);
+                    assert!(!record.two_sided.contains(lane));
                     continue;
                 }
                 let Some(s) = set.sample(u_light[lane], u[lane], v[lane]) else {
@@ -307,8 +511,33 @@ mod tests {
                 assert_eq!(record.emission[lane], s.surface.emission);
                 assert_eq!(record.light_pmf.to_array()[lane], s.surface.light_pmf);
                 assert_eq!(record.area.to_array()[lane], s.surface.area);
+                assert_eq!(record.two_sided.contains(lane), s.surface.two_sided);
+                assert_eq!(record.lambert_albedo[lane], s.surface.lambert_albedo);
             }
         }
+    }
+
+    /// `validate` finds a stale register table, a decreasing CDF and a
+    /// broken triangle map.
+    #[test]
+    fn validate_finds_corruption() {
+        let set = many_lights(5);
+        assert_eq!(set.validate(), Ok(()));
+        let mut stale = set.clone();
+        if let Some(registers) = &mut stale.registers {
+            registers.area = f32x8::splat(9.0);
+        }
+        assert!(stale.validate().is_err());
+        let mut decreasing = set.clone();
+        decreasing.cdf.swap(0, 1);
+        assert!(decreasing.validate().is_err());
+        let mut unmapped = set;
+        unmapped.light_of_triangle[0] = NOT_A_LIGHT;
+        assert!(unmapped.validate().is_err());
+    }
+
+    #[test]
+    fn an_empty_set_samples_nothing() {
         let empty =
             LightSet::default().sample_packet(LaneMask::ALL, &[0.5; LANES], f32x8::ONE, f32x8::ONE);
         assert!(empty.valid.is_empty());

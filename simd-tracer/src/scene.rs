@@ -125,7 +125,8 @@ impl Scene {
 
     /// Checks [`Scene::surfaces`] against the triangles, materials and
     /// lights they were derived from ([`crate::surface::validate`]).
-    /// Also checks [`Scene::emitters`] against the records.
+    /// Also checks [`Scene::emitters`] against the records and the light
+    /// set's own invariants ([`LightSet::validate`]).
     pub fn validate_surfaces(&self) -> Result<(), String> {
         crate::surface::validate(
             &self.surfaces,
@@ -135,6 +136,7 @@ impl Scene {
             &self.materials,
             &self.lights,
         )?;
+        self.lights.validate()?;
         if self.emitters != emitters(&self.bvh, &self.surfaces) {
             return Err("the emitter subset does not match the shading records".to_owned());
         }

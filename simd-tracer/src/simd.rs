@@ -8,7 +8,23 @@
 use crate::packet::LANES;
 use glam::Vec3;
 use std::ops::{Add, Mul, Neg, Sub};
-use wide::f32x8;
+use wide::bytemuck::cast;
+use wide::{f32x8, u32x8};
+
+/// Lane `i` is `table[index[i]]`: a lookup in a table of up to [`LANES`]
+/// entries held in one register (one `vpermd` on AVX2). Indices must be
+/// below [`LANES`].
+#[inline(always)]
+pub fn lookup_u32x8(table: u32x8, index: u32x8) -> u32x8 {
+    debug_assert!(index.to_array().iter().all(|&i| (i as usize) < LANES));
+    table.shuffle(index)
+}
+
+/// [`lookup_u32x8`] of `f32` entries (their bits move unchanged).
+#[inline(always)]
+pub fn lookup_f32x8(table: f32x8, index: u32x8) -> f32x8 {
+    cast(lookup_u32x8(cast(table), index))
+}
 
 /// Eight 3-vectors, one per ray lane.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -205,6 +221,22 @@ mod tests {
                 0.3 * i as f32 + 0.1,
             )
         })
+    }
+
+    #[test]
+    fn lookups_read_the_indexed_entry_bit_for_bit() {
+        let table = [1.5, -0.0, f32::NAN, f32::INFINITY, 3.0, -2.25, 1e-40, 7.0];
+        let mut rng = crate::rng::Rng::new(3, 9);
+        for _ in 0..200 {
+            let index: [u32; LANES] = core::array::from_fn(|_| rng.next_u32() % LANES as u32);
+            let looked_up = lookup_f32x8(f32x8::new(table), u32x8::new(index)).to_array();
+            let words = lookup_u32x8(u32x8::new(index), u32x8::new(index)).to_array();
+            for lane in 0..LANES {
+                let entry = table[index[lane] as usize];
+                assert_eq!(looked_up[lane].to_bits(), entry.to_bits());
+                assert_eq!(words[lane], index[index[lane] as usize]);
+            }
+        }
     }
 
     #[test]
