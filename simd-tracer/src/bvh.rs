@@ -734,15 +734,17 @@ impl PacketRays {
         let (t, steep) = self.plane(first);
         let in_range = steep & t.simd_gt(f32x8::ZERO) & t.simd_lt(t_max);
         let (w1, w2, sum, inside) = self.edges(first);
-        let splat3 = |v: &[f32; 3]| v.map(f32x8::splat);
-        let [s0, s1] = [0, 1].map(|k| {
+        // Spelled out: an array `map` over the two edges is left as an
+        // out-of-line call per edge, which spills the packet's registers.
+        let second_edge = |k: usize| {
             edge_weight(
                 self.direction,
                 self.moment,
-                &splat3(&second.edge_moment[k]),
-                &splat3(&second.edge_direction[k]),
+                &second.edge_moment[k].map(f32x8::splat),
+                &second.edge_direction[k].map(f32x8::splat),
             )
-        });
+        };
+        let (s0, s1) = (second_edge(0), second_edge(1));
         let (second_sum, second_inside) = inside_x8(s0, s1, -w1);
         (
             in_range & (inside | second_inside),

@@ -184,18 +184,21 @@ impl RayCounts {
 /// Every stream is advanced: a lane outside `active` has ended its path
 /// for good (a packet's active set only shrinks), so its stream is never
 /// read again, and drawing in all 8 lanes spares a branch per lane.
+#[inline(always)]
 fn uniforms(rngs: &mut RngPacket, active: LaneMask) -> f32x8 {
     active.to_simd().select(rngs.next_f32x8(), f32x8::ZERO)
 }
 
 /// Ray origins moved off the surface along `n`, relative to the
 /// coordinates' magnitude.
+#[inline(always)]
 fn offset_x8(p: Vec3x8, n: Vec3x8) -> Vec3x8 {
     let scale = p.max_abs().max(f32x8::ONE) * f32x8::splat(RAY_EPSILON);
     n.mul_add(scale, p)
 }
 
 /// Power heuristic `a²/(a² + b²)`, 0 where both are 0.
+#[inline(always)]
 fn power_heuristic_x8(a: f32x8, b: f32x8) -> f32x8 {
     let (a2, b2) = (a * a, b * b);
     let sum = a2 + b2;

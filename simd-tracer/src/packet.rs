@@ -77,13 +77,14 @@ impl LaneMask {
     }
 
     /// From the sign bits of an `f32x8` comparison mask.
+    #[inline(always)]
     pub fn from_simd(mask: f32x8) -> Self {
         Self(mask.to_bitmask() as u8)
     }
 
     /// As an `f32x8` mask (all bits set in selected lanes): the mask
     /// broadcast to every lane, lane `i` keeping bit `i`, compared with it.
-    #[inline]
+    #[inline(always)]
     pub fn to_simd(self) -> f32x8 {
         const LANE_BITS: u32x8 = u32x8::new([1, 2, 4, 8, 16, 32, 64, 128]);
         let bits = u32x8::splat(u32::from(self.0)) & LANE_BITS;

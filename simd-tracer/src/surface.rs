@@ -124,6 +124,7 @@ impl SurfacePacket {
 
     /// Lanes with an emission towards a viewer at cosine `cos_light`
     /// (normal · to viewer): [`emits_towards`] lane-wise.
+    #[inline(always)]
     pub fn emits_towards(&self, cos_light: f32x8) -> LaneMask {
         let zero = f32x8::ZERO;
         let front = LaneMask::from_simd(cos_light.simd_gt(zero));
@@ -138,6 +139,7 @@ impl SurfacePacket {
     /// each lane's point, seen along a segment of squared length
     /// `distance_sq` at cosine `cos_light`: [`light_pdf_solid_angle`]
     /// lane-wise (the same operations, so the same bits).
+    #[inline(always)]
     pub fn light_pdf(&self, distance_sq: f32x8, cos_light: f32x8) -> f32x8 {
         let cos = cos_light.abs();
         let zero = f32x8::ZERO;

@@ -300,6 +300,9 @@ impl<const N: usize> Transport for FourierTransport<N> {
         gather_fourier(scene, lanes)
     }
 
+    // Inlined: a 384-byte product returned from a call is copied again
+    // into its destination (`memcpy`), which costs more than the call.
+    #[inline(always)]
     fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
         a.product(b)
     }
