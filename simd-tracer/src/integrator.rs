@@ -42,7 +42,6 @@ use crate::packet::{LANES, LaneMask, RayPacket};
 use crate::rng::RngPacket;
 use crate::scene::{Scene, SpectrumId};
 use crate::simd::Vec3x8;
-use crate::surface::SurfacePacket;
 use crate::transport::Transport;
 use glam::Vec2;
 use wide::f32x8;
@@ -543,7 +542,7 @@ impl<S: Copy> PathState<S> {
         }
 
         // Shading frame, 8-wide, from the hit triangles' records.
-        let surface = SurfacePacket::gather(&scene.surfaces, &hit.triangle, active);
+        let surface = scene.packed_surfaces().gather(&hit.triangle, active);
         let direction = Vec3x8::from_array(rays.direction);
         let direction_length = direction.length();
         let wo = -direction * (f32x8::ONE / direction_length);

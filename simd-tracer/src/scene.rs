@@ -11,8 +11,8 @@ use crate::bvh::{Bvh, TriangleSubset};
 use crate::camera::Camera;
 use crate::light::{Light, LightSet};
 use crate::material::Material;
-use crate::spectra::{SceneSpectrum, SpectrumSource};
-use crate::surface::{NO_ID, Surface};
+use crate::spectra::{SceneSpectrum, SpectrumRegisters, SpectrumSource};
+use crate::surface::{NO_ID, PackedSurfaces, Surface};
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use spectral_core::{SpectralError, SpectralRange};
@@ -105,6 +105,11 @@ pub struct Scene {
     /// The emissive triangles in the BVH, for the last segment of a path
     /// (only an emitter hit counts there: [`crate::integrator`]).
     pub emitters: TriangleSubset,
+    /// The first spectra's coefficients in registers (derived from
+    /// [`Scene::spectra`]).
+    spectrum_registers: SpectrumRegisters,
+    /// [`Scene::surfaces`] packed for packet gathers.
+    packed_surfaces: PackedSurfaces,
     skipped_triangles: usize,
 }
 
@@ -125,8 +130,10 @@ impl Scene {
 
     /// Checks [`Scene::surfaces`] against the triangles, materials and
     /// lights they were derived from ([`crate::surface::validate`]).
-    /// Also checks [`Scene::emitters`] against the records and the light
-    /// set's own invariants ([`LightSet::validate`]).
+    /// Also checks [`Scene::emitters`] against the records, the light
+    /// set's own invariants ([`LightSet::validate`]), the packed records
+    /// against the records and the spectrum registers against
+    /// [`Scene::spectra`].
     pub fn validate_surfaces(&self) -> Result<(), String> {
         crate::surface::validate(
             &self.surfaces,
@@ -137,10 +144,26 @@ impl Scene {
             &self.lights,
         )?;
         self.lights.validate()?;
+        if !self.packed_surfaces.packs(&self.surfaces) {
+            return Err("the packed shading records do not match the records".to_owned());
+        }
+        if self.spectrum_registers != SpectrumRegisters::new(&self.spectra) {
+            return Err("the spectrum registers do not hold the scene's spectra".to_owned());
+        }
         if self.emitters != emitters(&self.bvh, &self.surfaces) {
             return Err("the emitter subset does not match the shading records".to_owned());
         }
         Ok(())
+    }
+
+    /// The first spectra's Fourier coefficients in registers.
+    pub fn spectrum_registers(&self) -> &SpectrumRegisters {
+        &self.spectrum_registers
+    }
+
+    /// The shading records packed for packet gathers.
+    pub fn packed_surfaces(&self) -> &PackedSurfaces {
+        &self.packed_surfaces
     }
 
     /// Area of triangle `index` (0 for an unknown index).
@@ -162,7 +185,8 @@ impl Scene {
             + vec_bytes(&self.normals)
             + vec_bytes(&self.triangle_material)
             + vec_bytes(&self.uvs)
-            + vec_bytes(&self.surfaces);
+            + vec_bytes(&self.surfaces)
+            + self.packed_surfaces.memory_bytes();
         let kept = self.bvh.input_triangles() - self.bvh.skipped_triangles();
         let bvh = self.bvh.node_count() * BVH_NODE_BYTES
             + kept * BVH_TRIANGLE_BYTES
@@ -410,6 +434,8 @@ impl SceneBuilder {
             .collect();
         let lights = LightSet::new(&self.triangles, &mut surfaces, &self.spectra);
         let emitters = emitters(&bvh, &surfaces);
+        let spectrum_registers = SpectrumRegisters::new(&self.spectra);
+        let packed_surfaces = PackedSurfaces::new(&surfaces);
         Ok(Scene {
             range: self.range,
             spectra: self.spectra,
@@ -426,6 +452,8 @@ impl SceneBuilder {
             lights,
             surfaces,
             emitters,
+            spectrum_registers,
+            packed_surfaces,
             skipped_triangles: self.skipped,
         })
     }

@@ -10,11 +10,19 @@
 //!   interpolation. Tabulated inputs with breakpoints on that grid (1 nm and
 //!   5 nm tables) are reproduced exactly; narrow lines stay resolved (a 2 nm
 //!   laser is 8 steps wide).
+//!
+//! The Fourier coefficients of the first [`LANES`] spectra are also held in
+//! registers ([`SpectrumRegisters`]): lane `s` of register `j` is
+//! coefficient `j` of spectrum `s`, so a packet whose lanes name those
+//! spectra reads its coefficients with one permute per coefficient.
 
 use spectral_core::registry::Builtin;
 use spectral_core::spectrum::{Blackbody, ConstantSpectrum, Spectrum, TabulatedSpectrum};
 use spectral_core::upsample::{RgbIlluminant, RgbUnbounded, SigmoidPolynomial};
+use crate::packet::LANES;
+use crate::simd::lookup_f32x8;
 use spectral_core::{FourierSpectrum, SpectralError, SpectralRange};
+use wide::{f32x8, u32x8};
 
 /// Coefficients stored per spectrum (the largest supported `N`).
 pub const MAX_COEFFS: usize = 32;
@@ -213,6 +221,43 @@ impl SceneSpectrum {
     /// Largest value of the dense table.
     pub fn max_value(&self) -> f32 {
         self.dense.iter().copied().fold(0.0, f32::max)
+    }
+}
+
+/// The Fourier coefficients of a scene's first [`LANES`] spectra, one
+/// register per coefficient (lane `s`: spectrum `s`; lanes past the last
+/// spectrum hold 0).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpectrumRegisters {
+    coeffs: [f32x8; MAX_COEFFS],
+    count: usize,
+}
+
+impl SpectrumRegisters {
+    /// The registers of the first [`LANES`] of `spectra`.
+    pub fn new(spectra: &[SceneSpectrum]) -> Self {
+        let held = &spectra[..spectra.len().min(LANES)];
+        Self {
+            coeffs: core::array::from_fn(|j| {
+                f32x8::new(core::array::from_fn(|s| {
+                    held.get(s).map_or(0.0, |spectrum| spectrum.coefficients_f32()[j])
+                }))
+            }),
+            count: held.len(),
+        }
+    }
+
+    /// Whether spectrum `id` is held.
+    #[inline(always)]
+    pub fn holds(&self, id: u32) -> bool {
+        (id as usize) < self.count
+    }
+
+    /// Coefficient `j` of spectrum `ids[lane]` in each lane (held spectra
+    /// only, [`SpectrumRegisters::holds`]): the coefficient bits unchanged.
+    #[inline(always)]
+    pub fn coefficient(&self, j: usize, ids: u32x8) -> f32x8 {
+        lookup_f32x8(self.coeffs[j], ids)
     }
 }
 

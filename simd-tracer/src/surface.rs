@@ -11,6 +11,10 @@
 //! that needs neither texture coordinates nor a per-lane material call).
 //! The 8-wide emission mask and pdf here are checked lane by lane against
 //! the scalar [`emits_towards`] and [`light_pdf_solid_angle`].
+//!
+//! Packets read the records from [`PackedSurfaces`], the same records as
+//! eight 32-bit words each: one 32-byte load per lane and one `8 × 8`
+//! transpose give the packet's eight fields.
 
 use crate::light::LightSet;
 #[cfg(doc)]
@@ -20,7 +24,8 @@ use crate::packet::{LANES, LaneMask};
 use crate::scene::{MaterialId, SpectrumId, triangle_area};
 use crate::simd::Vec3x8;
 use glam::Vec3;
-use wide::f32x8;
+use wide::bytemuck::cast;
+use wide::{f32x8, u32x8};
 
 /// "None" for the id fields of a [`Surface`].
 pub const NO_ID: u32 = u32::MAX;
@@ -95,18 +100,73 @@ pub struct SurfacePacket {
     pub lambert_albedo: [SpectrumId; LANES],
 }
 
-impl SurfacePacket {
+/// The shading records as eight 32-bit words each, in the order of
+/// [`SurfacePacket`]'s fields: normal x, y, z, emission, two-sided (all
+/// bits set, else 0), light-selection probability, area, Lambert albedo
+/// (ids as their integer bits). The material is not packed: packets read it
+/// from [`crate::scene::Scene::triangle_material`].
+#[derive(Debug, Clone, Default)]
+pub struct PackedSurfaces(Vec<u32x8>);
+
+impl PackedSurfaces {
+    /// The packed form of `surfaces`.
+    pub fn new(surfaces: &[Surface]) -> Self {
+        Self(surfaces.iter().map(Self::pack).collect())
+    }
+
+    fn pack(surface: &Surface) -> u32x8 {
+        u32x8::new([
+            surface.normal.x.to_bits(),
+            surface.normal.y.to_bits(),
+            surface.normal.z.to_bits(),
+            surface.emission,
+            if surface.two_sided { u32::MAX } else { 0 },
+            surface.light_pmf.to_bits(),
+            surface.area.to_bits(),
+            surface.lambert_albedo,
+        ])
+    }
+
+    /// Whether these are exactly the packed `surfaces` (bit for bit).
+    pub fn packs(&self, surfaces: &[Surface]) -> bool {
+        self.0.len() == surfaces.len()
+            && self
+                .0
+                .iter()
+                .zip(surfaces)
+                .all(|(&words, surface)| words.to_array() == Self::pack(surface).to_array())
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.0.capacity() * size_of::<u32x8>()
+    }
+
     /// The records of `triangles` in the lanes of `active`
     /// ([`Surface::NONE`] elsewhere and for unknown indices).
-    pub fn gather(surfaces: &[Surface], triangles: &[u32; LANES], active: LaneMask) -> Self {
-        let mut records = [Surface::NONE; LANES];
-        for lane in active.iter() {
-            if let Some(surface) = surfaces.get(triangles[lane] as usize) {
-                records[lane] = *surface;
+    #[inline]
+    pub fn gather(&self, triangles: &[u32; LANES], active: LaneMask) -> SurfacePacket {
+        let none: f32x8 = cast(Self::pack(&Surface::NONE));
+        let rows: [f32x8; LANES] = core::array::from_fn(|lane| {
+            match self.0.get(triangles[lane] as usize) {
+                Some(&words) if active.contains(lane) => cast(words),
+                _ => none,
             }
+        });
+        let [x, y, z, emission, two_sided, light_pmf, area, lambert_albedo] =
+            f32x8::transpose(rows);
+        SurfacePacket {
+            normal: Vec3x8::new(x, y, z),
+            emission: cast::<f32x8, u32x8>(emission).to_array(),
+            two_sided: LaneMask::from_simd(two_sided),
+            light_pmf,
+            area,
+            lambert_albedo: cast::<f32x8, u32x8>(lambert_albedo).to_array(),
         }
-        Self::from_records(&records)
     }
+}
+
+impl SurfacePacket {
 
     /// Eight records in structure-of-arrays form.
     pub fn from_records(records: &[Surface; LANES]) -> Self {
@@ -309,10 +369,15 @@ mod tests {
             |r| r.area += 1.0,
             |r| r.lambert_albedo = NO_ID,
         ];
+        assert!(scene.packed_surfaces().packs(s));
+        assert!(!scene.packed_surfaces().packs(&s[..4]));
         for corrupt in corruptions {
             let mut bad = s.clone();
             corrupt(&mut bad[0]);
             assert!(check(&bad).is_err());
+            // The material is not packed; every other field is.
+            let material_only = bad[0].material != s[0].material;
+            assert_eq!(scene.packed_surfaces().packs(&bad), material_only);
         }
         Ok(())
     }
@@ -335,7 +400,7 @@ mod tests {
                 _ => 2.0 * rng.next_f32() - 1.0,
             });
             let distance_sq: [f32; LANES] = core::array::from_fn(|_| 10.0 * rng.next_f32());
-            let packet = SurfacePacket::gather(&scene.surfaces, &triangles, active);
+            let packet = scene.packed_surfaces().gather(&triangles, active);
             let emits = packet.emits_towards(f32x8::new(cos));
             let pdf = packet
                 .light_pdf(f32x8::new(distance_sq), f32x8::new(cos))

@@ -19,7 +19,7 @@
 //!   pixel ([`AlphaMode::PerPixel`]).
 
 use crate::material::{LaneSpectrum, SpectralRef};
-use crate::packet::LANES;
+use crate::packet::{LANES, LaneMask};
 use crate::rng::Rng;
 use crate::scene::Scene;
 use crate::spectra::MAX_COEFFS;
@@ -28,7 +28,7 @@ use spectral_core::control_variate::{AlphaStatistics, ControlVariate};
 use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy};
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, Lane, SpectralError, SpectralRange};
-use wide::f32x8;
+use wide::{f32x8, u32x8};
 
 /// Where Fourier samples are converted to colour.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -235,6 +235,9 @@ fn gather_fourier<const N: usize>(
     scene: &Scene,
     lanes: &[LaneSpectrum; LANES],
 ) -> FourierSpectrum<f32x8, N> {
+    if let Some(spectrum) = gather_from_registers(scene, lanes) {
+        return spectrum;
+    }
     let chunks = N.div_ceil(LANES);
     debug_assert!(chunks <= CHUNKS);
     // rows[chunk][lane]: coefficients chunk·LANES .. (chunk + 1)·LANES of a lane.
@@ -260,6 +263,39 @@ fn gather_fourier<const N: usize>(
         *first += f32x8::new(lanes.map(|l| l.constant));
     }
     FourierSpectrum::from_coeffs(coeffs)
+}
+
+/// [`gather_fourier`] where every lane's spectral part is absent or one of
+/// the spectra held in registers ([`Scene::spectrum_registers`]): one
+/// permute per coefficient and the same product `scale · c` per lane (so
+/// the same bits); `None` for any other lane.
+#[inline(always)]
+fn gather_from_registers<const N: usize>(
+    scene: &Scene,
+    lanes: &[LaneSpectrum; LANES],
+) -> Option<FourierSpectrum<f32x8, N>> {
+    let registers = scene.spectrum_registers();
+    let mut ids = [0u32; LANES];
+    let mut spectral = LaneMask::NONE;
+    for (lane, spectrum) in lanes.iter().enumerate() {
+        match spectrum.of {
+            None => {}
+            Some(SpectralRef::Scene(id)) if registers.holds(id) => {
+                ids[lane] = id;
+                spectral = spectral.with(lane);
+            }
+            Some(_) => return None,
+        }
+    }
+    let (ids, live) = (u32x8::new(ids), spectral.to_simd());
+    let scale = f32x8::new(lanes.map(|l| l.scale));
+    let mut coeffs: [f32x8; N] = core::array::from_fn(|j| {
+        live.select(scale * registers.coefficient(j, ids), f32x8::ZERO)
+    });
+    if let Some(first) = coeffs.first_mut() {
+        *first += f32x8::new(lanes.map(|l| l.constant));
+    }
+    Some(FourierSpectrum::from_coeffs(coeffs))
 }
 
 impl<const N: usize> Transport for FourierTransport<N> {
@@ -826,6 +862,29 @@ mod tests {
             },
             _ => LaneSpectrum::scene(spectra + 5),
         });
+        assert!(gather_from_registers::<12>(&scene, &lanes).is_none());
+        check::<4>(&scene, &lanes);
+        check::<8>(&scene, &lanes);
+        check::<12>(&scene, &lanes);
+        check::<16>(&scene, &lanes);
+        check::<32>(&scene, &lanes);
+        // Only spectra held in registers (and lanes without a spectral
+        // part): the register path, against the same oracle.
+        let held = spectra.min(LANES as u32);
+        let lanes: [LaneSpectrum; LANES] = core::array::from_fn(|lane| match lane % 4 {
+            0 => LaneSpectrum::scene(lane as u32 % held),
+            1 => LaneSpectrum::complement(SpectralRef::Scene((lane as u32 + 1) % held)),
+            2 => LaneSpectrum {
+                constant: 0.25 * lane as f32,
+                scale: -1.5 + lane as f32,
+                of: Some(SpectralRef::Scene((lane as u32 + 2) % held)),
+            },
+            _ => LaneSpectrum {
+                constant: 0.7,
+                ..LaneSpectrum::ZERO
+            },
+        });
+        assert!(gather_from_registers::<12>(&scene, &lanes).is_some());
         check::<4>(&scene, &lanes);
         check::<8>(&scene, &lanes);
         check::<12>(&scene, &lanes);
