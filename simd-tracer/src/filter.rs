@@ -68,10 +68,12 @@ impl Filter {
 #[derive(Debug, Clone, PartialEq)]
 pub struct GaussianSampler {
     radius: f32,
-    /// Filter values at `TABLE_SIZE + 1` evenly spaced points of `[−r, r]`.
-    values: Vec<f32>,
-    /// CDF of the piecewise-linear filter at the same points (0 … 1).
+    /// CDF of the piecewise-linear filter at `TABLE_SIZE + 1` evenly spaced
+    /// points of `[−r, r]` (0 … 1).
     cdf: Vec<f32>,
+    /// Per segment `[c0, c1, f0, f1]`: the CDF and the filter value at its
+    /// two ends, side by side so a lane reads its segment in one load.
+    segments: Vec<[f32; 4]>,
     /// `inverse[k]`: the segment containing the CDF value `k/INVERSE_SIZE`,
     /// so sampling starts its search there (at most a step or two).
     inverse: Vec<u16>,
@@ -102,19 +104,30 @@ impl GaussianSampler {
                 (cdf.partition_point(|&c| c <= u).clamp(1, TABLE_SIZE) - 1) as u16
             })
             .collect();
+        let segments = values
+            .windows(2)
+            .zip(cdf.windows(2))
+            .map(|(f, c)| [c[0], c[1], f[0], f[1]])
+            .collect();
         Self {
             radius,
-            values,
             cdf,
+            segments,
             inverse,
         }
     }
 
     /// The segment whose CDF interval contains `u`.
     fn segment(&self, u: f32) -> usize {
-        let k = ((u * INVERSE_SIZE as f32) as usize).min(INVERSE_SIZE);
-        let mut segment = usize::from(self.inverse[k]);
-        while segment + 1 < TABLE_SIZE && self.cdf[segment + 1] <= u {
+        self.segment_from(((u * INVERSE_SIZE as f32) as usize).min(INVERSE_SIZE), u)
+    }
+
+    /// [`GaussianSampler::segment`] with the inverse-table cell `k` of `u`
+    /// given.
+    #[inline(always)]
+    fn segment_from(&self, k: usize, u: f32) -> usize {
+        let mut segment = self.inverse.get(k).map_or(0, |&s| usize::from(s));
+        while segment + 1 < TABLE_SIZE && self.segments[segment][1] <= u {
             segment += 1;
         }
         segment
@@ -125,20 +138,20 @@ impl GaussianSampler {
     /// in the scalar order.
     pub fn sample_x8(&self, u: f32x8) -> f32x8 {
         let lanes = u.to_array();
+        // The inverse-table cells 8-wide: `u` clamped to [0, 1] (NaN to 0)
+        // gives the scalar conversion's saturated index.
+        let size = f32x8::splat(INVERSE_SIZE as f32);
+        let cells = (u.fast_max(f32x8::ZERO).fast_min(f32x8::ONE) * size)
+            .trunc_int()
+            .to_array();
         let mut segment = [0.0f32; 8];
-        let (mut c0, mut c1, mut f0, mut f1) = ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
-        for (lane, &u_lane) in lanes.iter().enumerate() {
-            let k = self.segment(u_lane);
+        let rows: [[f32; 4]; 8] = core::array::from_fn(|lane| {
+            let k = self.segment_from(cells[lane] as usize, lanes[lane]);
             segment[lane] = k as f32;
-            (c0[lane], c1[lane]) = (self.cdf[k], self.cdf[k + 1]);
-            (f0[lane], f1[lane]) = (self.values[k], self.values[k + 1]);
-        }
-        let (c0, c1, f0, f1) = (
-            f32x8::new(c0),
-            f32x8::new(c1),
-            f32x8::new(f0),
-            f32x8::new(f1),
-        );
+            self.segments[k]
+        });
+        let column = |i: usize| f32x8::new(core::array::from_fn(|lane| rows[lane][i]));
+        let (c0, c1, f0, f1) = (column(0), column(1), column(2), column(3));
         let (zero, one, half) = (f32x8::ZERO, f32x8::ONE, f32x8::splat(0.5));
         let step = f32x8::splat(2.0 * self.radius / TABLE_SIZE as f32);
         let mass = c1 - c0;
@@ -167,8 +180,7 @@ impl GaussianSampler {
     pub fn sample(&self, u: f32) -> f32 {
         let segment = self.segment(u);
         let step = 2.0 * self.radius / TABLE_SIZE as f32;
-        let (c0, c1) = (self.cdf[segment], self.cdf[segment + 1]);
-        let (f0, f1) = (self.values[segment], self.values[segment + 1]);
+        let [c0, c1, f0, f1] = self.segments[segment];
         let mass = c1 - c0;
         let target = if mass > 0.0 {
             ((u - c0) / mass).clamp(0.0, 1.0)
