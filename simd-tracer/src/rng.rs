@@ -42,10 +42,29 @@ pub struct Rng {
     increment: u64,
 }
 
+/// The hashed (sample, purpose) part of a stream's key, shared by every
+/// pixel of a pass ([`Rng::for_pixel`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SampleKey(u64);
+
+impl SampleKey {
+    /// The key part of sample (pass) `sample` for `purpose`.
+    pub fn new(sample: u64, purpose: Purpose) -> Self {
+        Self(mix64(sample ^ mix64(purpose as u64)))
+    }
+}
+
 impl Rng {
     /// The stream of (seed, pixel, sample, purpose).
     pub fn for_sample(seed: u64, pixel: u64, sample: u64, purpose: Purpose) -> Self {
-        let key = mix64(seed ^ mix64(pixel ^ mix64(sample ^ mix64(purpose as u64))));
+        Self::for_pixel(seed, pixel, SampleKey::new(sample, purpose))
+    }
+
+    /// [`Rng::for_sample`] with the (sample, purpose) part hashed once for
+    /// all the pixels of a pass.
+    #[inline]
+    pub fn for_pixel(seed: u64, pixel: u64, sample: SampleKey) -> Self {
+        let key = mix64(seed ^ mix64(pixel ^ sample.0));
         Self::new(key, mix64(key ^ 0x5851_f42d_4c95_7f2d))
     }
 
@@ -196,6 +215,7 @@ mod tests {
     fn streams_are_deterministic_and_distinct() {
         let a = Rng::for_sample(1, 2, 3, Purpose::Path);
         assert_eq!(a, Rng::for_sample(1, 2, 3, Purpose::Path));
+        assert_eq!(a, Rng::for_pixel(1, 2, SampleKey::new(3, Purpose::Path)));
         assert_ne!(a, Rng::for_sample(1, 2, 3, Purpose::Wavelengths));
         assert_ne!(a, Rng::for_sample(1, 2, 4, Purpose::Path));
         let mut r = a;
