@@ -213,6 +213,23 @@ mod tests {
             let mut hits = group.map(|p| bvh.intersect_packet_flat(&p));
             intersect(&group, &mut hits, |p| {
                 calls += 1;
+                // A packet runs as it is, or packed: its lanes first, the
+                // unused lanes copies of the first.
+                let bits = |packet: &RayPacket, lane: usize| {
+                    let ray = packet.ray(lane);
+                    [ray.origin, ray.direction, glam::Vec3::splat(ray.t_max)]
+                        .map(|v| v.to_array().map(f32::to_bits))
+                };
+                let same = |g: &RayPacket| {
+                    g.active == p.active && (0..LANES).all(|lane| bits(g, lane) == bits(p, lane))
+                };
+                if !group.iter().any(same) {
+                    let used = p.active.count();
+                    assert_eq!(p.active, LaneMask::first(used));
+                    for lane in used..LANES {
+                        assert_eq!(bits(p, lane), bits(p, 0));
+                    }
+                }
                 bvh.intersect_packet_flat(p)
             });
             assert_eq!(calls, active.div_ceil(LANES));
