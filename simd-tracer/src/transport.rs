@@ -126,7 +126,6 @@ pub trait Transport: Sync {
 fn all_finite(values: &[f32]) -> bool {
     values.iter().fold(true, |finite, v| finite & v.is_finite())
 }
-
 // ---------------------------------------------------------------- Fourier
 
 /// Light as `N` Fourier coefficients per ray lane.
@@ -919,6 +918,23 @@ mod tests {
         let samples = transport.samples(&broken, &());
         let finite = samples.map(|s| FourierTransport::<N>::sample_is_finite(&s));
         assert_eq!(finite, [true, false, true, false, true, true, true, true]);
+    }
+
+    /// The check finds a NaN or an infinity at every position of every
+    /// length.
+    #[test]
+    fn all_finite_finds_every_non_finite_value() {
+        for length in 0..=20 {
+            let values: Vec<f32> = (0..length).map(|i| i as f32 - 3.5).collect();
+            assert!(all_finite(&values), "{length}");
+            for position in 0..length {
+                for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+                    let mut broken = values.clone();
+                    broken[position] = bad;
+                    assert!(!all_finite(&broken), "{length} {position} {bad}");
+                }
+            }
+        }
     }
 
     #[test]
