@@ -106,6 +106,24 @@ impl<S: Copy> EmissionSums<S> {
         emission: &[Option<SpectrumId>; LANES],
         weight: &[f32; LANES],
     ) {
+        // The common case, one emission among the lanes: one scaled sum,
+        // the same as the loop below forms for it.
+        let mut ids = emission.iter().flatten();
+        if let Some(&id) = ids.next() {
+            if ids.all(|&other| other == id) {
+                let lane_weights: [f32; LANES] = core::array::from_fn(|l| {
+                    if emission[l].is_some() {
+                        weight[l]
+                    } else {
+                        0.0
+                    }
+                });
+                if lane_weights.iter().any(|&w| w != 0.0) {
+                    self.add_scaled(transport, scene, wavelengths, value, id, lane_weights);
+                }
+                return;
+            }
+        }
         let mut done = [false; LANES];
         for lane in 0..LANES {
             let Some(id) = emission[lane] else {
@@ -124,22 +142,36 @@ impl<S: Copy> EmissionSums<S> {
             for (l, d) in done.iter_mut().enumerate() {
                 *d |= emission[l] == Some(id);
             }
-            let scaled = transport.scale(value, f32x8::new(lane_weights));
-            let slot = match self.ids.iter().position(|&s| s == Some(id)) {
-                Some(slot) => Some(slot),
-                None => self
-                    .ids
-                    .iter()
-                    .position(Option::is_none)
-                    .inspect(|&slot| self.ids[slot] = Some(id)),
-            };
-            match slot {
-                Some(slot) => self.sums[slot] = transport.add(&self.sums[slot], &scaled),
-                None => {
-                    let le =
-                        transport.gather(scene, wavelengths, &[LaneSpectrum::scene(id); LANES]);
-                    self.direct = transport.add(&self.direct, &transport.mul(&scaled, &le));
-                }
+            self.add_scaled(transport, scene, wavelengths, value, id, lane_weights);
+        }
+    }
+
+    /// Adds `value ⊛ Le(id) · weight(lane)` (to the slot of `id` if there
+    /// is one, else directly).
+    #[inline(always)]
+    fn add_scaled<T: Transport<Spectra = S>>(
+        &mut self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+        value: &S,
+        id: SpectrumId,
+        lane_weights: [f32; LANES],
+    ) {
+        let scaled = transport.scale(value, f32x8::new(lane_weights));
+        let slot = match self.ids.iter().position(|&s| s == Some(id)) {
+            Some(slot) => Some(slot),
+            None => self
+                .ids
+                .iter()
+                .position(Option::is_none)
+                .inspect(|&slot| self.ids[slot] = Some(id)),
+        };
+        match slot {
+            Some(slot) => self.sums[slot] = transport.add(&self.sums[slot], &scaled),
+            None => {
+                let le = transport.gather(scene, wavelengths, &[LaneSpectrum::scene(id); LANES]);
+                self.direct = transport.add(&self.direct, &transport.mul(&scaled, &le));
             }
         }
     }
