@@ -96,6 +96,13 @@ impl<S: Copy> EmissionSums<S> {
         }
     }
 
+    /// Empties the sums for a new path: the slots are released (a slot's
+    /// sum is set when it is claimed), the direct sum is zeroed.
+    fn reset<T: Transport<Spectra = S>>(&mut self, transport: &T) {
+        self.ids = [None; EMISSION_SLOTS];
+        self.direct = transport.zero();
+    }
+
     /// Adds `value ⊛ Le(lane) · weight(lane)` for each lane with an emission.
     fn add<T: Transport<Spectra = S>>(
         &mut self,
@@ -161,11 +168,11 @@ impl<S: Copy> EmissionSums<S> {
         let scaled = transport.scale(value, f32x8::new(lane_weights));
         let slot = match self.ids.iter().position(|&s| s == Some(id)) {
             Some(slot) => Some(slot),
-            None => self
-                .ids
-                .iter()
-                .position(Option::is_none)
-                .inspect(|&slot| self.ids[slot] = Some(id)),
+            None => self.ids.iter().position(Option::is_none).inspect(|&slot| {
+                // A claimed slot starts from zero.
+                self.ids[slot] = Some(id);
+                self.sums[slot] = transport.zero();
+            }),
         };
         match slot {
             Some(slot) => self.sums[slot] = transport.add(&self.sums[slot], &scaled),
@@ -338,6 +345,28 @@ impl<'a> Shading<'a> {
 /// emission sums and a throughput per packet) stay within the L1 cache.
 pub const GROUP: usize = 8;
 
+/// The per-packet path state of a group of `G` packets, kept from group to
+/// group ([`trace_group`] resets what a new group needs): building it anew
+/// for every group cost a few kilobytes of zeroing and copying per packet.
+pub struct GroupState<S, const G: usize> {
+    paths: [PathState<S>; G],
+    nee: [NeeSample<S>; G],
+}
+
+impl<S: Copy, const G: usize> GroupState<S, G> {
+    /// A state for groups traced with `transport`.
+    pub fn new<T: Transport<Spectra = S>>(transport: &T) -> Self {
+        Self {
+            paths: core::array::from_fn(|_| PathState::new(transport, LaneMask::NONE)),
+            nee: core::array::from_fn(|_| NeeSample {
+                weight: [0.0; LANES],
+                light: [None; LANES],
+                through_bsdf: transport.zero(),
+            }),
+        }
+    }
+}
+
 /// Traces one packet and returns the radiance each lane carries back.
 /// `rngs` drive path decisions per lane; `wavelengths` were drawn before;
 /// the rays cast are added to `counts`. The same as a [`trace_group`] of
@@ -355,6 +384,7 @@ pub fn trace<T: Transport>(
         transport,
         scene,
         settings,
+        &mut GroupState::new(transport),
         core::array::from_ref(camera_rays),
         core::array::from_mut(rngs),
         core::array::from_mut(wavelengths),
@@ -371,26 +401,29 @@ pub fn trace<T: Transport>(
 /// alone ([`trace`]): the queries answer each lane independently, and each
 /// packet's work runs in the same order as alone (the light sample's
 /// contribution is added once the group's shadow rays are answered, after
-/// the BSDF sample that its product shares).
+/// the BSDF sample that its product shares). `state` is reset here; it
+/// carries nothing from one group to the next.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the group's inputs, its state and its outputs"
+)]
 pub fn trace_group<T: Transport, const G: usize>(
     transport: &T,
     scene: &Scene,
     settings: &IntegratorSettings,
+    state: &mut GroupState<T::Spectra, G>,
     camera_rays: &[RayPacket; G],
     rngs: &mut [RngPacket; G],
     wavelengths: &mut [T::Wavelengths; G],
     counts: &mut RayCounts,
 ) -> [T::Spectra; G] {
-    let mut paths: [PathState<T::Spectra>; G] =
-        core::array::from_fn(|p| PathState::new(transport, camera_rays[p].active));
+    let GroupState { paths, nee } = state;
+    for (path, rays) in paths.iter_mut().zip(camera_rays) {
+        path.reset(transport, rays.active);
+    }
     let mut rays = *camera_rays;
     let mut hits = rays.each_ref().map(PacketHit::misses);
     let mut shadows = rays;
-    let mut nee: [NeeSample<T::Spectra>; G] = core::array::from_fn(|_| NeeSample {
-        weight: [0.0; LANES],
-        light: [None; LANES],
-        through_bsdf: transport.zero(),
-    });
     let mut depth = 1u32;
     while paths.iter().any(|path| !path.active.is_empty()) {
         for (path, rays) in paths.iter().zip(&mut rays) {
@@ -527,6 +560,15 @@ impl<S: Copy> PathState<S> {
             active,
             previous_pdf: f32x8::ZERO,
         }
+    }
+
+    /// The state of new paths in the lanes of `active` ([`PathState::new`]
+    /// without rebuilding the emission sums).
+    fn reset<T: Transport<Spectra = S>>(&mut self, transport: &T, active: LaneMask) {
+        self.emitted.reset(transport);
+        self.throughput = transport.one();
+        self.active = active;
+        self.previous_pdf = f32x8::ZERO;
     }
 
     /// One bounce at the hits of `rays`: escapes and emission, the light

@@ -22,7 +22,7 @@
 //! [`RenderResult::rejected`].
 
 use crate::filter::Filter;
-use crate::integrator::{GROUP, IntegratorSettings, RayCounts, trace_group};
+use crate::integrator::{GROUP, GroupState, IntegratorSettings, RayCounts, trace_group};
 use crate::packet::{LANES, LaneMask, RayPacket};
 use crate::rng::{Purpose, Rng, RngPacket, SampleKey};
 use crate::scene::Scene;
@@ -215,6 +215,7 @@ fn render_tile<T: Transport>(
     let pixel_index = |(lx, ly): (u32, u32)| {
         u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx)
     };
+    let mut state = GroupState::<T::Spectra, GROUP>::new(transport);
     let path_key = SampleKey::new(u64::from(pass), Purpose::Path);
     let wavelength_key = SampleKey::new(u64::from(pass), Purpose::Wavelengths);
     for first in (0..count).step_by(GROUP) {
@@ -257,6 +258,7 @@ fn render_tile<T: Transport>(
             transport,
             scene,
             &settings.integrator,
+            &mut state,
             &camera_rays,
             &mut path_rngs,
             &mut wavelengths,

@@ -7,7 +7,7 @@
 use glam::Vec3;
 use simd_tracer::camera::Camera;
 use simd_tracer::filter::Filter;
-use simd_tracer::integrator::{IntegratorSettings, RayCounts, trace, trace_group};
+use simd_tracer::integrator::{GroupState, IntegratorSettings, RayCounts, trace, trace_group};
 use simd_tracer::material::Material;
 use simd_tracer::packet::{LANES, LaneMask, Ray, RayPacket};
 use simd_tracer::render::{RenderResult, RenderSettings, render};
@@ -544,7 +544,8 @@ fn images_do_not_depend_on_the_thread_count() -> TestResult {
 }
 
 /// Traces `packets` (camera rays with the given active lanes) in groups of
-/// four and one by one with the same streams; `bits` flattens a radiance.
+/// four (one group state reused) and one by one with the same streams;
+/// `bits` flattens a radiance.
 fn group_matches_single<T: Transport>(
     transport: &T,
     scene: &Scene,
@@ -556,6 +557,8 @@ fn group_matches_single<T: Transport>(
     };
     let (width, height) = (32u32, 32u32);
     let mut rng = Rng::new(11, 12);
+    // One state for all groups: nothing may carry over from one to the next.
+    let mut state = GroupState::new(transport);
     for group in 0..16u64 {
         let camera: [RayPacket; 4] = core::array::from_fn(|_| {
             let rays: Vec<Ray> = (0..LANES)
@@ -597,6 +600,7 @@ fn group_matches_single<T: Transport>(
             transport,
             scene,
             &integrator,
+            &mut state,
             &camera,
             &mut group_rngs,
             &mut group_wavelengths,
