@@ -206,6 +206,7 @@ fn render_tile<T: Transport>(
     scene: &Scene,
     settings: &RenderSettings,
     pass: u32,
+    state: &mut GroupState<T::Spectra, GROUP>,
     tile: &mut Tile<T::Pixel>,
 ) {
     // The tile's packets in row-major order, traced GROUP at a time; the
@@ -215,7 +216,6 @@ fn render_tile<T: Transport>(
     let pixel_index = |(lx, ly): (u32, u32)| {
         u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx)
     };
-    let mut state = GroupState::<T::Spectra, GROUP>::new(transport);
     let path_key = SampleKey::new(u64::from(pass), Purpose::Path);
     let wavelength_key = SampleKey::new(u64::from(pass), Purpose::Wavelengths);
     for first in (0..count).step_by(GROUP) {
@@ -258,7 +258,7 @@ fn render_tile<T: Transport>(
             transport,
             scene,
             &settings.integrator,
-            &mut state,
+            state,
             &camera_rays,
             &mut path_rngs,
             &mut wavelengths,
@@ -323,11 +323,14 @@ pub fn render<T: Transport>(
         let end = first.saturating_add(batch).min(settings.spp);
         let batch_start = Instant::now();
         pool.install(|| {
-            tiles.par_iter_mut().for_each(|tile| {
-                for pass in first..end {
-                    render_tile(transport, scene, settings, pass, tile);
-                }
-            });
+            tiles.par_iter_mut().for_each_init(
+                || GroupState::new(transport),
+                |state, tile| {
+                    for pass in first..end {
+                        render_tile(transport, scene, settings, pass, state, tile);
+                    }
+                },
+            );
         });
         if transport.passes_interact() {
             debug_assert_eq!(end, first + 1);
