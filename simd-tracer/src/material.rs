@@ -930,7 +930,7 @@ fn sin_cos_quarter_x8(theta: f32x8) -> (f32x8, f32x8) {
 /// 8-wide twin of [`sample_cosine`]. The concentric map's angle is
 /// `θ = (π/4) · minor/major ∈ [−π/4, π/4]` from the `a` axis, or `π/2 − θ`
 /// from it (so sine and cosine swap): one division and one short
-/// polynomial per lane ([`sin_cos_quarter_x8`]).
+/// polynomial per lane ([`sin_cos_quarter_x8`]). `n` must be unit length.
 pub fn sample_cosine_x8(n: Vec3x8, u: f32x8, v: f32x8) -> Vec3x8 {
     let two = f32x8::splat(2.0);
     let (a, b) = (two.mul_sub(u, f32x8::ONE), two.mul_sub(v, f32x8::ONE));
@@ -942,8 +942,11 @@ pub fn sample_cosine_x8(n: Vec3x8, u: f32x8, v: f32x8) -> Vec3x8 {
     let (cos_phi, sin_phi) = (a_major.select(cos, sin), a_major.select(sin, cos));
     let (x, y) = (r * cos_phi, r * sin_phi);
     let z = (f32x8::ONE - x * x - y * y).max(f32x8::ZERO).sqrt();
+    // The frame is orthonormal and x² + y² + z² = 1: the direction is a unit
+    // vector to rounding without a normalisation (a square root and a
+    // division on the path's critical chain).
     let (t, s) = simd::basis(n);
-    (t * x + s * y + n * z).normalize()
+    t * x + s * y + n * z
 }
 
 impl Bsdf {
