@@ -36,7 +36,9 @@
 
 use crate::bvh::NO_TRIANGLE;
 use crate::compaction;
-use crate::material::{Bsdf, BsdfEvalPacket, BsdfSamplePacket, LaneSpectrum, ShadingPoint};
+use crate::material::{
+    Bsdf, BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket, LaneSpectrum, ShadingPoint,
+};
 use crate::packet::PacketHit;
 use crate::packet::{LANES, LaneMask, RayPacket};
 use crate::rng::RngPacket;
@@ -245,9 +247,14 @@ fn power_heuristic_x8(a: f32x8, b: f32x8) -> f32x8 {
 
 /// How a packet's BSDFs are evaluated and sampled.
 enum Shading<'a> {
-    /// Every active lane is Lambert with a spectrum albedo: 8-wide, with
-    /// no per-lane material call and no texture coordinates.
-    Lambert([LaneSpectrum; LANES]),
+    /// Every lane of `lanes` is Lambert with the spectrum albedo
+    /// `albedo[lane]`: 8-wide, with no per-lane material call, no texture
+    /// coordinates and the albedos gathered by id
+    /// ([`Transport::gather_ids`]).
+    Lambert {
+        albedo: [SpectrumId; LANES],
+        lanes: LaneMask,
+    },
     /// Lane by lane through the materials (8-wide where all are Lambert).
     General {
         bsdfs: [Option<&'a Bsdf>; LANES],
@@ -305,11 +312,27 @@ impl<'a> Shading<'a> {
         n: Vec3x8,
         wo: Vec3x8,
         wi: Vec3x8,
-    ) -> BsdfEvalPacket {
+    ) -> ShadingEval {
         match self {
-            Self::Lambert(albedo) => Bsdf::eval_lambert_packet(albedo, n, wi),
+            &Self::Lambert { albedo, lanes } => {
+                let value = Bsdf::eval_lambert_directions(n, wi);
+                ShadingEval {
+                    value,
+                    pdf: value,
+                    spectrum: Factors::Lambert { albedo, lanes },
+                }
+            }
             Self::General { bsdfs, points } => {
-                Bsdf::eval_packet(scene, bsdfs, points, valid, n, wo, wi)
+                let BsdfEvalPacket {
+                    value,
+                    pdf,
+                    spectrum,
+                } = Bsdf::eval_packet(scene, bsdfs, points, valid, n, wo, wi);
+                ShadingEval {
+                    value,
+                    pdf,
+                    spectrum: Factors::Lanes(spectrum),
+                }
             }
         }
     }
@@ -328,14 +351,101 @@ impl<'a> Shading<'a> {
         u_lobe: &[f32; LANES],
         u: f32x8,
         v: f32x8,
-    ) -> BsdfSamplePacket {
+    ) -> ShadingSample {
         match self {
-            Self::Lambert(albedo) => Bsdf::sample_lambert_packet(albedo, active, n, u, v),
+            &Self::Lambert { albedo, lanes } => {
+                let LambertSamplePacket {
+                    wi,
+                    pdf,
+                    weight,
+                    valid,
+                } = Bsdf::sample_lambert_directions(active, n, u, v);
+                ShadingSample {
+                    wi,
+                    pdf,
+                    weight,
+                    valid,
+                    terminate_secondary: LaneMask::NONE,
+                    spectrum: Factors::Lambert { albedo, lanes },
+                }
+            }
             Self::General { bsdfs, points } => {
-                Bsdf::sample_packet(scene, bsdfs, points, active, n, wo, u_lobe, u, v)
+                let BsdfSamplePacket {
+                    wi,
+                    pdf,
+                    weight,
+                    spectrum,
+                    valid,
+                    terminate_secondary,
+                } = Bsdf::sample_packet(scene, bsdfs, points, active, n, wo, u_lobe, u, v);
+                ShadingSample {
+                    wi,
+                    pdf,
+                    weight,
+                    valid,
+                    terminate_secondary,
+                    spectrum: Factors::Lanes(spectrum),
+                }
             }
         }
     }
+}
+
+/// The spectral factors of a packet's BSDF values or sample.
+#[derive(PartialEq)]
+enum Factors {
+    /// The Lambert albedos `albedo[lane]` in the lanes of `lanes`, 0
+    /// elsewhere ([`Transport::gather_ids`]).
+    Lambert {
+        albedo: [SpectrumId; LANES],
+        lanes: LaneMask,
+    },
+    /// One factor per lane ([`Transport::gather`]).
+    Lanes([LaneSpectrum; LANES]),
+}
+
+impl Factors {
+    /// Whether the factors agree in the lanes of `lanes`.
+    fn agree(&self, other: &Self, lanes: LaneMask) -> bool {
+        match (self, other) {
+            (Self::Lanes(a), Self::Lanes(b)) => lanes.iter().all(|lane| a[lane] == b[lane]),
+            _ => self == other,
+        }
+    }
+
+    /// `throughput ⊛ f`.
+    fn times<T: Transport>(
+        &self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+        throughput: &T::Spectra,
+    ) -> T::Spectra {
+        let factor = match self {
+            Self::Lambert { albedo, lanes } => {
+                transport.gather_ids(scene, wavelengths, albedo, *lanes)
+            }
+            Self::Lanes(spectrum) => transport.gather(scene, wavelengths, spectrum),
+        };
+        transport.mul(throughput, &factor)
+    }
+}
+
+/// A packet's BSDF values as a bounce uses them.
+struct ShadingEval {
+    value: f32x8,
+    pdf: f32x8,
+    spectrum: Factors,
+}
+
+/// A packet's BSDF sample as a bounce uses it.
+struct ShadingSample {
+    wi: Vec3x8,
+    pdf: f32x8,
+    weight: f32x8,
+    valid: LaneMask,
+    terminate_secondary: LaneMask,
+    spectrum: Factors,
 }
 
 /// Packets traced together by [`trace_group`] in the renderer: their
@@ -651,9 +761,13 @@ impl<S: Copy> PathState<S> {
             return;
         }
         let origin = offset_x8(position, normal);
-        let shading = match surface.lambert(active) {
-            Some(albedo) => Shading::Lambert(albedo),
-            None => Shading::general(scene, transport, wavelengths, hit, active, normal, front),
+        let shading = if surface.all_lambert(active) {
+            Shading::Lambert {
+                albedo: surface.lambert_albedo,
+                lanes: active,
+            }
+        } else {
+            Shading::general(scene, transport, wavelengths, hit, active, normal, front)
         };
 
         // Next-event estimation: one light sample per lane, one shadow packet.
@@ -708,23 +822,17 @@ impl<S: Copy> PathState<S> {
         // The one truncated product of the bounce: T ⊛ f(sampled direction),
         // formed in place for the light sample, which shares it where the
         // BSDF's spectral factor does not depend on the direction.
-        nee.through_bsdf = transport.mul(
-            &self.throughput,
-            &transport.gather(scene, wavelengths, &sample.spectrum),
-        );
+        nee.through_bsdf = sample
+            .spectrum
+            .times(transport, scene, wavelengths, &self.throughput);
         let weight = active.to_simd().select(sample.weight, f32x8::ZERO);
-        let shared = matches!(shading, Shading::Lambert(_))
-            || nee_lanes
-                .iter()
-                .all(|lane| eval.spectrum[lane] == sample.spectrum[lane]);
-        if shared {
+        if eval.spectrum.agree(&sample.spectrum, nee_lanes) {
             self.throughput = transport.scale(&nee.through_bsdf, weight);
         } else {
             let throughput_bsdf = nee.through_bsdf;
-            nee.through_bsdf = transport.mul(
-                &self.throughput,
-                &transport.gather(scene, wavelengths, &eval.spectrum),
-            );
+            nee.through_bsdf = eval
+                .spectrum
+                .times(transport, scene, wavelengths, &self.throughput);
             self.throughput = transport.scale(&throughput_bsdf, weight);
         }
 

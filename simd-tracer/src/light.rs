@@ -117,9 +117,8 @@ impl LightRegisters {
             |table: f32x8, none: f32| lanes.select(lookup_f32x8(table, index), f32x8::splat(none));
         let word =
             |table: u32x8, none: u32| live.select(lookup_u32x8(table, index), u32x8::splat(none));
-        let corner = |[x, y, z]: [f32x8; 3]| {
-            Vec3x8::new(float(x, 0.0), float(y, 0.0), float(z, 0.0))
-        };
+        let corner =
+            |[x, y, z]: [f32x8; 3]| Vec3x8::new(float(x, 0.0), float(y, 0.0), float(z, 0.0));
         let [a, b, c] = self.vertices;
         let (a, b, c) = (corner(a), corner(b), corner(c));
         let su = u.sqrt();

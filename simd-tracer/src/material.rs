@@ -881,6 +881,20 @@ pub struct BsdfSamplePacket {
     pub terminate_secondary: LaneMask,
 }
 
+/// The directional part of a Lambert packet's sample
+/// ([`Bsdf::sample_lambert_directions`]).
+#[derive(Debug, Clone, Copy)]
+pub struct LambertSamplePacket {
+    /// Incident directions (unit).
+    pub wi: Vec3x8,
+    /// Solid-angle pdfs.
+    pub pdf: f32x8,
+    /// `f cos θ / p` without the albedo: 1 in valid lanes, else 0.
+    pub weight: f32x8,
+    /// Lanes that produced a sample.
+    pub valid: LaneMask,
+}
+
 /// BSDF values of a packet for given directions.
 #[derive(Debug, Clone, Copy)]
 pub struct BsdfEvalPacket {
@@ -960,17 +974,47 @@ impl Bsdf {
         u: f32x8,
         v: f32x8,
     ) -> BsdfSamplePacket {
-        let wi = sample_cosine_x8(n, u, v);
-        let cos = wi.dot(n);
-        let valid = LaneMask::from_simd(cos.simd_gt(f32x8::ZERO)).and(active);
+        let LambertSamplePacket {
+            wi,
+            pdf,
+            weight,
+            valid,
+        } = Self::sample_lambert_directions(active, n, u, v);
         BsdfSamplePacket {
             wi,
-            pdf: cos * f32x8::splat(FRAC_1_PI),
-            weight: valid.to_simd().select(f32x8::ONE, f32x8::ZERO),
+            pdf,
+            weight,
             spectrum: *albedo,
             valid,
             terminate_secondary: LaneMask::NONE,
         }
+    }
+
+    /// The directional part of [`Bsdf::sample_lambert_packet`] (its
+    /// spectral part is the albedo).
+    #[inline(always)]
+    pub fn sample_lambert_directions(
+        active: LaneMask,
+        n: Vec3x8,
+        u: f32x8,
+        v: f32x8,
+    ) -> LambertSamplePacket {
+        let wi = sample_cosine_x8(n, u, v);
+        let cos = wi.dot(n);
+        let valid = LaneMask::from_simd(cos.simd_gt(f32x8::ZERO)).and(active);
+        LambertSamplePacket {
+            wi,
+            pdf: cos * f32x8::splat(FRAC_1_PI),
+            weight: valid.to_simd().select(f32x8::ONE, f32x8::ZERO),
+            valid,
+        }
+    }
+
+    /// The directional part of [`Bsdf::eval_lambert_packet`]: `f cos θi`
+    /// without the albedo, which is also the pdf.
+    #[inline(always)]
+    pub fn eval_lambert_directions(n: Vec3x8, wi: Vec3x8) -> f32x8 {
+        wi.dot(n).max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI)
     }
 
     /// `f cos θi` and the pdf for a packet whose lanes are all Lambertian
@@ -980,7 +1024,7 @@ impl Bsdf {
         n: Vec3x8,
         wi: Vec3x8,
     ) -> BsdfEvalPacket {
-        let value = wi.dot(n).max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI);
+        let value = Self::eval_lambert_directions(n, wi);
         BsdfEvalPacket {
             value,
             pdf: value,

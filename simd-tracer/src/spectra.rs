@@ -16,11 +16,11 @@
 //! coefficient `j` of spectrum `s`, so a packet whose lanes name those
 //! spectra reads its coefficients with one permute per coefficient.
 
+use crate::packet::LANES;
+use crate::simd::lookup_f32x8;
 use spectral_core::registry::Builtin;
 use spectral_core::spectrum::{Blackbody, ConstantSpectrum, Spectrum, TabulatedSpectrum};
 use spectral_core::upsample::{RgbIlluminant, RgbUnbounded, SigmoidPolynomial};
-use crate::packet::LANES;
-use crate::simd::lookup_f32x8;
 use spectral_core::{FourierSpectrum, SpectralError, SpectralRange};
 use wide::{f32x8, u32x8};
 
@@ -240,7 +240,8 @@ impl SpectrumRegisters {
         Self {
             coeffs: core::array::from_fn(|j| {
                 f32x8::new(core::array::from_fn(|s| {
-                    held.get(s).map_or(0.0, |spectrum| spectrum.coefficients_f32()[j])
+                    held.get(s)
+                        .map_or(0.0, |spectrum| spectrum.coefficients_f32()[j])
                 }))
             }),
             count: held.len(),

@@ -19,7 +19,7 @@
 use crate::light::LightSet;
 #[cfg(doc)]
 use crate::light::{emits_towards, light_pdf_solid_angle};
-use crate::material::{Albedo, Bsdf, LaneSpectrum, Material};
+use crate::material::{Albedo, Bsdf, Material};
 use crate::packet::{LANES, LaneMask};
 use crate::scene::{MaterialId, SpectrumId, triangle_area};
 use crate::simd::Vec3x8;
@@ -147,14 +147,21 @@ impl PackedSurfaces {
     #[inline]
     pub fn gather(&self, triangles: &[u32; LANES], active: LaneMask) -> SurfacePacket {
         let none: f32x8 = cast(Self::pack(&Surface::NONE));
-        let rows: [f32x8; LANES] = core::array::from_fn(|lane| {
-            match self.0.get(triangles[lane] as usize) {
+        let rows: [f32x8; LANES] =
+            core::array::from_fn(|lane| match self.0.get(triangles[lane] as usize) {
                 Some(&words) if active.contains(lane) => cast(words),
                 _ => none,
-            }
-        });
-        let [x, y, z, emission, two_sided, light_pmf, area, lambert_albedo] =
-            f32x8::transpose(rows);
+            });
+        let [
+            x,
+            y,
+            z,
+            emission,
+            two_sided,
+            light_pmf,
+            area,
+            lambert_albedo,
+        ] = f32x8::transpose(rows);
         SurfacePacket {
             normal: Vec3x8::new(x, y, z),
             emission: cast::<f32x8, u32x8>(emission).to_array(),
@@ -167,7 +174,6 @@ impl PackedSurfaces {
 }
 
 impl SurfacePacket {
-
     /// Eight records in structure-of-arrays form.
     pub fn from_records(records: &[Surface; LANES]) -> Self {
         Self {
@@ -207,17 +213,11 @@ impl SurfacePacket {
         none.select(zero, self.light_pmf * distance_sq / (self.area * cos))
     }
 
-    /// The lanes' Lambert albedos if every lane in `active` is Lambert with
-    /// a spectrum albedo.
-    pub fn lambert(&self, active: LaneMask) -> Option<[LaneSpectrum; LANES]> {
-        let mut spectra = [LaneSpectrum::ZERO; LANES];
-        for lane in active.iter() {
-            match self.lambert_albedo[lane] {
-                NO_ID => return None,
-                id => spectra[lane] = LaneSpectrum::scene(id),
-            }
-        }
-        Some(spectra)
+    /// Whether every lane in `active` is Lambert with a spectrum albedo
+    /// (then [`SurfacePacket::lambert_albedo`] names the albedos).
+    #[inline(always)]
+    pub fn all_lambert(&self, active: LaneMask) -> bool {
+        active.iter().all(|lane| self.lambert_albedo[lane] != NO_ID)
     }
 }
 
@@ -405,7 +405,7 @@ mod tests {
             let pdf = packet
                 .light_pdf(f32x8::new(distance_sq), f32x8::new(cos))
                 .to_array();
-            let lambert = packet.lambert(active);
+            let lambert = packet.all_lambert(active);
             for lane in 0..LANES {
                 let record = match scene.surfaces.get(triangles[lane] as usize) {
                     Some(r) if active.contains(lane) => *r,
@@ -432,17 +432,7 @@ mod tests {
             let all_lambert = active
                 .iter()
                 .all(|lane| packet.lambert_albedo[lane] != NO_ID);
-            assert_eq!(lambert.is_some(), all_lambert);
-            if let Some(spectra) = lambert {
-                for (lane, spectrum) in spectra.iter().enumerate() {
-                    let expected = if active.contains(lane) {
-                        LaneSpectrum::scene(packet.lambert_albedo[lane])
-                    } else {
-                        LaneSpectrum::ZERO
-                    };
-                    assert_eq!(*spectrum, expected);
-                }
-            }
+            assert_eq!(lambert, all_lambert);
         }
         Ok(())
     }
