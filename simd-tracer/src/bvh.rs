@@ -804,14 +804,20 @@ impl PacketRays {
 }
 
 /// `Σw` and the mask of lanes inside the three edges (all `w ≥ 0` or all
-/// `≤ 0`) with `Σw ≠ 0`; the scalar test's conditions lane by lane.
+/// `≤ 0`) with `Σw ≠ 0`; the scalar test's conditions lane by lane, as
+/// `min w ≥ 0 or max w ≤ 0` and `|Σw| > 0`. The same mask for every input:
+/// without NaN the forms are equivalent (`±0` pass both sign tests, and a
+/// NaN sum of infinite weights of both signs fails the sign tests either
+/// way); a NaN weight, which `min`/`max` may drop, makes `Σw` NaN and fails
+/// `|Σw| > 0`, as it fails every comparison of the scalar test.
 #[inline(always)]
 fn inside_x8(w0: f32x8, w1: f32x8, w2: f32x8) -> (f32x8, f32x8) {
     let zero = f32x8::ZERO;
     let sum = w0 + w1 + w2;
-    let inside = (w0.simd_ge(zero) & w1.simd_ge(zero) & w2.simd_ge(zero))
-        | (w0.simd_le(zero) & w1.simd_le(zero) & w2.simd_le(zero));
-    (sum, inside & sum.simd_ne(zero))
+    let low = w0.fast_min(w1).fast_min(w2);
+    let high = w0.fast_max(w1).fast_max(w2);
+    let inside = low.simd_ge(zero) | high.simd_le(zero);
+    (sum, inside & sum.abs().simd_gt(zero))
 }
 
 /// A slot's bits in every lane (the flat tests select them per lane).
@@ -1769,6 +1775,43 @@ mod tests {
             Vec3::new(0.6, -0.4, 0.5),
         ));
         tris
+    }
+
+    /// The packet's inside test (`min`/`max` form) accepts exactly the lanes
+    /// the scalar test's conditions accept, for every triple of signed
+    /// zeros, ordinary and tiny values, infinities and NaN.
+    #[test]
+    fn packet_inside_test_equals_the_scalar_conditions() {
+        let values = [
+            0.0,
+            -0.0,
+            1.0,
+            -2.5,
+            f32::MIN_POSITIVE,
+            -1e-40,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let triples: Vec<[f32; 3]> = values
+            .iter()
+            .flat_map(|&a| values.iter().flat_map(move |&b| values.map(|c| [a, b, c])))
+            .collect();
+        for chunk in triples.chunks(LANES) {
+            let lane = |k: usize| chunk.get(k).copied().unwrap_or([0.0; 3]);
+            let column = |i: usize| f32x8::new(core::array::from_fn(|k| lane(k)[i]));
+            let (sum, inside) = inside_x8(column(0), column(1), column(2));
+            let (sum, inside) = (sum.to_array(), inside.to_bitmask());
+            for k in 0..chunk.len() {
+                let [w0, w1, w2] = lane(k);
+                let scalar_sum = w0 + w1 + w2;
+                let scalar = ((w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0)
+                    || (w0 <= 0.0 && w1 <= 0.0 && w2 <= 0.0))
+                    && scalar_sum != 0.0;
+                assert_eq!(inside & (1 << k) != 0, scalar, "{w0} {w1} {w2}");
+                assert_eq!(sum[k].to_bits(), scalar_sum.to_bits(), "{w0} {w1} {w2}");
+            }
+        }
     }
 
     #[test]
