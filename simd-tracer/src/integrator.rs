@@ -44,9 +44,11 @@ use crate::packet::{LANES, LaneMask, RayPacket};
 use crate::rng::RngPacket;
 use crate::scene::{Scene, SpectrumId};
 use crate::simd::Vec3x8;
+use crate::surface::NO_ID;
 use crate::transport::Transport;
 use glam::Vec2;
-use wide::f32x8;
+use wide::bytemuck::cast;
+use wide::{f32x8, u32x8};
 
 /// Depth and roulette settings.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -105,52 +107,49 @@ impl<S: Copy> EmissionSums<S> {
         self.direct = transport.zero();
     }
 
-    /// Adds `value ⊛ Le(lane) · weight(lane)` for each lane with an emission.
+    /// Adds `value ⊛ Le(ids[lane]) · weight(lane)` for each lane of `lanes`.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the spectra, the emissions and their weights"
+    )]
     fn add<T: Transport<Spectra = S>>(
         &mut self,
         transport: &T,
         scene: &Scene,
         wavelengths: &T::Wavelengths,
         value: &S,
-        emission: &[Option<SpectrumId>; LANES],
-        weight: &[f32; LANES],
+        ids: &[SpectrumId; LANES],
+        lanes: LaneMask,
+        weight: f32x8,
     ) {
+        let Some(first) = lanes.iter().next() else {
+            return;
+        };
+        let live = lanes.to_simd();
+        let weight = live.select(weight, f32x8::ZERO);
+        // Lanes whose weight is not 0 (a NaN weight counts).
+        let weighted = !weight.simd_eq(f32x8::ZERO);
         // The common case, one emission among the lanes: one scaled sum,
         // the same as the loop below forms for it.
-        let mut ids = emission.iter().flatten();
-        if let Some(&id) = ids.next() {
-            if ids.all(|&other| other == id) {
-                let lane_weights: [f32; LANES] = core::array::from_fn(|l| {
-                    if emission[l].is_some() {
-                        weight[l]
-                    } else {
-                        0.0
-                    }
-                });
-                if lane_weights.iter().any(|&w| w != 0.0) {
-                    self.add_scaled(transport, scene, wavelengths, value, id, lane_weights);
-                }
-                return;
+        let id = ids[first];
+        let same: f32x8 = cast(u32x8::new(*ids).simd_eq(u32x8::splat(id)));
+        if (same | !live).all() {
+            if weighted.any() {
+                self.add_scaled(transport, scene, wavelengths, value, id, weight);
             }
+            return;
         }
-        let mut done = [false; LANES];
-        for lane in 0..LANES {
-            let Some(id) = emission[lane] else {
-                continue;
-            };
-            if done[lane] || weight[lane] == 0.0 {
+        let mut done = LaneMask::NONE;
+        let weighted = LaneMask::from_simd(weighted);
+        for lane in lanes.and(weighted).iter() {
+            if done.contains(lane) {
                 continue;
             }
-            let lane_weights: [f32; LANES] = core::array::from_fn(|l| {
-                if emission[l] == Some(id) {
-                    weight[l]
-                } else {
-                    0.0
-                }
-            });
-            for (l, d) in done.iter_mut().enumerate() {
-                *d |= emission[l] == Some(id);
-            }
+            let id = ids[lane];
+            let of_id: f32x8 = cast(u32x8::new(*ids).simd_eq(u32x8::splat(id)));
+            let of_id = LaneMask::from_simd(of_id).and(lanes);
+            done = done.or(of_id);
+            let lane_weights = of_id.to_simd().select(weight, f32x8::ZERO);
             self.add_scaled(transport, scene, wavelengths, value, id, lane_weights);
         }
     }
@@ -165,9 +164,9 @@ impl<S: Copy> EmissionSums<S> {
         wavelengths: &T::Wavelengths,
         value: &S,
         id: SpectrumId,
-        lane_weights: [f32; LANES],
+        lane_weights: f32x8,
     ) {
-        let scaled = transport.scale(value, f32x8::new(lane_weights));
+        let scaled = transport.scale(value, lane_weights);
         let slot = match self.ids.iter().position(|&s| s == Some(id)) {
             Some(slot) => Some(slot),
             None => self.ids.iter().position(Option::is_none).inspect(|&slot| {
@@ -469,8 +468,9 @@ impl<S: Copy, const G: usize> GroupState<S, G> {
         Self {
             paths: core::array::from_fn(|_| PathState::new(transport, LaneMask::NONE)),
             nee: core::array::from_fn(|_| NeeSample {
-                weight: [0.0; LANES],
-                light: [None; LANES],
+                weight: f32x8::ZERO,
+                light: [NO_ID; LANES],
+                lanes: LaneMask::NONE,
                 through_bsdf: transport.zero(),
             }),
         }
@@ -656,8 +656,10 @@ struct PathState<S> {
 /// group's shadow rays: `through_bsdf ⊛ Le(light) · weight` per lane that
 /// is not blocked.
 struct NeeSample<S> {
-    weight: [f32; LANES],
-    light: [Option<SpectrumId>; LANES],
+    weight: f32x8,
+    /// The lights' emission spectra, in the lanes of `lanes`.
+    light: [SpectrumId; LANES],
+    lanes: LaneMask,
     /// Throughput times the BSDF's spectral factor towards the light.
     through_bsdf: S,
 }
@@ -709,14 +711,14 @@ impl<S: Copy> PathState<S> {
         // Escaped lanes see the environment (no NEE for it, so no MIS).
         let missed = self.active.and_not(hit.hit);
         if let (Some(env), false) = (scene.environment, missed.is_empty()) {
-            let ids = core::array::from_fn(|lane| missed.contains(lane).then_some(env));
             self.emitted.add(
                 transport,
                 scene,
                 wavelengths,
                 &self.throughput,
-                &ids,
-                &[1.0; LANES],
+                &[env; LANES],
+                missed,
+                f32x8::ONE,
             );
         }
         let mut active = self.active.and(hit.hit);
@@ -745,15 +747,14 @@ impl<S: Copy> PathState<S> {
                 .previous_pdf
                 .simd_gt(f32x8::ZERO)
                 .select(power_heuristic_x8(self.previous_pdf, p_light), f32x8::ONE);
-            let emission =
-                core::array::from_fn(|lane| emits.contains(lane).then_some(surface.emission[lane]));
             self.emitted.add(
                 transport,
                 scene,
                 wavelengths,
                 &self.throughput,
-                &emission,
-                &emits.to_simd().select(weight, f32x8::ZERO).to_array(),
+                &surface.emission,
+                emits,
+                weight,
             );
         }
         if depth >= settings.max_depth {
@@ -786,18 +787,11 @@ impl<S: Copy> PathState<S> {
             & p_light.simd_gt(f32x8::ZERO)
             & distance_sq.simd_gt(f32x8::ZERO);
         let nee_lanes = emits.and(LaneMask::from_simd(usable));
-        nee.weight = nee_lanes
-            .to_simd()
-            .select(
-                eval.value * power_heuristic_x8(p_light, eval.pdf) / p_light,
-                f32x8::ZERO,
-            )
-            .to_array();
-        nee.light = core::array::from_fn(|lane| {
-            nee_lanes
-                .contains(lane)
-                .then_some(light.surface.emission[lane])
-        });
+        nee.weight = nee_lanes.to_simd().select(
+            eval.value * power_heuristic_x8(p_light, eval.pdf) / p_light,
+            f32x8::ZERO,
+        );
+        (nee.light, nee.lanes) = (light.surface.emission, nee_lanes);
         *shadow = RayPacket {
             origin: origin.to_array(),
             direction: to_light.to_array(),
@@ -869,18 +863,16 @@ impl<S: Copy> PathState<S> {
         nee: &NeeSample<S>,
         blocked: LaneMask,
     ) {
-        let mut weight = nee.weight;
-        for lane in blocked.iter() {
-            weight[lane] = 0.0;
-        }
-        if weight.iter().any(|&w| w > 0.0) {
+        let weight = blocked.to_simd().select(f32x8::ZERO, nee.weight);
+        if weight.simd_gt(f32x8::ZERO).any() {
             self.emitted.add(
                 transport,
                 scene,
                 wavelengths,
                 &nee.through_bsdf,
                 &nee.light,
-                &weight,
+                nee.lanes,
+                weight,
             );
         }
     }
@@ -955,6 +947,83 @@ mod tests {
 
     /// The 8-wide MIS weight and ray offset equal their scalar formulas lane
     /// by lane, bit for bit (zeros, both-zero and huge pdfs included).
+    /// Emission sums equal the lane-by-lane sums `Σ w · c_id · value` for
+    /// constant emissions `c_id`: one emission per call (the common case),
+    /// several, and more than [`EMISSION_SLOTS`] (products formed
+    /// directly); zero, negative and unused lanes included.
+    #[test]
+    fn emission_sums_equal_lane_by_lane_sums() -> Result<(), Box<dyn std::error::Error>> {
+        use crate::camera::Camera;
+        use crate::material::Material;
+        use crate::scene::SceneBuilder;
+        use crate::spectra::SpectrumSource;
+        use crate::transport::{Buffer, FourierTransport};
+        use spectral_core::SpectralRange;
+        use spectral_core::xyz::XyzRoute;
+
+        let range = SpectralRange::VISIBLE;
+        let mut b = SceneBuilder::new(range);
+        let emissions = [1.0, 2.0, 3.0, 5.0, 7.0, 11.0];
+        let mut ids = Vec::new();
+        for (i, &c) in emissions.iter().enumerate() {
+            ids.push(b.add_spectrum(&format!("c{i}"), SpectrumSource::Constant(c))?);
+        }
+        let material = b.add_material(Material::lambert("grey", ids[0]));
+        b.add_triangle([Vec3::ZERO, Vec3::X, Vec3::Y], material);
+        b.set_camera(Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0)?);
+        let scene = b.build()?;
+        let transport = FourierTransport::<4>::new(range, Buffer::Spectral, XyzRoute::Series)?;
+        let mut rng = Rng::new(9, 10);
+        for round in 0..300 {
+            // Rounds cycle through 1, 3 and all 6 emissions.
+            let kinds = [1, 3, emissions.len()][round % 3] as u32;
+            let mut sums = EmissionSums::new(&transport);
+            let mut expected = [[0.0f64; 4]; LANES];
+            for _ in 0..3 {
+                let value =
+                    spectral_core::FourierSpectrum::from_coeffs(core::array::from_fn(|_| {
+                        f32x8::new(core::array::from_fn(|_| 2.0 * rng.next_f32() - 1.0))
+                    }));
+                let lane_ids: [SpectrumId; LANES] =
+                    core::array::from_fn(|_| ids[(rng.next_u32() % kinds) as usize]);
+                let lanes = LaneMask((rng.next_u32() & 0xff) as u8);
+                let weight: [f32; LANES] = core::array::from_fn(|_| match rng.next_u32() % 4 {
+                    0 => 0.0,
+                    1 => -rng.next_f32(),
+                    _ => rng.next_f32(),
+                });
+                sums.add(
+                    &transport,
+                    &scene,
+                    &(),
+                    &value,
+                    &lane_ids,
+                    lanes,
+                    f32x8::new(weight),
+                );
+                for lane in lanes.iter() {
+                    let c = emissions[ids.iter().position(|&id| id == lane_ids[lane]).unwrap_or(0)];
+                    for (j, e) in expected[lane].iter_mut().enumerate() {
+                        *e += f64::from(weight[lane])
+                            * c
+                            * f64::from(value.coeffs[j].to_array()[lane]);
+                    }
+                }
+            }
+            let total = sums.finish(&transport, &scene, &());
+            for (lane, row) in expected.iter().enumerate() {
+                for (j, &e) in row.iter().enumerate() {
+                    let got = f64::from(total.coeffs[j].to_array()[lane]);
+                    assert!(
+                        (got - e).abs() <= 1e-4 * (1.0 + e.abs()),
+                        "{round} {lane} {j}: {got} vs {e}"
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
     #[test]
     fn packet_helpers_match_scalar_oracles() {
         let mut rng = Rng::new(5, 6);
