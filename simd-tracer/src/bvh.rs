@@ -1802,8 +1802,7 @@ mod tests {
             let column = |i: usize| f32x8::new(core::array::from_fn(|k| lane(k)[i]));
             let (sum, inside) = inside_x8(column(0), column(1), column(2));
             let (sum, inside) = (sum.to_array(), inside.to_bitmask());
-            for k in 0..chunk.len() {
-                let [w0, w1, w2] = lane(k);
+            for (k, &[w0, w1, w2]) in chunk.iter().enumerate() {
                 let scalar_sum = w0 + w1 + w2;
                 let scalar = ((w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0)
                     || (w0 <= 0.0 && w1 <= 0.0 && w2 <= 0.0))

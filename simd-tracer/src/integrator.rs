@@ -245,6 +245,10 @@ fn power_heuristic_x8(a: f32x8, b: f32x8) -> f32x8 {
 }
 
 /// How a packet's BSDFs are evaluated and sampled.
+#[allow(
+    clippy::large_enum_variant,
+    reason = "one value per bounce on the stack; boxing the general variant would allocate per bounce"
+)]
 enum Shading<'a> {
     /// Every lane of `lanes` is Lambert with the spectrum albedo
     /// `albedo[lane]`: 8-wide, with no per-lane material call, no texture
@@ -920,8 +924,7 @@ mod tests {
                 let closest = scene.bvh.intersect_incoherent(packet);
                 for lane in 0..LANES {
                     let emissive = closest.hit.contains(lane)
-                        && scene.surfaces[closest.triangle[lane] as usize].emission
-                            != crate::surface::NO_ID;
+                        && scene.surfaces[closest.triangle[lane] as usize].emission != NO_ID;
                     let lane_bits = |h: &PacketHit| {
                         (
                             h.hit.contains(lane),
