@@ -72,11 +72,12 @@ pub struct GaussianSampler {
     /// points of `[−r, r]` (0 … 1).
     cdf: Vec<f32>,
     /// Per segment `[c0, c1, f0, f1]`: the CDF and the filter value at its
-    /// two ends, side by side so a lane reads its segment in one load.
-    segments: Vec<[f32; 4]>,
+    /// two ends, side by side so a lane reads its segment in one load
+    /// (fixed sizes: the lookups need no bounds checks).
+    segments: Box<[[f32; 4]; TABLE_SIZE]>,
     /// `inverse[k]`: the segment containing the CDF value `k/INVERSE_SIZE`,
     /// so sampling starts its search there (at most a step or two).
-    inverse: Vec<u16>,
+    inverse: Box<[u16; INVERSE_SIZE + 1]>,
 }
 
 impl GaussianSampler {
@@ -98,17 +99,12 @@ impl GaussianSampler {
             cdf.push(total);
         }
         let cdf: Vec<f32> = cdf.into_iter().map(|c| (c / total) as f32).collect();
-        let inverse = (0..=INVERSE_SIZE)
-            .map(|k| {
-                let u = k as f32 / INVERSE_SIZE as f32;
-                (cdf.partition_point(|&c| c <= u).clamp(1, TABLE_SIZE) - 1) as u16
-            })
-            .collect();
-        let segments = values
-            .windows(2)
-            .zip(cdf.windows(2))
-            .map(|(f, c)| [c[0], c[1], f[0], f[1]])
-            .collect();
+        let inverse = Box::new(core::array::from_fn(|k| {
+            let u = k as f32 / INVERSE_SIZE as f32;
+            (cdf.partition_point(|&c| c <= u).clamp(1, TABLE_SIZE) - 1) as u16
+        }));
+        let segments =
+            Box::new(core::array::from_fn(|i| [cdf[i], cdf[i + 1], values[i], values[i + 1]]));
         Self {
             radius,
             cdf,
@@ -126,7 +122,7 @@ impl GaussianSampler {
     /// given.
     #[inline(always)]
     fn segment_from(&self, k: usize, u: f32) -> usize {
-        let mut segment = self.inverse.get(k).map_or(0, |&s| usize::from(s));
+        let mut segment = usize::from(self.inverse[k.min(INVERSE_SIZE)]).min(TABLE_SIZE - 1);
         while segment + 1 < TABLE_SIZE && self.segments[segment][1] <= u {
             segment += 1;
         }
@@ -148,7 +144,7 @@ impl GaussianSampler {
         let rows: [[f32; 4]; 8] = core::array::from_fn(|lane| {
             let k = self.segment_from(cells[lane] as usize, lanes[lane]);
             segment[lane] = k as f32;
-            self.segments[k]
+            self.segments[k.min(TABLE_SIZE - 1)]
         });
         let column = |i: usize| f32x8::new(core::array::from_fn(|lane| rows[lane][i]));
         let (c0, c1, f0, f1) = (column(0), column(1), column(2), column(3));
@@ -180,7 +176,7 @@ impl GaussianSampler {
     pub fn sample(&self, u: f32) -> f32 {
         let segment = self.segment(u);
         let step = 2.0 * self.radius / TABLE_SIZE as f32;
-        let [c0, c1, f0, f1] = self.segments[segment];
+        let [c0, c1, f0, f1] = self.segments[segment.min(TABLE_SIZE - 1)];
         let mass = c1 - c0;
         let target = if mass > 0.0 {
             ((u - c0) / mass).clamp(0.0, 1.0)
