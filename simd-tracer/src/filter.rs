@@ -103,8 +103,9 @@ impl GaussianSampler {
             let u = k as f32 / INVERSE_SIZE as f32;
             (cdf.partition_point(|&c| c <= u).clamp(1, TABLE_SIZE) - 1) as u16
         }));
-        let segments =
-            Box::new(core::array::from_fn(|i| [cdf[i], cdf[i + 1], values[i], values[i + 1]]));
+        let segments = Box::new(core::array::from_fn(|i| {
+            [cdf[i], cdf[i + 1], values[i], values[i + 1]]
+        }));
         Self {
             radius,
             cdf,

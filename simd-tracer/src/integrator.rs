@@ -178,7 +178,7 @@ impl<S: Copy> EmissionSums<S> {
         match slot {
             Some(slot) => self.sums[slot] = transport.add(&self.sums[slot], &scaled),
             None => {
-                let le = transport.gather(scene, wavelengths, &[LaneSpectrum::scene(id); LANES]);
+                let le = transport.gather_ids(scene, wavelengths, &[id; LANES], LaneMask::ALL);
                 self.direct = transport.add(&self.direct, &transport.mul(&scaled, &le));
             }
         }
@@ -194,7 +194,7 @@ impl<S: Copy> EmissionSums<S> {
         let mut radiance = self.direct;
         for (id, sum) in self.ids.iter().zip(&self.sums) {
             if let Some(id) = *id {
-                let le = transport.gather(scene, wavelengths, &[LaneSpectrum::scene(id); LANES]);
+                let le = transport.gather_ids(scene, wavelengths, &[id; LANES], LaneMask::ALL);
                 radiance = transport.add(&radiance, &transport.mul(sum, &le));
             }
         }
