@@ -19,6 +19,8 @@ pub struct Camera {
     right: Vec3,
     up: Vec3,
     fov_deg: f32,
+    /// `tan(fov/2)`, computed once (not per packet).
+    tan_half_fov: f32,
 }
 
 /// Why a camera is invalid.
@@ -71,6 +73,7 @@ impl Camera {
             right,
             up,
             fov_deg,
+            tan_half_fov: (0.5 * fov_deg.to_radians()).tan(),
         })
     }
 
@@ -86,7 +89,7 @@ impl Camera {
 
     /// Film-plane size of one pixel at unit distance, `2 tan(fov/2) / min(w, h)`.
     fn pixel_scale(&self, width: u32, height: u32) -> f32 {
-        2.0 * (0.5 * self.fov_deg.to_radians()).tan() / width.min(height) as f32
+        2.0 * self.tan_half_fov / width.min(height) as f32
     }
 
     /// The (unnormalised) ray direction through film point `(x, y)` in pixels.
