@@ -7,7 +7,7 @@
 //! same expression MIS uses when a BSDF-sampled ray hits the light.
 //!
 //! Scenes with at most [`LANES`] emissive triangles (a quad lamp is two)
-//! also hold the lights field by field in registers ([`LightRegisters`]):
+//! also hold the lights field by field in registers (`LightRegisters`):
 //! a packet then chooses its lights with one comparison per light and
 //! reads their records with one permute per field, instead of a search and
 //! a record copy per lane. Both paths give the scalar sample bit for bit.

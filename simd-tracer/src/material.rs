@@ -944,7 +944,7 @@ fn sin_cos_quarter_x8(theta: f32x8) -> (f32x8, f32x8) {
 /// 8-wide twin of [`sample_cosine`]. The concentric map's angle is
 /// `θ = (π/4) · minor/major ∈ [−π/4, π/4]` from the `a` axis, or `π/2 − θ`
 /// from it (so sine and cosine swap): one division and one short
-/// polynomial per lane ([`sin_cos_quarter_x8`]). `n` must be unit length.
+/// polynomial per lane (Cephes' minimax sine and cosine on `[−π/4, π/4]`). `n` must be unit length.
 pub fn sample_cosine_x8(n: Vec3x8, u: f32x8, v: f32x8) -> Vec3x8 {
     let two = f32x8::splat(2.0);
     let (a, b) = (two.mul_sub(u, f32x8::ONE), two.mul_sub(v, f32x8::ONE));
