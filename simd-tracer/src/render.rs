@@ -266,9 +266,10 @@ fn render_tile<T: Transport>(
         );
         for g in 0..GROUP {
             let samples = transport.samples(&radiance[g], &wavelengths[g]);
+            let finite = transport.finite_lanes(&radiance[g], &samples);
             for (lane, slot) in lanes[g].iter().enumerate() {
                 if let Some((lx, ly)) = *slot {
-                    if T::sample_is_finite(&samples[lane]) {
+                    if finite.contains(lane) {
                         let index = (ly * tile.width + lx) as usize;
                         transport.accumulate(&mut tile.pixels[index], &samples[lane]);
                     } else {

@@ -112,6 +112,13 @@ pub trait Transport: Sync {
     ) -> [Self::Sample; LANES];
     /// Whether a sample is free of NaN and infinity (else it is rejected).
     fn sample_is_finite(sample: &Self::Sample) -> bool;
+    /// The lanes whose samples (made from `radiance`) are free of NaN and
+    /// infinity: [`Transport::sample_is_finite`] lane by lane.
+    fn finite_lanes(&self, _radiance: &Self::Spectra, samples: &[Self::Sample; LANES]) -> LaneMask {
+        (0..LANES)
+            .filter(|&lane| Self::sample_is_finite(&samples[lane]))
+            .fold(LaneMask::NONE, LaneMask::with)
+    }
     /// Adds a sample to a pixel.
     fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample);
     /// The shared state for ending the current pass, from every pixel
@@ -442,6 +449,25 @@ impl<const N: usize> Transport for FourierTransport<N> {
 
     fn sample_is_finite(sample: &Self::Sample) -> bool {
         all_finite(&sample.coeffs) && all_finite(&sample.xyz)
+    }
+
+    /// The coefficients checked 8 lanes at a time on the radiance (a
+    /// sample's coefficients are its lane's, moved unchanged); the XYZ per
+    /// lane only where the buffer holds XYZ (else it is 0).
+    fn finite_lanes(&self, radiance: &Self::Spectra, samples: &[Self::Sample; LANES]) -> LaneMask {
+        let all = f32x8::ZERO.is_finite();
+        let coeffs = radiance
+            .coeffs
+            .iter()
+            .fold(all, |finite, c| finite & c.is_finite());
+        let lanes = LaneMask::from_simd(coeffs);
+        match self.buffer {
+            Buffer::Spectral => lanes,
+            Buffer::Xyz => (0..LANES)
+                .filter(|&lane| all_finite(&samples[lane].xyz))
+                .fold(LaneMask::NONE, LaneMask::with)
+                .and(lanes),
+        }
     }
 
     fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
@@ -982,6 +1008,43 @@ mod tests {
                     b.to_array().map(f32::to_bits)
                 );
                 assert_eq!(a.to_array().map(f32::to_bits), row.map(f32::to_bits));
+            }
+        }
+    }
+
+    /// The packet-wide finite check equals the per-lane one, for both
+    /// buffers, with NaN and infinities in random places and huge finite
+    /// coefficients (whose XYZ may overflow).
+    #[test]
+    fn finite_lanes_equal_the_per_lane_check() {
+        let mut rng = Rng::new(13, 14);
+        for buffer in [Buffer::Spectral, Buffer::Xyz] {
+            let Ok(transport) =
+                FourierTransport::<12>::new(SpectralRange::VISIBLE, buffer, XyzRoute::Series)
+            else {
+                panic!("transport");
+            };
+            for _ in 0..300 {
+                let mut coeffs: [[f32; LANES]; 12] =
+                    core::array::from_fn(|_| core::array::from_fn(|_| rng.next_f32() - 0.5));
+                for _ in 0..rng.next_u32() % 4 {
+                    let (j, lane) = (
+                        (rng.next_u32() % 12) as usize,
+                        (rng.next_u32() % 8) as usize,
+                    );
+                    coeffs[j][lane] = match rng.next_u32() % 4 {
+                        0 => f32::NAN,
+                        1 => f32::INFINITY,
+                        2 => f32::NEG_INFINITY,
+                        _ => 3e38,
+                    };
+                }
+                let radiance = FourierSpectrum::<f32x8, 12>::from_coeffs(coeffs.map(f32x8::new));
+                let samples = transport.samples(&radiance, &());
+                let per_lane = (0..LANES)
+                    .filter(|&lane| FourierTransport::<12>::sample_is_finite(&samples[lane]))
+                    .fold(LaneMask::NONE, LaneMask::with);
+                assert_eq!(transport.finite_lanes(&radiance, &samples), per_lane);
             }
         }
     }
