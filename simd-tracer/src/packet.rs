@@ -71,9 +71,19 @@ impl LaneMask {
         Self(self.0 & !other.0)
     }
 
-    /// The set lanes in increasing order.
+    /// The set lanes in increasing order (one step per set lane: the
+    /// lowest set bit, then cleared).
+    #[inline]
     pub fn iter(self) -> impl Iterator<Item = usize> {
-        (0..LANES).filter(move |&lane| self.contains(lane))
+        let mut bits = self.0;
+        core::iter::from_fn(move || {
+            if bits == 0 {
+                return None;
+            }
+            let lane = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            Some(lane)
+        })
     }
 
     /// From the sign bits of an `f32x8` comparison mask.
@@ -198,6 +208,10 @@ mod tests {
         assert_eq!(m.without(1).with(7), LaneMask(0b1000_0101));
         assert_eq!(LaneMask::from_simd(m.to_simd()), m);
         for bits in 0..=u8::MAX {
+            // The set lanes, in increasing order, for every mask.
+            let lanes: Vec<usize> = LaneMask(bits).iter().collect();
+            let expected: Vec<usize> = (0..LANES).filter(|&l| bits & (1 << l) != 0).collect();
+            assert_eq!(lanes, expected);
             let mask = LaneMask(bits).to_simd().to_array();
             for (lane, value) in mask.iter().enumerate() {
                 let expected = if bits & (1 << lane) != 0 { u32::MAX } else { 0 };

@@ -254,6 +254,12 @@ impl SpectrumRegisters {
         (id as usize) < self.count
     }
 
+    /// [`SpectrumRegisters::holds`] lane-wise (all bits set where held).
+    #[inline(always)]
+    pub fn holds_x8(&self, ids: u32x8) -> u32x8 {
+        ids.simd_lt(u32x8::splat(self.count as u32))
+    }
+
     /// Coefficient `j` of spectrum `ids[lane]` in each lane (held spectra
     /// only, [`SpectrumRegisters::holds`]): the coefficient bits unchanged.
     #[inline(always)]

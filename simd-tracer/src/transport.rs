@@ -28,6 +28,7 @@ use spectral_core::control_variate::{AlphaStatistics, ControlVariate};
 use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy};
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, Lane, SpectralError, SpectralRange};
+use wide::bytemuck::cast;
 use wide::{f32x8, u32x8};
 
 /// Where Fourier samples are converted to colour.
@@ -369,7 +370,9 @@ impl<const N: usize> Transport for FourierTransport<N> {
         lanes: LaneMask,
     ) -> Self::Spectra {
         let registers = scene.spectrum_registers();
-        if !lanes.iter().all(|lane| registers.holds(ids[lane])) {
+        let live = lanes.to_simd();
+        let id_lanes = u32x8::new(*ids);
+        if !(registers.holds_x8(id_lanes) | !cast::<f32x8, u32x8>(live)).all() {
             let spectra = core::array::from_fn(|lane| {
                 if lanes.contains(lane) {
                     LaneSpectrum::scene(ids[lane])
@@ -379,10 +382,7 @@ impl<const N: usize> Transport for FourierTransport<N> {
             });
             return self.gather(scene, wavelengths, &spectra);
         }
-        let live = lanes.to_simd();
-        let ids = u32x8::new(core::array::from_fn(|lane| {
-            if lanes.contains(lane) { ids[lane] } else { 0 }
-        }));
+        let ids = cast::<f32x8, u32x8>(live).select(id_lanes, u32x8::ZERO);
         let mut coeffs: [f32x8; N] =
             core::array::from_fn(|j| live.select(registers.coefficient(j, ids), f32x8::ZERO));
         // The general gather adds the constant part (0) to `c_0`: `−0`
