@@ -303,6 +303,10 @@ pub struct Bvh {
     /// Slots of the fan pairs (first, second) whose second triangle takes
     /// the first one's plane ([`COPLANAR_SINE`]), in order of the first.
     flat_pairs: Vec<[u32; 2]>,
+    /// The prepared triangles of `flat_pairs`, in the same order: the flat
+    /// test reads them one after the other, without slot lookups and their
+    /// bounds checks.
+    flat_pair_triangles: Vec<[PreparedTriangle; 2]>,
     /// Slots of the triangles in no pair, ascending.
     flat_singles: Vec<u32>,
     /// Their vertices, same order (for validation).
@@ -602,6 +606,19 @@ fn is_degenerate(vertices: &[Vec3; 3]) -> bool {
     let [a, b, c] = vertices.map(Vec3::as_dvec3);
     let (e1, e2) = (b - a, c - a);
     e1.cross(e2).length() <= DEGENERATE_SINE * e1.length() * e2.length()
+}
+
+/// The prepared triangles of the fan pairs `pairs` (slots into
+/// `triangles`), in order; a pair with a slot out of range is left out
+/// (which `Bvh::validate` reports as stale copies).
+fn pair_triangles(
+    pairs: &[[u32; 2]],
+    triangles: &[PreparedTriangle],
+) -> Vec<[PreparedTriangle; 2]> {
+    pairs
+        .iter()
+        .filter_map(|&[a, b]| Some([*triangles.get(a as usize)?, *triangles.get(b as usize)?]))
+        .collect()
 }
 
 fn to_obvhs_triangle(vertices: &[Vec3; 3]) -> ObvhsTriangle {
@@ -1057,6 +1074,7 @@ impl Bvh {
             }
         }
         flat_pairs.sort_unstable();
+        let flat_pair_triangles = pair_triangles(&flat_pairs, &triangles_prepared);
         let flat_singles = (0..vertices.len())
             .filter(|&slot| !paired[slot])
             .map(index_u32)
@@ -1075,6 +1093,7 @@ impl Bvh {
             shadow,
             triangles: triangles_prepared,
             flat_pairs,
+            flat_pair_triangles,
             flat_singles,
             vertices,
             original,
@@ -1106,6 +1125,11 @@ impl Bvh {
     /// Bytes held by the 8-wide tree (nodes and triangle blocks).
     pub fn wide_memory_bytes(&self) -> usize {
         self.wide.memory_bytes()
+    }
+
+    /// Bytes held by the flat test's copies of the fan pairs' triangles.
+    pub fn flat_memory_bytes(&self) -> usize {
+        self.flat_pair_triangles.capacity() * size_of::<[PreparedTriangle; 2]>()
     }
 
     /// How bounce rays find their hits ([`WIDE_MIN_TRIANGLES`]).
@@ -1315,6 +1339,9 @@ impl Bvh {
         }
         for &single in &self.flat_singles {
             count(single)?;
+        }
+        if self.flat_pair_triangles != pair_triangles(&self.flat_pairs, &self.triangles) {
+            return Err("the flat pairs' triangle copies are stale".to_owned());
         }
         if let Some(slot) = listed.iter().position(|&c| c != 1) {
             return Err(format!(
@@ -1639,15 +1666,10 @@ impl Bvh {
     pub fn intersect_packet_flat(&self, packet: &RayPacket) -> PacketHit {
         let rays = PacketRays::new(packet);
         let mut best = FlatBest::new(packet);
-        for &[first, second] in &self.flat_pairs {
-            if let (Some(a), Some(b)) = (
-                self.triangles.get(first as usize),
-                self.triangles.get(second as usize),
-            ) {
-                let (accept, t, w1, w2, sum, take_first) = rays.pair_all(a, b, best.t_max);
-                let slot = take_first.select(slot_lanes(first), slot_lanes(second));
-                best.keep((accept, t, w1, w2, sum), slot);
-            }
+        for (&[first, second], [a, b]) in self.flat_pairs.iter().zip(&self.flat_pair_triangles) {
+            let (accept, t, w1, w2, sum, take_first) = rays.pair_all(a, b, best.t_max);
+            let slot = take_first.select(slot_lanes(first), slot_lanes(second));
+            best.keep((accept, t, w1, w2, sum), slot);
         }
         for &single in &self.flat_singles {
             if let Some(triangle) = self.triangles.get(single as usize) {
@@ -1704,15 +1726,10 @@ impl Bvh {
             .active
             .to_simd()
             .select(packet.t_max, f32x8::NEG_INFINITY);
-        for &[first, second] in &self.flat_pairs {
-            if let (Some(a), Some(b)) = (
-                self.triangles.get(first as usize),
-                self.triangles.get(second as usize),
-            ) {
-                blocked |= rays.pair_all(a, b, t_max).0.to_bitmask();
-                if blocked & wanted == wanted {
-                    return LaneMask((blocked & wanted) as u8);
-                }
+        for [a, b] in &self.flat_pair_triangles {
+            blocked |= rays.pair_all(a, b, t_max).0.to_bitmask();
+            if blocked & wanted == wanted {
+                return LaneMask((blocked & wanted) as u8);
             }
         }
         for &single in &self.flat_singles {
@@ -1874,12 +1891,19 @@ mod tests {
         assert_eq!(Bvh::build(&[[a, b, c], [a, c, slight]]).flat_pairs.len(), 1);
 
         // Validation catches a pair that is not one, a slot listed twice,
-        // and a second triangle whose plane is its own again.
+        // a second triangle whose plane is its own again ...
         let mut broken = bvh.clone();
         broken.flat_pairs[0][1] = broken.flat_pairs[1][1];
         assert!(broken.validate().is_err());
         let mut broken = bvh.clone();
         broken.flat_singles.push(0);
+        assert!(broken.validate().is_err());
+        // ... and stale or missing copies of the pairs' triangles.
+        let mut broken = bvh.clone();
+        broken.flat_pair_triangles.swap(0, 1);
+        assert!(broken.validate().is_err());
+        let mut broken = bvh.clone();
+        broken.flat_pair_triangles.pop();
         assert!(broken.validate().is_err());
         // (A tilted parallelogram, whose halves' own f32 normals differ.)
         let tilted = [

@@ -190,7 +190,8 @@ impl Scene {
         let kept = self.bvh.input_triangles() - self.bvh.skipped_triangles();
         let bvh = self.bvh.node_count() * BVH_NODE_BYTES
             + kept * BVH_TRIANGLE_BYTES
-            + self.bvh.wide_memory_bytes();
+            + self.bvh.wide_memory_bytes()
+            + self.bvh.flat_memory_bytes();
         let lights = self.lights.len() * LIGHT_BYTES
             + self.triangles.len() * size_of::<u32>()
             + self.emitters.len() * size_of::<u32>();
