@@ -1127,6 +1127,14 @@ impl Bvh {
         self.wide.memory_bytes()
     }
 
+    /// The prepared triangles of the leaf `first..first + count` (those in
+    /// range: one bounds check per leaf, not per triangle).
+    #[inline(always)]
+    fn leaf_triangles(&self, first: usize, count: usize) -> &[PreparedTriangle] {
+        let end = first.saturating_add(count).min(self.triangles.len());
+        self.triangles.get(first..end).unwrap_or(&[])
+    }
+
     /// Bytes held by the flat test's copies of the fan pairs' triangles.
     pub fn flat_memory_bytes(&self) -> usize {
         self.flat_pair_triangles.capacity() * size_of::<[PreparedTriangle; 2]>()
@@ -1543,10 +1551,7 @@ impl Bvh {
         let mut slots = [NO_TRIANGLE; LANES];
         let mut hit_bits = 0u32;
         self.traverse_packet(&rays, &mut t_max, |first, count, lanes, t_max| {
-            for slot in first..first + count {
-                let Some(triangle) = self.triangles.get(slot) else {
-                    continue;
-                };
+            for (slot, triangle) in (first..).zip(self.leaf_triangles(first, count)) {
                 if let Some((accept, t, w1, w2, sum)) = rays.triangle(triangle, *t_max, lanes) {
                     let bits = accept.to_bitmask();
                     *t_max = accept.select(t, *t_max);
@@ -1596,10 +1601,7 @@ impl Bvh {
         let wanted = u32::from(packet.active.0);
         let mut blocked = 0u32;
         self.traverse_packet(&rays, &mut t_max, |first, count, lanes, t_max| {
-            for slot in first..first + count {
-                let Some(triangle) = self.triangles.get(slot) else {
-                    continue;
-                };
+            for triangle in self.leaf_triangles(first, count) {
                 if let Some((accept, ..)) = rays.triangle(triangle, *t_max, lanes) {
                     blocked |= accept.to_bitmask();
                     *t_max = accept.select(f32x8::NEG_INFINITY, *t_max);
