@@ -195,9 +195,8 @@ impl SurfacePacket {
         let zero = f32x8::ZERO;
         let front = LaneMask::from_simd(cos_light.simd_gt(zero));
         let back = LaneMask::from_simd(cos_light.simd_lt(zero)).and(self.two_sided);
-        let emissive = (0..LANES)
-            .filter(|&lane| self.emission[lane] != NO_ID)
-            .fold(LaneMask::NONE, LaneMask::with);
+        let none: f32x8 = cast(u32x8::new(self.emission).simd_eq(u32x8::splat(NO_ID)));
+        let emissive = LaneMask::ALL.and_not(LaneMask::from_simd(none));
         front.or(back).and(emissive)
     }
 
