@@ -29,6 +29,15 @@
 use crate::packet::{LANES, LaneMask, PacketHit, RayPacket};
 use wide::f32x8;
 
+/// `(packet, lane)` reduced into range, so that indexing needs no bounds
+/// check (the pairs are in range by construction: `p < G`, `lane < LANES`).
+#[inline(always)]
+fn in_range<const G: usize>((p, lane): (usize, usize)) -> (usize, usize) {
+    const { assert!(LANES.is_power_of_two()) };
+    debug_assert!(p < G && lane < LANES);
+    (p % G, lane & (LANES - 1))
+}
+
 /// The lanes `source` of one component (`field`) of `packets`: eight
 /// scalar loads from the packets' memory assembled in registers (writing
 /// lanes into an array and loading it as a vector would stall on store
@@ -40,7 +49,7 @@ fn gather<const G: usize>(
     field: impl Fn(&RayPacket) -> &f32x8,
 ) -> f32x8 {
     f32x8::new(core::array::from_fn(|k| {
-        let (p, lane) = source[k];
+        let (p, lane) = in_range::<G>(source[k]);
         field(&packets[p]).as_array()[lane]
     }))
 }
@@ -132,7 +141,8 @@ pub fn intersect<const G: usize>(
             Source::Lanes(source) => source,
         };
         for k in found.hit.and(packed.active).iter() {
-            let (p, lane) = source[k];
+            let k = k & (LANES - 1);
+            let (p, lane) = in_range::<G>(source[k]);
             let hit = &mut hits[p];
             hit.t.as_mut_array()[lane] = found.t.as_array()[k];
             hit.u.as_mut_array()[lane] = found.u.as_array()[k];
@@ -160,7 +170,7 @@ pub fn occluded<const G: usize>(
             Source::Lanes(source) => source,
         };
         for k in found.iter() {
-            let (p, lane) = source[k];
+            let (p, lane) = in_range::<G>(source[k & (LANES - 1)]);
             blocked[p] = blocked[p].with(lane);
         }
     });
