@@ -121,14 +121,10 @@ impl LightRegisters {
             |[x, y, z]: [f32x8; 3]| Vec3x8::new(float(x, 0.0), float(y, 0.0), float(z, 0.0));
         let [a, b, c] = self.vertices;
         let (a, b, c) = (corner(a), corner(b), corner(c));
-        let su = u.sqrt();
-        let b0 = f32x8::ONE - su;
-        let b1 = v * su;
-        let b2 = f32x8::ONE - b0 - b1;
         let none = Surface::NONE;
         let two_sided = word(self.two_sided, 0).simd_eq(u32x8::ONE);
         LightSamplePacket {
-            point: a * b0 + b * b1 + c * b2,
+            point: point_on_triangle_x8([a, b, c], u, v),
             triangle: word(self.triangle, 0).to_array(),
             surface: SurfacePacket {
                 normal: Vec3x8::new(
@@ -145,6 +141,18 @@ impl LightRegisters {
             valid: active,
         }
     }
+}
+
+/// The point `(u, v)` picks on the triangles `[a, b, c]`, lane by lane:
+/// [`LightSet::sample`]'s formula with the same operations in the same
+/// order, so the same bits.
+#[inline(always)]
+fn point_on_triangle_x8([a, b, c]: [Vec3x8; 3], u: f32x8, v: f32x8) -> Vec3x8 {
+    let su = u.sqrt();
+    let b0 = f32x8::ONE - su;
+    let b1 = v * su;
+    let b2 = f32x8::ONE - b0 - b1;
+    a * b0 + b * b1 + c * b2
 }
 
 /// A sampled point on a light.
@@ -320,13 +328,8 @@ impl LightSet {
                 valid = valid.with(lane);
             }
         }
-        let su = u.sqrt();
-        let b0 = f32x8::ONE - su;
-        let b1 = v * su;
-        let b2 = f32x8::ONE - b0 - b1;
-        let [a, b, c] = corners.map(|lanes| Vec3x8::from_lanes(&lanes));
         LightSamplePacket {
-            point: a * b0 + b * b1 + c * b2,
+            point: point_on_triangle_x8(corners.map(|lanes| Vec3x8::from_lanes(&lanes)), u, v),
             triangle,
             surface: SurfacePacket::from_records(&records),
             valid,

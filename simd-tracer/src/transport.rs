@@ -88,14 +88,7 @@ pub trait Transport: Sync {
         ids: &[SpectrumId; LANES],
         lanes: LaneMask,
     ) -> Self::Spectra {
-        let spectra = core::array::from_fn(|lane| {
-            if lanes.contains(lane) {
-                LaneSpectrum::scene(ids[lane])
-            } else {
-                LaneSpectrum::ZERO
-            }
-        });
-        self.gather(scene, wavelengths, &spectra)
+        self.gather(scene, wavelengths, &id_spectra(ids, lanes))
     }
     /// Spectral product (truncated for Fourier).
     fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra;
@@ -145,6 +138,18 @@ pub trait Transport: Sync {
     fn coefficients(&self, _pixel: &Self::Pixel) -> Option<Vec<f64>> {
         None
     }
+}
+
+/// The lane spectra of [`Transport::gather_ids`]: scene spectrum
+/// `ids[lane]` in the lanes of `lanes`, zero elsewhere.
+fn id_spectra(ids: &[SpectrumId; LANES], lanes: LaneMask) -> [LaneSpectrum; LANES] {
+    core::array::from_fn(|lane| {
+        if lanes.contains(lane) {
+            LaneSpectrum::scene(ids[lane])
+        } else {
+            LaneSpectrum::ZERO
+        }
+    })
 }
 
 /// Whether every value is finite (without early exit: the check is a
@@ -373,14 +378,7 @@ impl<const N: usize> Transport for FourierTransport<N> {
         let live = lanes.to_simd();
         let id_lanes = u32x8::new(*ids);
         if !(registers.holds_x8(id_lanes) | !cast::<f32x8, u32x8>(live)).all() {
-            let spectra = core::array::from_fn(|lane| {
-                if lanes.contains(lane) {
-                    LaneSpectrum::scene(ids[lane])
-                } else {
-                    LaneSpectrum::ZERO
-                }
-            });
-            return self.gather(scene, wavelengths, &spectra);
+            return self.gather(scene, wavelengths, &id_spectra(ids, lanes));
         }
         let ids = cast::<f32x8, u32x8>(live).select(id_lanes, u32x8::ZERO);
         let mut coeffs: [f32x8; N] =
@@ -916,14 +914,11 @@ mod tests {
         }
     }
 
-    #[test]
-    fn gather_matches_the_lane_by_lane_oracle_bit_for_bit() {
-        let Ok(scene) = crate::scenes::cornell_box(SpectralRange::VISIBLE) else {
-            panic!("Cornell box");
-        };
-        let spectra = scene.spectra.len() as u32;
-        assert!(spectra >= 3);
-        let lanes: [LaneSpectrum; LANES] = core::array::from_fn(|lane| match lane % 4 {
+    /// Lanes of every kind over the scene spectra `0 .. spectra`: a
+    /// spectrum, its complement, a scaled and offset one, and `last(lane)`
+    /// in every fourth lane.
+    fn mixed_lanes(spectra: u32, last: impl Fn(usize) -> LaneSpectrum) -> [LaneSpectrum; LANES] {
+        core::array::from_fn(|lane| match lane % 4 {
             0 => LaneSpectrum::scene(lane as u32 % spectra),
             1 => LaneSpectrum::complement(SpectralRef::Scene((lane as u32 + 1) % spectra)),
             2 => LaneSpectrum {
@@ -931,12 +926,32 @@ mod tests {
                 scale: -1.5 + lane as f32,
                 of: Some(SpectralRef::Scene((lane as u32 + 2) % spectra)),
             },
-            // A constant lane and a dangling reference (zeros).
-            _ if lane == 3 => LaneSpectrum {
-                constant: 0.7,
-                ..LaneSpectrum::ZERO
-            },
-            _ => LaneSpectrum::scene(spectra + 5),
+            _ => last(lane),
+        })
+    }
+
+    /// A lane with only a constant part.
+    fn constant_lane() -> LaneSpectrum {
+        LaneSpectrum {
+            constant: 0.7,
+            ..LaneSpectrum::ZERO
+        }
+    }
+
+    #[test]
+    fn gather_matches_the_lane_by_lane_oracle_bit_for_bit() {
+        let Ok(scene) = crate::scenes::cornell_box(SpectralRange::VISIBLE) else {
+            panic!("Cornell box");
+        };
+        let spectra = scene.spectra.len() as u32;
+        assert!(spectra >= 3);
+        // A constant lane and a dangling reference (zeros).
+        let lanes = mixed_lanes(spectra, |lane| {
+            if lane == 3 {
+                constant_lane()
+            } else {
+                LaneSpectrum::scene(spectra + 5)
+            }
         });
         assert!(gather_from_registers::<12>(&scene, &lanes).is_none());
         check::<4>(&scene, &lanes);
@@ -947,19 +962,7 @@ mod tests {
         // Only spectra held in registers (and lanes without a spectral
         // part): the register path, against the same oracle.
         let held = spectra.min(LANES as u32);
-        let lanes: [LaneSpectrum; LANES] = core::array::from_fn(|lane| match lane % 4 {
-            0 => LaneSpectrum::scene(lane as u32 % held),
-            1 => LaneSpectrum::complement(SpectralRef::Scene((lane as u32 + 1) % held)),
-            2 => LaneSpectrum {
-                constant: 0.25 * lane as f32,
-                scale: -1.5 + lane as f32,
-                of: Some(SpectralRef::Scene((lane as u32 + 2) % held)),
-            },
-            _ => LaneSpectrum {
-                constant: 0.7,
-                ..LaneSpectrum::ZERO
-            },
-        });
+        let lanes = mixed_lanes(held, |_| constant_lane());
         assert!(gather_from_registers::<12>(&scene, &lanes).is_some());
         check::<4>(&scene, &lanes);
         check::<8>(&scene, &lanes);
