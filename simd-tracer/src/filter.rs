@@ -147,7 +147,9 @@ impl GaussianSampler {
     /// it, `u K − k ∈ [0, 1]`.
     #[inline(always)]
     fn cell(u: f32) -> (usize, f32) {
-        let scaled = u.max(0.0).min(1.0) * INVERSE_CELLS as f32;
+        // `u > 0 ? u : 0` then `min`: the packet's `max` and `min` (NaN to 0).
+        let clamped = if u > 0.0 { u.min(1.0) } else { 0.0 };
+        let scaled = clamped * INVERSE_CELLS as f32;
         let k = (scaled as usize).min(INVERSE_CELLS - 1);
         (k, scaled - k as f32)
     }
@@ -156,7 +158,7 @@ impl GaussianSampler {
     /// lookup per lane, the interpolation 8-wide with the scalar
     /// operations.
     pub fn sample_x8(&self, u: f32x8) -> f32x8 {
-        // `max` before `min` maps NaN to 0, as the scalar `f32::max` does.
+        // `max` before `min` maps NaN to 0, as the scalar clamp does.
         let scaled =
             u.fast_max(f32x8::ZERO).fast_min(f32x8::ONE) * f32x8::splat(INVERSE_CELLS as f32);
         let last = wide::i32x8::splat((INVERSE_CELLS - 1) as i32);
