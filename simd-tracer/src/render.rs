@@ -216,8 +216,8 @@ fn render_tile<T: Transport>(
     let pixel_index = |(lx, ly): (u32, u32)| {
         u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx)
     };
-    let path_key = SampleKey::new(u64::from(pass), Purpose::Path);
-    let wavelength_key = SampleKey::new(u64::from(pass), Purpose::Wavelengths);
+    let path_key = SampleKey::new(settings.seed, u64::from(pass), Purpose::Path);
+    let wavelength_key = SampleKey::new(settings.seed, u64::from(pass), Purpose::Wavelengths);
     for first in (0..count).step_by(GROUP) {
         let lanes: [[Option<(u32, u32)>; LANES]; GROUP] = core::array::from_fn(|g| {
             let mut lanes = [None; LANES];
@@ -239,20 +239,18 @@ fn render_tile<T: Transport>(
             }
             lanes
         });
-        let stream = |lanes: &[Option<(u32, u32)>; LANES], lane: usize, key: SampleKey| {
-            let pixel = lanes[lane].map_or(u64::MAX - lane as u64, pixel_index);
-            Rng::for_pixel(settings.seed, pixel, key)
+        // A lane without a pixel draws from a stream no pixel has.
+        let pixels = |lanes: &[Option<(u32, u32)>; LANES]| -> [u64; LANES] {
+            core::array::from_fn(|lane| lanes[lane].map_or(u64::MAX - lane as u64, pixel_index))
         };
-        let mut path_rngs: [RngPacket; GROUP] = core::array::from_fn(|g| {
-            RngPacket::new(core::array::from_fn(|lane| {
-                stream(&lanes[g], lane, path_key)
-            }))
-        });
+        let mut path_rngs: [RngPacket; GROUP] =
+            core::array::from_fn(|g| RngPacket::for_pixels(&pixels(&lanes[g]), path_key));
         let camera_rays: [RayPacket; GROUP] = core::array::from_fn(|g| {
             camera_packet(scene, settings, tile, &lanes[g], &mut path_rngs[g])
         });
         let mut wavelengths: [T::Wavelengths; GROUP] = core::array::from_fn(|g| {
-            transport.sample_wavelengths(|lane| stream(&lanes[g], lane, wavelength_key))
+            let pixels = pixels(&lanes[g]);
+            transport.sample_wavelengths(|lane| Rng::for_pixel(pixels[lane], wavelength_key))
         });
         let radiance = trace_group(
             transport,
