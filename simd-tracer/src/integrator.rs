@@ -308,6 +308,7 @@ impl<'a> Shading<'a> {
     }
 
     /// [`Bsdf::eval_packet`] for the lanes in `valid`.
+    #[inline(always)]
     fn eval(
         &self,
         scene: &Scene,

@@ -304,6 +304,7 @@ impl LightSet {
     /// [`LightSet::sample`] for the active lanes of a packet: the light
     /// choice per lane, the point on it 8-wide (the same operations, so the
     /// same bits lane by lane).
+    #[inline(always)]
     pub fn sample_packet(
         &self,
         active: LaneMask,
