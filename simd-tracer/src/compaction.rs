@@ -64,9 +64,10 @@ enum Source<'a> {
 
 /// Calls `run(packed, source)` for each full packet (and a last partial
 /// one) of the active lanes of `packets`, packed in order, packet by packet
-/// and lane by lane. Unused lanes of the last packet are inactive copies of
-/// its first lane. Where packing would not save a query, each packet with
-/// active lanes runs as it is.
+/// and lane by lane; packets whose lanes are all active run as they are
+/// (packing them would fill a query with the same 8 rays). Unused lanes of
+/// the last packet are inactive copies of its first lane. Where packing
+/// would not save a query, each packet with active lanes runs as it is.
 fn for_each_packed<const G: usize>(
     packets: &[RayPacket; G],
     mut run: impl FnMut(&RayPacket, Source<'_>),
@@ -84,6 +85,13 @@ fn for_each_packed<const G: usize>(
             }
         }
         return;
+    }
+    // A full packet is a query of its own either way: it runs as it is,
+    // without gathering its lanes.
+    for (p, packet) in packets.iter().enumerate() {
+        if packet.active == LaneMask::ALL {
+            run(packet, Source::Whole(p));
+        }
     }
     let mut flush = |source: &mut [(usize, usize); LANES], filled: usize| {
         for k in filled..LANES {
@@ -107,6 +115,9 @@ fn for_each_packed<const G: usize>(
         run(&packed, Source::Lanes(source));
     };
     for (p, packet) in packets.iter().enumerate() {
+        if packet.active == LaneMask::ALL {
+            continue;
+        }
         for lane in packet.active.iter() {
             source[filled] = (p, lane);
             filled += 1;
