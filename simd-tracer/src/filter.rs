@@ -17,10 +17,10 @@
 //! within 1e-4 in the tails and within 4e-4 in the two outermost cells
 //! (`|x| > 1.7` px, where the filter rises from 0 and stays below 0.2 % of
 //! its peak), tested against the Gaussian's numerical integral: far below
-//! anything a reconstruction filter's shape shows in an image. A sample costs one table lookup, a
-//! multiply and an add (an exact inversion of a piecewise-linear table, a
-//! quadratic per sample behind a data-dependent search, cost 3 % of a
-//! Cornell-box render). The converged image equals the splatted one; a
+//! anything a reconstruction filter's shape shows in an image. A sample
+//! costs one table lookup, a multiply and an add (an exact inversion of a
+//! piecewise-linear table, a quadratic per sample behind a data-dependent
+//! search, cost 3 % of a Cornell-box render). The converged image equals the splatted one; a
 //! pixel's samples never touch other pixels, so tiles render independently
 //! and deterministically.
 //!

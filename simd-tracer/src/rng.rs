@@ -15,10 +15,11 @@
 //! of the `pcg_hash` of Jarzynski and Olano ("Hash Functions for GPU
 //! Rendering", JCGT 9(3), 2020: one PCG step and its RXS-M-XS output),
 //! a bijection of 32-bit words, so the pixels of a pass (indices below
-//! 2³²) start from distinct states and so draw distinct first numbers. A pixel's samples never depend on
-//! which thread renders it or in which order: the image depends only on
-//! the seed. Separate purposes (path decisions vs wavelengths) keep the
-//! path geometry identical across spectral transports.
+//! 2³²) start from distinct states and so draw distinct first numbers. A
+//! pixel's samples never depend on which thread renders it or in which
+//! order: the image depends only on the seed. Separate purposes (path
+//! decisions vs wavelengths) keep the path geometry identical across
+//! spectral transports.
 //!
 //! [`RngPacket`] is the 8-lane twin, seeded 8 lanes at a time
 //! ([`RngPacket::for_pixels`]), each lane bit-identical to its scalar

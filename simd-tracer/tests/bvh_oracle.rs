@@ -1006,7 +1006,3 @@ fn degenerate_triangles_are_skipped_and_never_hit() {
             .is_empty()
     );
 }
-#[test]
-fn scratch_nodes() {
-    println!("box nodes {}", box_scene().bvh.node_count());
-}
