@@ -29,6 +29,39 @@ pub const MAX_COEFFS: usize = 32;
 /// Spacing of the dense tables of the sampled transports, nm.
 pub const DENSE_STEP_NM: f64 = 0.25;
 
+/// Where a wavelength falls on the dense grid of a range: the sample
+/// `index` at or below it and the `fraction` of the step beyond, so that
+/// the value of every dense table of that range is one interpolation
+/// ([`SceneSpectrum::value_at`]). A sampled path's wavelengths stay fixed,
+/// so the sampled transports place them once per path instead of once per
+/// spectrum lookup. Wavelengths below the range or NaN get an index past
+/// every table (value 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DensePoint {
+    index: u32,
+    fraction: f32,
+}
+
+impl DensePoint {
+    /// The point of `lambda_nm` on the dense grid of `range`.
+    #[inline]
+    pub fn new(range: &SpectralRange, lambda_nm: f32) -> Self {
+        let x = (f64::from(lambda_nm) - range.min_nm()) / DENSE_STEP_NM;
+        if x.is_nan() || x < 0.0 {
+            return Self {
+                index: u32::MAX,
+                fraction: 0.0,
+            };
+        }
+        // Saturating, as the float-to-int conversion is: past every table.
+        let i = x as usize;
+        Self {
+            index: u32::try_from(i).unwrap_or(u32::MAX),
+            fraction: (x - i as f64) as f32,
+        }
+    }
+}
+
 /// Where a scene spectrum comes from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SpectrumSource {
@@ -203,19 +236,25 @@ impl SceneSpectrum {
     /// The value at `lambda_nm` from the dense table (0 outside the range).
     #[inline]
     pub fn value(&self, lambda_nm: f32) -> f32 {
-        let x = (f64::from(lambda_nm) - self.range.min_nm()) / DENSE_STEP_NM;
-        if x.is_nan() || x < 0.0 {
-            return 0.0;
-        }
-        let i = x as usize;
+        self.value_at(DensePoint::new(&self.range, lambda_nm))
+    }
+
+    /// The value at a point of the dense grid of `range` (the result of
+    /// [`SceneSpectrum::value`] at the point's wavelength where `range` is
+    /// this spectrum's range, see [`SceneSpectrum::range`]).
+    #[inline(always)]
+    pub fn value_at(&self, point: DensePoint) -> f32 {
+        let i = point.index as usize;
         match (self.dense.get(i), self.dense.get(i + 1)) {
-            (Some(&a), Some(&b)) => {
-                let t = (x - i as f64) as f32;
-                a + t * (b - a)
-            }
+            (Some(&a), Some(&b)) => a + point.fraction * (b - a),
             (Some(&a), None) => a,
             _ => 0.0,
         }
+    }
+
+    /// The range the spectrum was prepared over.
+    pub fn range(&self) -> &SpectralRange {
+        &self.range
     }
 
     /// Largest value of the dense table.
@@ -292,6 +331,60 @@ mod tests {
         let f = s.fourier_f64::<12>();
         let direct: FourierSpectrum<f64, 12> = b.project(&range);
         assert_eq!(f, direct);
+    }
+
+    /// The dense lookup through grid points equals the linear
+    /// interpolation of the table written out in `f64` positions (the
+    /// scalar oracle), bit for bit, at every quarter and odd fraction of a
+    /// step across the range, at its ends, beyond them, and for negative,
+    /// huge, infinite and NaN wavelengths.
+    #[test]
+    fn dense_points_give_the_interpolated_table() {
+        let range = SpectralRange::VISIBLE;
+        let Ok(s) = SceneSpectrum::new(
+            SpectrumSource::Builtin(Builtin::lookup("fl11").unwrap()),
+            range,
+        ) else {
+            panic!("fl11");
+        };
+        let oracle = |lambda_nm: f32| -> f32 {
+            let x = (f64::from(lambda_nm) - range.min_nm()) / DENSE_STEP_NM;
+            if x.is_nan() || x < 0.0 || x >= s.dense.len() as f64 {
+                return 0.0;
+            }
+            let i = x.floor() as usize;
+            if i + 1 == s.dense.len() {
+                return s.dense[i];
+            }
+            let t = (x - i as f64) as f32;
+            s.dense[i] + t * (s.dense[i + 1] - s.dense[i])
+        };
+        let mut wavelengths: Vec<f32> = (0..(4 * 480 * 7))
+            .map(|k| 355.0 + k as f32 / 28.0)
+            .collect();
+        wavelengths.extend([
+            360.0,
+            830.0,
+            f32::from_bits(830.0f32.to_bits() + 1),
+            f32::from_bits(360.0f32.to_bits() - 1),
+            -1.0,
+            0.0,
+            1e30,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ]);
+        for l in wavelengths {
+            let expected = oracle(l).to_bits();
+            assert_eq!(s.value(l).to_bits(), expected, "{l}");
+            assert_eq!(
+                s.value_at(DensePoint::new(&range, l)).to_bits(),
+                expected,
+                "{l}"
+            );
+        }
+        assert_eq!(s.range(), &range);
     }
 
     #[test]
