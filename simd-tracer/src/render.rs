@@ -180,6 +180,14 @@ fn camera_packet<P>(
     }
 }
 
+/// Stack of each render thread. A group's path states, rays, hits and
+/// wavelengths ([`GROUP`] packets) live on it: with 32 coefficients or 32
+/// wavelengths and groups of 32 packets a release build needs 2–3 MiB
+/// (found by shrinking `RUST_MIN_STACK` until it overflowed), more than a
+/// spawned thread's default 2 MiB. 16 MiB leaves room for debug builds'
+/// larger frames; only the pages a thread touches are committed.
+const RENDER_THREAD_STACK_BYTES: usize = 16 << 20;
+
 /// Wall time a batch of passes aims at: the progress callback (and so the
 /// CLI's progress display, Ctrl-C and the time limit) sees the render at
 /// least this often, give or take one pass.
@@ -290,7 +298,7 @@ pub fn render<T: Transport>(
     if settings.width == 0 || settings.height == 0 || settings.spp == 0 {
         return Err(RenderError::EmptyImage);
     }
-    let mut builder = rayon::ThreadPoolBuilder::new();
+    let mut builder = rayon::ThreadPoolBuilder::new().stack_size(RENDER_THREAD_STACK_BYTES);
     if let Some(threads) = settings.threads {
         builder = builder.num_threads(threads.max(1));
     }
