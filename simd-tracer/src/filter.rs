@@ -89,7 +89,7 @@ pub struct GaussianSampler {
 impl GaussianSampler {
     /// The sampler of `max(0, exp(−x²/2σ²) − exp(−r²/2σ²))` on `[−r, r]`:
     /// the knots `x_k = F⁻¹(k/K)` of the filter's CDF `F`, solved in `f64`
-    /// on its trapezoid integral over [`BUILD_SEGMENTS`] segments (exactly,
+    /// on its trapezoid integral over `BUILD_SEGMENTS` segments (exactly,
     /// a quadratic per segment), then rounded to `f32`.
     pub fn new(sigma: f32, radius: f32) -> Self {
         let (sigma, radius) = (f64::from(sigma), f64::from(radius));

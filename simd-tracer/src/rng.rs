@@ -115,7 +115,7 @@ impl Rng {
     }
 
     /// The stream of `pixel` under a pass's key: the pixel index mixed
-    /// into the key by two rounds of [`hash32`] (low word, then high word)
+    /// into the key by two rounds of `hash32` (low word, then high word)
     /// is the state (distinct for the pixels of a pass below 2³²), and,
     /// hashed once more with a salt, selects the stream.
     #[inline]

@@ -560,7 +560,7 @@ impl<const C: usize> PacketWavelengths<C> {
         }
     }
 
-    /// The wavelengths of ray lane `lane`.
+    /// The wavelengths of ray lane `lane` (taken modulo [`LANES`]).
     pub fn lane(&self, lane: usize) -> &SampledWavelengths<C> {
         &self.lanes[lane % LANES]
     }
