@@ -20,7 +20,7 @@ pub struct SpectrumArgs {
     /// A two-column CSV file (`wavelength_nm,value`; `#` comments and one
     /// header row allowed) or a built-in name: d65, d50, a, fl2, fl7, fl11,
     /// led-b1 … led-b5, led-bh1, led-rgb1, led-v1, led-v2, colorchecker-1 …
-    /// colorchecker-24, cie-x/y/z, gold-n, gold-k, …, blackbody-<kelvin>.
+    /// colorchecker-24, cie-x/y/z, gold-n, gold-k, …, `blackbody-<kelvin>`.
     #[arg(required_unless_present = "list")]
     pub spectrum: Option<String>,
     /// Number of Fourier coefficients N (1–32).

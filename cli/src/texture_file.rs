@@ -14,7 +14,7 @@
 //!     (linear, 0 … 1).
 //! * **OpenEXR** (first part; values are linear):
 //!   * albedo: channels `F0 … F{N−1}` make a Fourier texture read with
-//!     [`read_coefficients_exr`] (its `fourierRangeNm` must equal the
+//!     [`crate::image_out::read_coefficients_exr`] (its `fourierRangeNm` must equal the
 //!     scene's range); otherwise `R`, `G`, `B` (linear sRGB reflectance,
 //!     clamped to [0, 1] by the upsampling) or `Y` (grey);
 //!   * thickness: `Y`, else the only channel of a single-channel image.

@@ -112,7 +112,7 @@ impl<L: Lane, const N: usize> FourierSpectrum<L, N> {
     /// The truncated product `h = self ⊛ other` (module docs), lane-wise.
     ///
     /// For `N` = 4, 8, 12, 16 the product runs as fully unrolled straight-line
-    /// code ([`unrolled`]), with the accumulators in registers; other `N` use
+    /// code (the private `unrolled` module), with the accumulators in registers; other `N` use
     /// the equivalent loops. Both are checked against each other and against
     /// dense quadrature.
     #[inline]

@@ -132,7 +132,7 @@ const GRAZING: FilmResponse = FilmResponse {
 };
 
 /// Below this `cos θ_1` the film formulas treat the incidence as grazing
-/// ([`GRAZING`]). The cosine in a medium of the incident index is
+/// (`GRAZING`). The cosine in a medium of the incident index is
 /// recomputed from `sin θ_1`, and `1 − cos² θ_1` rounds to 1 for
 /// `cos θ_1 < 1.5·10⁻⁸`: that cosine becomes 0 and the p admittance `n/cos`
 /// infinite (NaN reflectances). Near grazing `1 − R = O(cos θ_1)`, so the

@@ -116,7 +116,7 @@ impl Spectrum for SigmoidPolynomial {
         sigmoid((c0 * t + c1) * t + c2)
     }
 
-    /// Gauss–Legendre on [`SIGMOID_PROJECTION_PANELS`] panels: sigmoid
+    /// Gauss–Legendre on panels of [`SIGMOID_PROJECTION_PANEL_NM`]: sigmoid
     /// polynomials are so smooth that 5 nm panels agree with 1 nm panels to
     /// 1e-7 (tested), at a fifth of the cost (textures project every texel).
     fn project<const N: usize>(&self, range: &SpectralRange) -> FourierSpectrum<f64, N> {

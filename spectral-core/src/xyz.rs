@@ -2,7 +2,7 @@
 //!
 //! `X = ∫ s(λ) x̄(λ) dλ / ∫ȳ dλ` (likewise `Y`, `Z`) over the spectral range,
 //! so the constant spectrum 1 has `Y = 1`. `∫ȳ` is
-//! [`cmf::Y_BAR_INTEGRAL`](crate::cmf::Y_BAR_INTEGRAL), derived from the
+//! [`crate::cmf::Y_BAR_INTEGRAL`], derived from the
 //! embedded table.
 //!
 //! The paper compares four routes from `N` coefficients to XYZ:

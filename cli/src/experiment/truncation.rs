@@ -8,7 +8,7 @@
 //!
 //! * per-pixel mean ΔE2000 — bias plus the path-tracing noise of the render;
 //! * **bias**: mean ΔE2000 of the means of
-//!   [`BIAS_BLOCK_PX`](super::BIAS_BLOCK_PX)² pixel blocks, where the noise
+//!   [`super::BIAS_BLOCK_PX`]² pixel blocks, where the noise
 //!   averages out (its floor is set by the same blocks of the unbiased
 //!   Spec4 hero and Spec32 renders at the same spp, and by the reference's
 //!   own block noise, half the block ΔE between its halves);
