@@ -50,7 +50,10 @@
 //! Every writer writes a temporary file `.<name>.tmp-<pid>-<k>` in the
 //! target's directory, flushes and syncs it, then renames it over the target.
 //! On any error the temporary is removed and the target is left untouched
-//! (absent, or the previous file). A missing directory is an error;
+//! (absent, or the previous file). A process that quits at once (a second
+//! Ctrl-C) removes the temporaries being written first
+//! ([`remove_temporaries_and_exit`]), so no file of a write cut short is
+//! ever left. A missing directory is an error;
 //! directories are never created. Errors are one line naming the path:
 //! `cannot write out/render.png: Permission denied (os error 13)`.
 
@@ -58,6 +61,7 @@ use std::fs::{self, File};
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, ImageAttributes, Layer,
@@ -712,6 +716,30 @@ fn write_exr_channels(
 
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
+/// The temporaries being written. A writer registers its temporary before
+/// creating it, holding the lock while it does, and deregisters it once it
+/// is renamed or removed.
+static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn in_flight() -> MutexGuard<'static, Vec<PathBuf>> {
+    // The list stays valid whatever a panicking holder did: use it anyway.
+    IN_FLIGHT.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Removes the temporaries being written and exits the process with `code`
+/// while still holding their list, so no writer creates another one: a
+/// write in progress ends with neither its temporary nor its target (its
+/// rename finds no file), a finished one is complete. For quitting at once
+/// (a second Ctrl-C) from another thread than the writers'.
+pub fn remove_temporaries_and_exit(code: i32) -> ! {
+    let temporaries = in_flight();
+    for temp in temporaries.iter() {
+        // Best effort: a writer may have renamed it a moment ago.
+        let _ = fs::remove_file(temp);
+    }
+    std::process::exit(code)
+}
+
 /// Writes through `write` into a temporary file beside `path`, syncs it and
 /// renames it over `path`; removes the temporary on any error (so `path` is
 /// either the complete new file or untouched).
@@ -738,18 +766,23 @@ pub fn write_atomically(
         name.to_string_lossy(),
         std::process::id()
     ));
-    let mut file = File::create(&temp).map_err(|e| write_error(path, e))?;
-    let result = write(&mut file)
-        .and_then(|()| file.flush().map_err(|e| e.to_string()))
-        .and_then(|()| file.sync_all().map_err(|e| e.to_string()));
-    drop(file);
+    let created = {
+        let mut temporaries = in_flight();
+        temporaries.push(temp.clone());
+        File::create(&temp)
+    };
+    let result = created.map_err(|e| e.to_string()).and_then(|mut file| {
+        write(&mut file)
+            .and_then(|()| file.flush().map_err(|e| e.to_string()))
+            .and_then(|()| file.sync_all().map_err(|e| e.to_string()))
+    });
     let result = result.and_then(|()| fs::rename(&temp, path).map_err(|e| e.to_string()));
-    if let Err(message) = result {
+    if result.is_err() {
         // Best effort: the temporary may already be gone.
         let _ = fs::remove_file(&temp);
-        return Err(write_error(path, message));
     }
-    Ok(())
+    in_flight().retain(|t| t != &temp);
+    result.map_err(|message| write_error(path, message))
 }
 
 fn write_error(path: &Path, detail: impl std::fmt::Display) -> CliError {

@@ -43,8 +43,9 @@ pub const INTERRUPTED_EXIT_CODE: u8 = 130;
 
 /// Installs the Ctrl-C handler of `fspec render`: the first press stops the
 /// render after the pass in progress and the passes done so far are written
-/// as usual; a second press exits at once. Outputs are always written to a
-/// temporary name and renamed, so neither leaves a truncated file.
+/// as usual; a second press exits at once, removing the temporaries of
+/// writes in progress first. Outputs are always written to a temporary
+/// name and renamed, so neither leaves a truncated or temporary file.
 pub fn install_interrupt_handler() -> Result<(), CliError> {
     ctrlc::set_handler(|| {
         if INTERRUPTS.fetch_add(1, Ordering::SeqCst) == 0 {
@@ -52,7 +53,7 @@ pub fn install_interrupt_handler() -> Result<(), CliError> {
                 "\nfspec: interrupted: finishing the current pass (Ctrl-C again to quit now)"
             );
         } else {
-            std::process::exit(i32::from(INTERRUPTED_EXIT_CODE));
+            crate::image_out::remove_temporaries_and_exit(i32::from(INTERRUPTED_EXIT_CODE));
         }
     })
     .map_err(|e| CliError::input(format!("cannot install the Ctrl-C handler: {e}")))

@@ -258,11 +258,18 @@ fn an_illuminant_for_another_scene_is_a_warning() -> TestResult {
 // Interruption
 // ---------------------------------------------------------------------------
 
+/// Two Ctrl-C presses: the second quits at once with 130, before anything
+/// is written. The second press follows the first as soon as its message
+/// is on stderr (the passes of a 512² render are batched to about half a
+/// second, so it lands long before the batch in progress ends; with a
+/// fixed 50 ms delay instead, a CI run on a loaded machine saw the batch end
+/// first and a temporary `.i.exr.tmp-…` left behind). Whatever the timing,
+/// a write cut short leaves no temporary file
+/// (`image_out::remove_temporaries_and_exit`).
 #[test]
 fn a_second_ctrl_c_quits_at_once_with_130_and_writes_nothing() -> TestResult {
+    use std::io::{BufRead, BufReader, Read};
     let dir = test_dir("ctrl-c-twice")?;
-    // Large passes, so that the second press arrives long before the first
-    // pass ends and anything could be written.
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_fspec"))
         .current_dir(&dir)
         .args(["render", "--width", "512", "--height", "512"])
@@ -270,16 +277,27 @@ fn a_second_ctrl_c_quits_at_once_with_130_and_writes_nothing() -> TestResult {
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()?;
+    let mut stderr = BufReader::new(child.stderr.take().ok_or("no stderr")?);
     // Long enough for the handler to be installed.
     std::thread::sleep(Duration::from_millis(1500));
     let pid = child.id().to_string();
-    for _ in 0..2 {
+    let interrupt = || -> TestResult {
         let status = std::process::Command::new("kill")
             .args(["-INT", &pid])
             .status()?;
         assert!(status.success());
-        std::thread::sleep(Duration::from_millis(50));
+        Ok(())
+    };
+    interrupt()?;
+    let mut seen = String::new();
+    while !seen.contains("Ctrl-C again to quit now") {
+        let mut line = String::new();
+        if stderr.read_line(&mut line)? == 0 {
+            return Err(format!("fspec ended before the first press was seen: {seen}").into());
+        }
+        seen.push_str(&line);
     }
+    interrupt()?;
     let deadline = Instant::now() + Duration::from_secs(60);
     while child.try_wait()?.is_none() {
         if Instant::now() > deadline {
@@ -288,11 +306,10 @@ fn a_second_ctrl_c_quits_at_once_with_130_and_writes_nothing() -> TestResult {
         }
         std::thread::sleep(Duration::from_millis(20));
     }
+    stderr.read_to_string(&mut seen)?;
     let output = child.wait_with_output()?;
     let stdout = String::from_utf8(output.stdout)?;
-    let stderr = String::from_utf8(output.stderr)?;
-    assert_eq!(output.status.code(), Some(130), "{stdout} {stderr}");
-    assert!(stderr.contains("Ctrl-C again to quit now"), "{stderr}");
+    assert_eq!(output.status.code(), Some(130), "{stdout} {seen}");
     assert!(stdout.is_empty(), "{stdout}");
     assert_eq!(entries(&dir)?, Vec::<String>::new(), "files left behind");
     Ok(())
