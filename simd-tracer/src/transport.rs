@@ -549,6 +549,8 @@ pub struct XyzPixel {
 pub struct PacketWavelengths<const C: usize> {
     lanes: [SampledWavelengths<C>; LANES],
     points: [[DensePoint; C]; LANES],
+    /// The range whose grid `points` lie on.
+    grid: SpectralRange,
 }
 
 impl<const C: usize> PacketWavelengths<C> {
@@ -557,6 +559,7 @@ impl<const C: usize> PacketWavelengths<C> {
         Self {
             points: lanes.map(|w| w.lambda_nm().map(|l| DensePoint::new(range, l))),
             lanes,
+            grid: *range,
         }
     }
 
@@ -567,15 +570,15 @@ impl<const C: usize> PacketWavelengths<C> {
 }
 
 /// The lanes' spectral factors at their wavelengths (only the hero where
-/// the secondaries are terminated). Scene spectra prepared over `range`,
-/// the common case, are read from their dense tables at the lanes' points
-/// on that grid, placed once per path ([`PacketWavelengths`]); placing
-/// every wavelength anew in each lookup (`f64` arithmetic and conversions)
-/// had cost 17 % of a 4-hero-wavelength render. Other references go through
-/// [`reference_value`]. The same values either way.
+/// the secondaries are terminated). Scene spectra prepared over the range
+/// the wavelengths were placed on, the common case, are read from their
+/// dense tables at the lanes' points on that grid, placed once per path
+/// ([`PacketWavelengths`]); placing every wavelength anew in each lookup
+/// (`f64` arithmetic and conversions) had cost 17 % of a 4-hero-wavelength
+/// render. Other references go through [`reference_value`]. The same
+/// values either way.
 fn gather_sampled<const C: usize>(
     scene: &Scene,
-    range: &SpectralRange,
     wavelengths: &PacketWavelengths<C>,
     lanes: &[LaneSpectrum; LANES],
 ) -> [f32x8; C] {
@@ -588,7 +591,7 @@ fn gather_sampled<const C: usize>(
             Some(SpectralRef::Scene(id)) => scene
                 .spectra
                 .get(*id as usize)
-                .filter(|s| s.range() == range),
+                .filter(|s| s.range() == &wavelengths.grid),
             _ => None,
         };
         if let Some(table) = on_grid {
@@ -662,7 +665,7 @@ impl<const C: usize> Transport for SampledTransport<C> {
         wavelengths: &Self::Wavelengths,
         lanes: &[LaneSpectrum; LANES],
     ) -> Self::Spectra {
-        gather_sampled(scene, &self.range, wavelengths, lanes)
+        gather_sampled(scene, wavelengths, lanes)
     }
 
     fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
@@ -820,7 +823,7 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
     ) -> Self::Spectra {
         (
             gather_fourier(scene, lanes),
-            gather_sampled(scene, &self.range, wavelengths, lanes),
+            gather_sampled(scene, wavelengths, lanes),
         )
     }
 
