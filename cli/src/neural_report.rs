@@ -26,7 +26,7 @@
 use crate::error::CliError;
 use crate::image_out::write_atomically;
 use crate::train::FilmSpec;
-use simd_tracer::angular::{ANGLE_ROWS, Network};
+use simd_tracer::spectra::angular::{ANGLE_ROWS, Network};
 use simd_tracer::spectra::MAX_COEFFS;
 use spectral_core::color::Xyz;
 use spectral_core::delta_e::delta_e2000;

@@ -17,11 +17,11 @@ use crate::image_out::{
 use crate::scene_source::{SceneDefaults, resolve_scene};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
-use simd_tracer::filter::Filter;
+use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{Progress, RenderResult, RenderSettings, render};
 use simd_tracer::scene::Scene;
-use simd_tracer::scenes::SceneOptions;
+use simd_tracer::scene::builtin::SceneOptions;
 use simd_tracer::transport::{
     AlphaMode, Buffer, ControlVariateTransport, FourierTransport, SampledTransport, Transport,
 };

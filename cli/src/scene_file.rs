@@ -118,7 +118,7 @@
 //! OBJ faces are triangulated; `vt` coordinates are kept. Faces take the
 //! scene material `material` if it is given; otherwise their MTL material,
 //! mapped through `materials` when the name is listed there, else converted
-//! like `simd_tracer::obj`: `Kd` a linear-sRGB reflectance (default 0.5 grey)
+//! like `simd_tracer::scene::obj`: `Kd` a linear-sRGB reflectance (default 0.5 grey)
 //! and `Ke`, when positive, a linear-sRGB radiance upsampled as an
 //! illuminant (× D65). Faces without an MTL material are 0.5 grey. `material`
 //! and `materials` exclude each other. A `materials` name that the MTL does
@@ -143,9 +143,9 @@ use crate::error::CliError;
 use crate::spectrum_file;
 use crate::texture_file::{TextureUse, load_texture};
 use glam::{Vec2, Vec3};
-use simd_tracer::angular::{AngularFunction, FilmLayer, Ior, Network, REFERENCE_WAVELENGTH_NM};
-use simd_tracer::camera::{Camera, CameraError};
-use simd_tracer::material::{Albedo, Bsdf, Material, diffuse_fresnel};
+use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network, REFERENCE_WAVELENGTH_NM};
+use simd_tracer::scene::camera::{Camera, CameraError};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
 use simd_tracer::scene::{MaterialId, SceneBuilder, SceneError, SpectrumId, TextureId};
 use simd_tracer::spectra::{MAX_COEFFS, SpectrumSource};
 use spectral_core::registry::Builtin;
@@ -630,12 +630,12 @@ fn check_colour(name: &str, key: &str, rgb: [f32; 3]) -> Result<[f64; 3], String
 }
 
 /// The material of an MTL entry (`Kd` reflectance, `Ke` illuminant), as
-/// `simd_tracer::obj` converts it; the flag says whether it emits.
+/// `simd_tracer::scene::obj` converts it; the flag says whether it emits.
 fn mtl_material(
     builder: &mut SceneBuilder,
     m: &tobj::Material,
 ) -> Result<(MaterialId, bool), String> {
-    let default = simd_tracer::obj::DEFAULT_ALBEDO as f32;
+    let default = simd_tracer::scene::obj::DEFAULT_ALBEDO as f32;
     let kd = check_colour(&m.name, "Kd", m.diffuse.unwrap_or([default; 3]))?;
     let albedo = builder
         .add_spectrum(
@@ -673,7 +673,7 @@ fn load_obj_geometry(
         }
         Err(e) => return Err(format!("{shown}: cannot read: {e}")),
     }
-    let (models, materials) = simd_tracer::obj::load_obj_file(path, &obj_load_options())
+    let (models, materials) = simd_tracer::scene::obj::load_obj_file(path, &obj_load_options())
         .map_err(|e| format!("{shown}: {e} (OBJ/MTL syntax)"))?;
     let materials = materials.map_err(|e| match e {
         tobj::LoadError::OpenFileFailed => {
@@ -712,7 +712,7 @@ fn load_obj_geometry(
                         let albedo = builder
                             .add_spectrum(
                                 "default grey",
-                                SpectrumSource::Constant(simd_tracer::obj::DEFAULT_ALBEDO),
+                                SpectrumSource::Constant(simd_tracer::scene::obj::DEFAULT_ALBEDO),
                             )
                             .map_err(|e| format!("{shown}: {e}"))?;
                         let id = builder.add_material(Material::lambert("default", albedo));
@@ -2108,7 +2108,7 @@ pub fn fuzz_scene_toml(bytes: &[u8]) {
     }
 }
 
-/// A bare OBJ as a scene (module docs of `simd_tracer::obj` for the MTL
+/// A bare OBJ as a scene (module docs of `simd_tracer::scene::obj` for the MTL
 /// mapping): a camera with a 40° field of view on the +z side of the mesh's
 /// bounding box, looking at its centre from the distance at which the box's
 /// bounding sphere fits the view, and — if no face emits — a constant white

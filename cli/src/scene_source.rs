@@ -4,7 +4,7 @@
 use crate::error::CliError;
 use crate::spectrum_file::{SpectrumSource as CliSpectrum, resolve};
 use simd_tracer::scene::SceneBuilder;
-use simd_tracer::scenes::{SCENES, SceneOptions, builtin_scene};
+use simd_tracer::scene::builtin::{SCENES, SceneOptions, builtin_scene};
 use simd_tracer::spectra::SpectrumSource;
 use spectral_core::SpectralRange;
 use std::path::Path;

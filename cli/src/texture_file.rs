@@ -31,7 +31,7 @@
 use crate::error::CliError;
 use crate::image_out::read_coefficients_exr_from;
 use exr::prelude::{ReadChannels, ReadLayers, read};
-use simd_tracer::texture::{MAX_TEXELS, Texture};
+use simd_tracer::spectra::texture::{MAX_TEXELS, Texture};
 use spectral_core::SpectralRange;
 use spectral_core::color::srgb_decode;
 use std::fs::File;
@@ -378,7 +378,7 @@ pub fn fuzz_coefficient_exr(bytes: &[u8]) {
         let Ok(texture) = load_exr(std::io::Cursor::new(bytes), name, usage, range) else {
             continue;
         };
-        if let simd_tracer::texture::TextureData::Rgb { fourier, .. } = texture.data() {
+        if let simd_tracer::spectra::texture::TextureData::Rgb { fourier, .. } = texture.data() {
             assert!(fourier.iter().all(|c| c.is_finite()));
         }
         for (u, v) in [(0.0, 0.0), (0.3, 0.7), (0.99, 0.5), (-1.5, 2.25)] {

@@ -11,7 +11,7 @@ use assert_cmd::Command;
 use clap::Parser;
 use common::{TestResult, entries};
 use fspec_cli::render_cmd::{RenderArgs, check_memory, predict_memory};
-use simd_tracer::filter::Filter;
+use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::RenderSettings;
 use std::fs;

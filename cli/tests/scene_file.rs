@@ -8,7 +8,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use fspec_cli::scene_file::{LoadedScene, RenderDefaults, load_obj_scene, load_scene_file};
-use simd_tracer::filter::Filter;
+use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderSettings, render};
 use simd_tracer::scene::Scene;

@@ -3,7 +3,7 @@
 //! and bad arguments are refused before any training.
 
 use assert_cmd::Command;
-use simd_tracer::angular::Network;
+use simd_tracer::spectra::angular::Network;
 use std::fs;
 use std::path::PathBuf;
 

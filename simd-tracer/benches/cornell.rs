@@ -50,7 +50,7 @@ fn bench_transport<T: Transport>(c: &mut Criterion, name: &str, transport: &T, s
 
 fn cornell(c: &mut Criterion) {
     let range = SpectralRange::VISIBLE;
-    let Ok(scene) = simd_tracer::scenes::cornell_box(range) else {
+    let Ok(scene) = simd_tracer::scene::builtin::cornell_box(range) else {
         return;
     };
     if let Ok(fourier) = FourierTransport::<12>::new(range, Buffer::Spectral, XyzRoute::Zeroth) {

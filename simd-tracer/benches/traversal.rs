@@ -30,7 +30,7 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::{Ray as ObvhsRay, RayHit};
 use obvhs::triangle::Triangle as ObvhsTriangle;
-use simd_tracer::bvh::Bvh;
+use simd_tracer::accel::Bvh;
 use simd_tracer::packet::{LANES, Ray, RayPacket};
 
 /// SplitMix64.

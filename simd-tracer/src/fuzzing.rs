@@ -9,9 +9,9 @@
 //! * [`obj`]: arbitrary OBJ and MTL text through the loader and the scene
 //!   build: `Err` or a valid scene, never a panic.
 
-use crate::bvh::{Bvh, Hit, WideStack};
-use crate::camera::Camera;
-use crate::obj::{ObjSource, load_obj};
+use crate::accel::{Bvh, Hit, WideStack};
+use crate::scene::camera::Camera;
+use crate::scene::obj::{ObjSource, load_obj};
 use crate::packet::{LANES, Ray, RayPacket};
 use crate::scene::{SceneBuilder, SceneError};
 use glam::Vec3;

@@ -13,27 +13,17 @@
 //!   -> NEE + MIS -> Film (coefficients or XYZ per pixel) -> XYZ image
 //! ```
 
-pub mod angular;
-pub mod bvh;
-pub mod camera;
-pub mod compaction;
-pub mod filter;
+pub mod accel;
+pub mod film;
 pub mod fuzzing;
 pub mod integrator;
-pub mod light;
-pub mod material;
-pub mod microfacet;
-pub mod obj;
 pub mod packet;
 pub mod render;
-pub mod rng;
+pub mod sampling;
 pub mod scene;
-pub mod scenes;
-pub mod shapes;
+pub mod shading;
 pub mod simd;
 pub mod spectra;
-pub mod surface;
-pub mod texture;
 pub mod transport;
 
 pub use spectral_core;

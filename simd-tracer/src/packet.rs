@@ -183,13 +183,13 @@ pub struct PacketHit {
 
 impl PacketHit {
     /// A miss in every lane: each lane's `t_max`, `u = v = 0` and
-    /// [`crate::bvh::NO_TRIANGLE`] (the convention of lanes without a hit).
+    /// [`crate::accel::NO_TRIANGLE`] (the convention of lanes without a hit).
     pub fn misses(rays: &RayPacket) -> Self {
         Self {
             t: rays.t_max,
             u: f32x8::ZERO,
             v: f32x8::ZERO,
-            triangle: [crate::bvh::NO_TRIANGLE; LANES],
+            triangle: [crate::accel::NO_TRIANGLE; LANES],
             hit: LaneMask::NONE,
         }
     }

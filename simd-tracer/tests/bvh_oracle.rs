@@ -1,4 +1,4 @@
-//! Oracle tests of `simd_tracer::bvh`: the 8-wide packet traversal against
+//! Oracle tests of `simd_tracer::accel`: the 8-wide packet traversal against
 //! `obvhs`'s single-ray traversal (`Bvh::intersect` / `Bvh::occluded`), the
 //! BVH invariants, inactive lanes and degenerate triangles.
 
@@ -6,7 +6,7 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 use proptest::prelude::*;
-use simd_tracer::bvh::{Bvh, Hit, NO_TRIANGLE, Traversal, WIDE_MIN_TRIANGLES};
+use simd_tracer::accel::{Bvh, Hit, NO_TRIANGLE, Traversal, WIDE_MIN_TRIANGLES};
 use simd_tracer::packet::{LANES, LaneMask, Ray, RayPacket};
 
 // ---------------------------------------------------------------------------

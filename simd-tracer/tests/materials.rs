@@ -4,9 +4,9 @@
 //! dielectric), and the spectral factors against the core's optics.
 
 use glam::{Vec2, Vec3};
-use simd_tracer::angular::{AngularFunction, FilmLayer, Ior};
-use simd_tracer::camera::Camera;
-use simd_tracer::material::{
+use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior};
+use simd_tracer::scene::camera::Camera;
+use simd_tracer::shading::material::{
     Albedo, Bsdf, LaneSpectrum, Material, ShadingPoint, SpectralRef, diffuse_fresnel,
 };
 use simd_tracer::scene::{Scene, SceneBuilder};

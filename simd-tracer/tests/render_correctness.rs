@@ -5,15 +5,15 @@
 //! determinism across thread counts.
 
 use glam::Vec3;
-use simd_tracer::camera::Camera;
-use simd_tracer::filter::Filter;
+use simd_tracer::scene::camera::Camera;
+use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::{GroupState, IntegratorSettings, RayCounts, trace, trace_group};
-use simd_tracer::material::Material;
+use simd_tracer::shading::material::Material;
 use simd_tracer::packet::{LANES, LaneMask, Ray, RayPacket};
 use simd_tracer::render::{RenderResult, RenderSettings, render};
-use simd_tracer::rng::{Purpose, Rng, RngPacket};
+use simd_tracer::sampling::rng::{Purpose, Rng, RngPacket};
 use simd_tracer::scene::{Scene, SceneBuilder};
-use simd_tracer::scenes::{SceneOptions, builtin_scene};
+use simd_tracer::scene::builtin::{SceneOptions, builtin_scene};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::transport::{
     AlphaMode, Buffer, ControlVariateTransport, FourierTransport, SampledTransport, Transport,
@@ -361,7 +361,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
     let mut lamp = Material::lambert("lamp", grey);
     lamp.emission = Some(glow);
     let lamp = b.add_material(lamp);
-    let scene_template = simd_tracer::scenes::cornell_box(range)?;
+    let scene_template = simd_tracer::scene::builtin::cornell_box(range)?;
     for (i, tri) in scene_template.triangles.iter().enumerate() {
         let is_light = scene_template.materials[scene_template.triangle_material[i] as usize]
             .emission
@@ -453,7 +453,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
 #[test]
 fn cornell_box_fourier_and_sampled_converge_to_the_same_colours() -> TestResult {
     let range = SpectralRange::VISIBLE;
-    let scene = simd_tracer::scenes::cornell_box(range)?;
+    let scene = simd_tracer::scene::builtin::cornell_box(range)?;
     let s = settings(24, 512, 5);
     let fourier = run(
         &FourierTransport::<16>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?,
@@ -497,7 +497,7 @@ fn cornell_box_fourier_and_sampled_converge_to_the_same_colours() -> TestResult 
 #[test]
 fn degenerate_triangles_render_clean_and_nothing_non_finite_reaches_the_film() -> TestResult {
     let range = SpectralRange::VISIBLE;
-    let mut b = simd_tracer::scenes::cornell_builder(range)?;
+    let mut b = simd_tracer::scene::builtin::cornell_builder(range)?;
     let grey = b.add_spectrum("grey", SpectrumSource::Constant(0.5))?;
     let m = b.add_material(Material::lambert("grey", grey));
     b.add_triangle([Vec3::ZERO, Vec3::ZERO, Vec3::X], m);
@@ -522,7 +522,7 @@ fn degenerate_triangles_render_clean_and_nothing_non_finite_reaches_the_film() -
 #[test]
 fn images_do_not_depend_on_the_thread_count() -> TestResult {
     let range = SpectralRange::VISIBLE;
-    let scene = simd_tracer::scenes::cornell_box(range)?;
+    let scene = simd_tracer::scene::builtin::cornell_box(range)?;
     let f = FourierTransport::<12>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?;
     let cv =
         ControlVariateTransport::<8, 4>::new(range, WavelengthStrategy::Hero, AlphaMode::Shared)?;

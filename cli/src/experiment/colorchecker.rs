@@ -38,7 +38,7 @@ use super::report::{Claim, Section, Table, Verdict, fixed, write_text};
 use crate::error::CliError;
 use crate::spectrum_file::{SpectrumSource, resolve};
 use serde_json::{Value, json};
-use simd_tracer::rng::{Purpose, Rng};
+use simd_tracer::sampling::rng::{Purpose, Rng};
 use spectral_core::cmf::{self, Y_BAR_INTEGRAL};
 use spectral_core::color::{Lab, Xyz};
 use spectral_core::control_variate::{AlphaStatistics, ControlVariate};

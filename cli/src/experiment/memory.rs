@@ -5,7 +5,7 @@
 //! * Stored spectral buffer / texture: `f32` per value — `4N` bytes for
 //!   Fourier N, 128 for 32 sampled bins, `4 × 471` for a 1 nm table over
 //!   360–830 nm. The texel column is measured on this project's
-//!   `simd_tracer::texture::Texture` (`memory_bytes` of a 1×1 texture)
+//!   `simd_tracer::spectra::texture::Texture` (`memory_bytes` of a 1×1 texture)
 //!   where it has the representation.
 //! * This renderer's per-pixel accumulator: `size_of` of the transport's
 //!   pixel type (`f64` sums and a count; a sampled transport keeps only XYZ
@@ -21,7 +21,7 @@
 use super::colorchecker::exact_xyz;
 use super::report::{Section, Table, fixed, write_text};
 use crate::error::CliError;
-use simd_tracer::texture::Texture;
+use simd_tracer::spectra::texture::Texture;
 use simd_tracer::transport::{FourierPixel, XyzPixel};
 use spectral_core::color::Xyz;
 use spectral_core::delta_e::delta_e2000;

@@ -8,23 +8,23 @@
 //! | `materials` | the paper's figure 4: diffuse, gold, copper, glass, coated plastic, a single-layer and a multi-layer thin film, on a textured floor |
 //! | `colorchecker` | the 24 ColorChecker patches lit directly by an illuminant (a constant environment, D65 by default, scaled to Y = 1) in front of a black backdrop |
 
-use crate::angular::{AngularFunction, FilmLayer, Ior, Network};
-use crate::camera::Camera;
-use crate::material::{Albedo, Bsdf, Material, diffuse_fresnel};
-use crate::obj::{ObjError, ObjSource, load_obj};
+use crate::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
+use crate::scene::camera::Camera;
+use crate::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
+use crate::scene::obj::{ObjError, ObjSource, load_obj};
 use crate::scene::{MaterialId, Scene, SceneBuilder, SceneError, SpectrumId};
-use crate::shapes::{add_box, add_quad_uv, add_sphere};
+use crate::scene::shapes::{add_box, add_quad_uv, add_sphere};
 use crate::spectra::SpectrumSource;
-use crate::texture::Texture;
+use crate::spectra::texture::Texture;
 use glam::Vec3;
 use spectral_core::SpectralRange;
 use spectral_core::registry::Builtin;
 use spectral_core::table::{FilmQuantity, FilmSide};
 
 /// The Cornell box OBJ (also at `scenes/cornell/cornell.obj`).
-pub const CORNELL_OBJ: &str = include_str!("../../scenes/cornell/cornell.obj");
+pub const CORNELL_OBJ: &str = include_str!("../../../scenes/cornell/cornell.obj");
 /// The Cornell box MTL.
-pub const CORNELL_MTL: &str = include_str!("../../scenes/cornell/cornell.mtl");
+pub const CORNELL_MTL: &str = include_str!("../../../scenes/cornell/cornell.mtl");
 /// Field of view of the Cornell box camera, degrees (smaller axis).
 pub const CORNELL_FOV_DEG: f32 = 39.3077;
 
@@ -40,7 +40,7 @@ pub struct SceneInfo {
 /// The network of the `materials` scene's neural sphere: `fspec train
 /// thin-film --out scenes/assets/film-400nm.nn` (film index 2.0, 400 nm, on
 /// a 1.5 substrate; 1 input, 10 hidden, 10 coefficients, seed 1).
-pub const FILM_NETWORK: &[u8] = include_bytes!("../../scenes/assets/film-400nm.nn");
+pub const FILM_NETWORK: &[u8] = include_bytes!("../../../scenes/assets/film-400nm.nn");
 
 /// Every built-in scene.
 pub const SCENES: [SceneInfo; 5] = [

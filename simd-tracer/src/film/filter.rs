@@ -273,7 +273,7 @@ mod tests {
 
     #[test]
     fn packet_offsets_equal_scalar_offsets_bit_for_bit() {
-        let mut rng = crate::rng::Rng::new(7, 11);
+        let mut rng = crate::sampling::rng::Rng::new(7, 11);
         let edges = [0.0, 0.5, 1.0 - f32::EPSILON, 1e-9, 0.25, 0.75, 0.999, 1e-3];
         for filter in [Filter::gaussian(), Filter::Box] {
             for round in 0..2000 {

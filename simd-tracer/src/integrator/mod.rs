@@ -5,7 +5,7 @@
 //! Packets are traced in lockstep groups ([`trace_group`]): per bounce, the
 //! group's hits, then each packet's shading, light sample and BSDF sample,
 //! then the group's shadow rays, so that bounce and shadow rays can be
-//! compacted across the group's packets ([`crate::compaction`]).
+//! compacted across the group's packets ([`crate::integrator::compaction`]).
 //!
 //! Per bounce, geometry and sampling decisions are scalar per ray lane (each
 //! lane has its own triangle, material and random numbers); the spectral
@@ -34,17 +34,16 @@
 //! Russian roulette starts at `rr_depth` (Mitsuba's default 5) with
 //! survival probability `min(0.95, mean spectral throughput)`.
 
-use crate::bvh::NO_TRIANGLE;
-use crate::compaction;
-use crate::material::{
+use crate::accel::NO_TRIANGLE;
+use crate::shading::material::{
     Bsdf, BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket, LaneSpectrum, ShadingPoint,
 };
 use crate::packet::PacketHit;
 use crate::packet::{LANES, LaneMask, RayPacket};
-use crate::rng::RngPacket;
+use crate::sampling::rng::RngPacket;
 use crate::scene::{Scene, SpectrumId};
 use crate::simd::Vec3x8;
-use crate::surface::NO_ID;
+use crate::shading::surface::NO_ID;
 use crate::transport::Transport;
 use glam::Vec2;
 use wide::bytemuck::cast;
@@ -454,7 +453,7 @@ struct ShadingSample {
 
 /// Packets traced together by [`trace_group`] in the renderer: their
 /// bounce and shadow rays are compacted across the group
-/// ([`crate::compaction`]), a whole 16 × 16 tile. More packets leave fewer
+/// ([`crate::integrator::compaction`]), a whole 16 × 16 tile. More packets leave fewer
 /// partly filled queries: on the Cornell box 16 packets cost 1.2 % fewer
 /// instructions per sample than 8 (12, which does not divide a tile's 32
 /// packets, 1.9 % more) and 2.5 % less time on a Zen 5 core, 32 another
@@ -517,7 +516,7 @@ pub fn trace<T: Transport>(
 /// Traces `G` packets in lockstep, one bounce at a time, and returns the
 /// radiance each lane carries back. Camera rays go through the tree as
 /// packets; the bounce and shadow rays of all `G` packets are compacted
-/// into as few full packets as hold them ([`crate::compaction`]). Every
+/// into as few full packets as hold them ([`crate::integrator::compaction`]). Every
 /// lane's path, random numbers and result are those of tracing its packet
 /// alone ([`trace`]): the queries answer each lane independently, and each
 /// packet's work runs in the same order as alone (the light sample's
@@ -597,7 +596,7 @@ pub fn trace_group<T: Transport, const G: usize>(
 /// path's last segment among the emitters (see [`last_segment_hits`]).
 /// The bound is where a flat test of the emitters costs about as much as a
 /// closest-hit query (the flat test's triangle count in the bvh module).
-const LAST_SEGMENT_EMITTERS: usize = crate::bvh::WIDE_MIN_TRIANGLES;
+const LAST_SEGMENT_EMITTERS: usize = crate::accel::WIDE_MIN_TRIANGLES;
 
 /// The hits of a path's last segment (`depth == max_depth`, no
 /// environment): only an emitter hit adds anything there (its emission),
@@ -892,7 +891,7 @@ impl<S: Copy> PathState<S> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
+    use crate::sampling::rng::Rng;
     use glam::Vec3;
 
     /// The last segment's emitter-only query keeps exactly the emitter hits
@@ -901,7 +900,7 @@ mod tests {
     /// light.
     #[test]
     fn last_segment_hits_equal_the_closest_hits_on_emitters() {
-        let scene = crate::scenes::cornell_box(spectral_core::SpectralRange::VISIBLE).unwrap();
+        let scene = crate::scene::builtin::cornell_box(spectral_core::SpectralRange::VISIBLE).unwrap();
         let mut rng = Rng::new(9, 10);
         let mut unit = move || 2.0 * rng.next_f32() - 1.0;
         let (mut emitter_hits, mut other_hits) = (0, 0);
@@ -963,8 +962,8 @@ mod tests {
     /// directly); zero, negative and unused lanes included.
     #[test]
     fn emission_sums_equal_lane_by_lane_sums() -> Result<(), Box<dyn std::error::Error>> {
-        use crate::camera::Camera;
-        use crate::material::Material;
+        use crate::scene::camera::Camera;
+        use crate::shading::material::Material;
         use crate::scene::SceneBuilder;
         use crate::spectra::SpectrumSource;
         use crate::transport::{Buffer, FourierTransport};
@@ -1070,3 +1069,5 @@ mod tests {
         }
     }
 }
+
+pub mod compaction;

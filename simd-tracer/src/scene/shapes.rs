@@ -118,8 +118,8 @@ pub fn add_sphere(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::Camera;
-    use crate::material::Material;
+    use crate::scene::camera::Camera;
+    use crate::shading::material::Material;
     use crate::spectra::SpectrumSource;
     use spectral_core::SpectralRange;
 

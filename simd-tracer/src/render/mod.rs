@@ -1,7 +1,7 @@
 //! Progressive rendering: passes of one sample per pixel over 16 × 16 tiles
 //! in parallel (rayon), packets of 8 pixels (4 × 2), traced
 //! [`crate::integrator::GROUP`] packets at a time (their bounce and shadow
-//! rays compacted, [`crate::compaction`]). Passes run in
+//! rays compacted, [`crate::integrator::compaction`]). Passes run in
 //! batches: each tile takes every pass of a batch in a row, so its pixels
 //! stay in cache (a 512² Fourier film is 32 MiB; one pass at a time streamed
 //! it through memory every pass). A batch is one pass for transports whose
@@ -10,7 +10,7 @@
 //! up to 16.
 //!
 //! Determinism: every sample draws its random numbers from streams keyed by
-//! (seed, pixel, pass) ([`crate::rng`]), the filter is importance-sampled so
+//! (seed, pixel, pass) ([`crate::sampling::rng`]), the filter is importance-sampled so
 //! a sample only touches its own pixel, and each tile is owned by one task
 //! per pass: the image depends only on the seed, never on the thread count
 //! or scheduling (tested bit for bit).
@@ -21,10 +21,10 @@
 //! NaN or infinite values never reach the film: they are counted in
 //! [`RenderResult::rejected`].
 
-use crate::filter::Filter;
+use crate::film::filter::Filter;
 use crate::integrator::{GROUP, GroupState, IntegratorSettings, RayCounts, trace_group};
 use crate::packet::{LANES, LaneMask, RayPacket};
-use crate::rng::{Purpose, Rng, RngPacket, SampleKey};
+use crate::sampling::rng::{Purpose, Rng, RngPacket, SampleKey};
 use crate::scene::Scene;
 use crate::simd::Vec3x8;
 use crate::transport::Transport;
@@ -430,7 +430,7 @@ mod tests {
         use spectral_core::xyz::XyzRoute;
         let range = spectral_core::SpectralRange::VISIBLE;
         let (Ok(scene), Ok(transport)) = (
-            crate::scenes::cornell_box(range),
+            crate::scene::builtin::cornell_box(range),
             FourierTransport::<4>::new(range, Buffer::Spectral, XyzRoute::Zeroth),
         ) else {
             panic!("Cornell box and transport");

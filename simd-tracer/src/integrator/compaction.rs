@@ -191,7 +191,7 @@ pub fn occluded<const G: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
+    use crate::sampling::rng::Rng;
 
     /// Random packets with random active lanes (some empty, some full),
     /// short and unbounded rays, from inside the Cornell box.
@@ -224,7 +224,7 @@ mod tests {
     /// occlusion; the queries run once per packed packet.
     #[test]
     fn compacted_queries_equal_per_packet_queries() {
-        let scene = crate::scenes::cornell_box(spectral_core::SpectralRange::VISIBLE).unwrap();
+        let scene = crate::scene::builtin::cornell_box(spectral_core::SpectralRange::VISIBLE).unwrap();
         let bvh = &scene.bvh;
         let mut rng = Rng::new(3, 4);
         for _ in 0..300 {

@@ -6,7 +6,7 @@
 //! Per lane the record gives the geometric normal, the emission and its
 //! sides, the light-selection probability and area that the MIS weight of
 //! an emitter hit needs,
-//! `p_light = P(light) · d² / (A |cos θ_y|)` (see [`crate::light`]),
+//! `p_light = P(light) · d² / (A |cos θ_y|)` (see [`crate::shading::light`]),
 //! and whether the BSDF is Lambert with a spectrum albedo (the packet path
 //! that needs neither texture coordinates nor a per-lane material call).
 //! The 8-wide emission mask and pdf here are checked lane by lane against
@@ -16,10 +16,10 @@
 //! eight 32-bit words each: one 32-byte load per lane and one `8 × 8`
 //! transpose give the packet's eight fields.
 
-use crate::light::LightSet;
+use crate::shading::light::LightSet;
 #[cfg(doc)]
-use crate::light::{emits_towards, light_pdf_solid_angle};
-use crate::material::{Albedo, Bsdf, Material};
+use crate::shading::light::{emits_towards, light_pdf_solid_angle};
+use crate::shading::material::{Albedo, Bsdf, Material};
 use crate::packet::{LANES, LaneMask};
 use crate::scene::{MaterialId, SpectrumId, triangle_area};
 use crate::simd::Vec3x8;
@@ -264,9 +264,9 @@ pub fn validate(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::Camera;
-    use crate::light::{emits_towards, light_pdf_solid_angle};
-    use crate::rng::Rng;
+    use crate::scene::camera::Camera;
+    use crate::shading::light::{emits_towards, light_pdf_solid_angle};
+    use crate::sampling::rng::Rng;
     use crate::scene::{Scene, SceneBuilder};
     use crate::spectra::SpectrumSource;
     use spectral_core::SpectralRange;

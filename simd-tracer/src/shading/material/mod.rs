@@ -10,13 +10,13 @@
 //! | BSDF | model |
 //! | --- | --- |
 //! | Lambert | `f = ρ/π`, cosine sampling (Shirley–Chiu), weight `ρ` |
-//! | Conductor | GGX (see [`crate::microfacet`]) with visible-normal sampling, `f = D G2 F/(4 cos θo cos θi)`, weight `F G2/G1`; `α < 10⁻³` is a mirror (delta); `F` from an angular spectrum (Fourier table / exact) |
+//! | Conductor | GGX (see [`crate::shading::microfacet`]) with visible-normal sampling, `f = D G2 F/(4 cos θo cos θi)`, weight `F G2/G1`; `α < 10⁻³` is a mirror (delta); `F` from an angular spectrum (Fourier table / exact) |
 //! | Dielectric | smooth (delta) or GGX (Walter et al. 2007) reflection and transmission; the lobe is chosen with the mean Fresnel `c_0` of the table (Fourier mode, and sampled mode without dispersion) and the throughput carries the spectral `F` or `1 − F`; transmitted radiance is scaled by `1/η²`; with a dispersive IOR and a hero wavelength, refraction follows the hero's IOR and terminates the secondary wavelengths |
 //! | Coated | a smooth or GGX dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic): specular `F(θo)` plus diffuse `ρ (1 − F_i)(1 − F_o)/(π η² (1 − F_dr,int))`, which conserves energy exactly for `ρ = 1` (the coat's Fresnel is achromatic, so it rides in the scalar part) |
 //! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
 
-use crate::angular::{Ior, REFERENCE_WAVELENGTH_NM};
-use crate::microfacet::{self, SMOOTH_ALPHA};
+use crate::spectra::angular::{Ior, REFERENCE_WAVELENGTH_NM};
+use crate::shading::microfacet::{self, SMOOTH_ALPHA};
 use crate::packet::{LANES, LaneMask};
 use crate::scene::{AngularId, Scene, SpectrumId, TextureId};
 use crate::simd::{self, Vec3x8};
@@ -1128,7 +1128,7 @@ impl Bsdf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
+    use crate::sampling::rng::Rng;
 
     /// Each lane of the 8-wide cosine sampler is the scalar sampler's
     /// direction (to rounding: the two use different `sin`/`cos`), a unit
@@ -1177,7 +1177,7 @@ mod tests {
     /// strictly above each lane's normal (as the integrator provides it).
     #[test]
     fn packet_bsdfs_match_the_scalar_oracle() -> Result<(), Box<dyn std::error::Error>> {
-        use crate::camera::Camera;
+        use crate::scene::camera::Camera;
         use crate::scene::SceneBuilder;
         use crate::spectra::SpectrumSource;
         let mut b = SceneBuilder::new(spectral_core::SpectralRange::VISIBLE);

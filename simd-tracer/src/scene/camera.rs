@@ -123,7 +123,7 @@ mod tests {
             39.3,
         )
         .unwrap();
-        let mut rng = crate::rng::Rng::new(3, 5);
+        let mut rng = crate::sampling::rng::Rng::new(3, 5);
         for (width, height) in [(512, 512), (640, 360), (1, 1), (37, 1000)] {
             for _ in 0..500 {
                 let x: [f32; 8] =

@@ -197,7 +197,7 @@ impl Neg for Vec3x8 {
 }
 
 /// An orthonormal basis around unit normals, lane-wise (Duff et al. 2017),
-/// the twin of [`crate::material::basis`].
+/// the twin of [`crate::shading::material::basis`].
 #[inline(always)]
 pub fn basis(n: Vec3x8) -> (Vec3x8, Vec3x8) {
     let sign = f32x8::ONE.copysign(n.z);
@@ -226,7 +226,7 @@ mod tests {
     #[test]
     fn lookups_read_the_indexed_entry_bit_for_bit() {
         let table = [1.5, -0.0, f32::NAN, f32::INFINITY, 3.0, -2.25, 1e-40, 7.0];
-        let mut rng = crate::rng::Rng::new(3, 9);
+        let mut rng = crate::sampling::rng::Rng::new(3, 9);
         for _ in 0..200 {
             let index: [u32; LANES] = core::array::from_fn(|_| rng.next_u32() % LANES as u32);
             let looked_up = lookup_f32x8(f32x8::new(table), u32x8::new(index)).to_array();
@@ -270,7 +270,7 @@ mod tests {
             assert_eq!(chosen, if a[i].x >= 0.0 { a[i] } else { b[i] });
             for (v, scalar) in [(va, a[i]), (vb, b[i])] {
                 let (t, s2) = basis(v.normalize());
-                let (tt, ss) = crate::material::basis(scalar.normalize());
+                let (tt, ss) = crate::shading::material::basis(scalar.normalize());
                 assert!(close(t.lane(i), tt) && close(s2.lane(i), ss), "lane {i}");
             }
         }

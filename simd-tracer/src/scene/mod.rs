@@ -6,14 +6,14 @@
 //! material is two-sided. Degenerate triangles (zero area, non-finite) are
 //! dropped at build time and counted in [`Scene::skipped_triangles`].
 
-use crate::angular::{AngularFunction, AngularSpectrum};
-use crate::bvh::{Bvh, TriangleSubset};
-use crate::camera::Camera;
-use crate::light::{Light, LightSet};
-use crate::material::Material;
+use crate::spectra::angular::{AngularFunction, AngularSpectrum};
+use crate::accel::{Bvh, TriangleSubset};
+use crate::scene::camera::Camera;
+use crate::shading::light::{Light, LightSet};
+use crate::shading::material::Material;
 use crate::spectra::{SceneSpectrum, SpectrumRegisters, SpectrumSource};
-use crate::surface::{NO_ID, PackedSurfaces, Surface};
-use crate::texture::Texture;
+use crate::shading::surface::{NO_ID, PackedSurfaces, Surface};
+use crate::spectra::texture::Texture;
 use glam::{Vec2, Vec3};
 use spectral_core::{SpectralError, SpectralRange};
 
@@ -129,13 +129,13 @@ impl Scene {
     }
 
     /// Checks [`Scene::surfaces`] against the triangles, materials and
-    /// lights they were derived from ([`crate::surface::validate`]).
+    /// lights they were derived from ([`crate::shading::surface::validate`]).
     /// Also checks [`Scene::emitters`] against the records, the light
     /// set's own invariants ([`LightSet::validate`]), the packed records
     /// against the records and the spectrum registers against
     /// [`Scene::spectra`].
     pub fn validate_surfaces(&self) -> Result<(), String> {
-        crate::surface::validate(
+        crate::shading::surface::validate(
             &self.surfaces,
             &self.triangles,
             &self.normals,
@@ -203,7 +203,7 @@ impl Scene {
                 let spectra = match a.function() {
                     AngularFunction::Conductor { n, k, .. } => n.memory_bytes() + k.memory_bytes(),
                     AngularFunction::Film { layers, .. } => {
-                        layers.capacity() * size_of::<crate::angular::FilmLayer>()
+                        layers.capacity() * size_of::<crate::spectra::angular::FilmLayer>()
                     }
                     _ => 0,
                 };
@@ -233,8 +233,8 @@ pub fn triangle_area([a, b, c]: &[Vec3; 3]) -> f32 {
 pub const BVH_NODE_BYTES: usize = size_of::<obvhs::bvh2::node::Bvh2Node>() + size_of::<u32>();
 
 /// Bytes the BVH keeps per (non-degenerate) triangle
-/// ([`crate::bvh::BYTES_PER_TRIANGLE`], derived from the BVH's own types).
-pub const BVH_TRIANGLE_BYTES: usize = crate::bvh::BYTES_PER_TRIANGLE;
+/// ([`crate::accel::BYTES_PER_TRIANGLE`], derived from the BVH's own types).
+pub const BVH_TRIANGLE_BYTES: usize = crate::accel::BYTES_PER_TRIANGLE;
 
 /// Bytes the light set keeps per emissive triangle: its [`Light`] record
 /// and CDF entry (its per-triangle light index is counted per triangle).
@@ -459,3 +459,8 @@ impl SceneBuilder {
         })
     }
 }
+
+pub mod builtin;
+pub mod camera;
+pub mod obj;
+pub mod shapes;

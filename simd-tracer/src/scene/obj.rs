@@ -7,7 +7,7 @@
 //! material gets the default grey. Degenerate faces are skipped by the scene
 //! builder and counted.
 
-use crate::material::Material;
+use crate::shading::material::Material;
 use crate::scene::{MaterialId, SceneBuilder, SceneError};
 use crate::spectra::SpectrumSource;
 use glam::Vec3;

@@ -409,3 +409,6 @@ mod tests {
         assert!(SceneSpectrum::new(bb, range).is_err());
     }
 }
+
+pub mod angular;
+pub mod texture;

@@ -18,9 +18,9 @@
 //!   the default: a single pixel's tens of samples give a noisy `α`) or per
 //!   pixel ([`AlphaMode::PerPixel`]).
 
-use crate::material::{LaneSpectrum, SpectralRef};
+use crate::shading::material::{LaneSpectrum, SpectralRef};
 use crate::packet::{LANES, LaneMask};
-use crate::rng::Rng;
+use crate::sampling::rng::Rng;
 use crate::scene::{Scene, SpectrumId};
 use crate::spectra::{DensePoint, MAX_COEFFS};
 use spectral_core::color::Xyz;
@@ -984,7 +984,7 @@ mod tests {
 
     #[test]
     fn gather_matches_the_lane_by_lane_oracle_bit_for_bit() {
-        let Ok(scene) = crate::scenes::cornell_box(SpectralRange::VISIBLE) else {
+        let Ok(scene) = crate::scene::builtin::cornell_box(SpectralRange::VISIBLE) else {
             panic!("Cornell box");
         };
         let spectra = scene.spectra.len() as u32;
@@ -1023,7 +1023,7 @@ mod tests {
     /// spectra are off its grid (the fallback path).
     #[test]
     fn sampled_gather_matches_the_lane_by_lane_oracle_bit_for_bit() {
-        let Ok(scene) = crate::scenes::cornell_box(SpectralRange::VISIBLE) else {
+        let Ok(scene) = crate::scene::builtin::cornell_box(SpectralRange::VISIBLE) else {
             panic!("Cornell box");
         };
         let spectra = scene.spectra.len() as u32;
@@ -1082,7 +1082,7 @@ mod tests {
     /// in for unheld ones).
     #[test]
     fn gather_by_id_equals_the_general_gather() {
-        let Ok(scene) = crate::scenes::cornell_box(SpectralRange::VISIBLE) else {
+        let Ok(scene) = crate::scene::builtin::cornell_box(SpectralRange::VISIBLE) else {
             panic!("Cornell box");
         };
         let Ok(transport) =

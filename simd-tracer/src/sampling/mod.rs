@@ -1,0 +1,3 @@
+//! Random numbers and sampling.
+
+pub mod rng;

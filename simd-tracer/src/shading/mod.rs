@@ -1,0 +1,6 @@
+//! Shading: per-triangle surface records, lights, microfacet maths and materials.
+
+pub mod light;
+pub mod material;
+pub mod microfacet;
+pub mod surface;
