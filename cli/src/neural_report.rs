@@ -26,8 +26,8 @@
 use crate::error::CliError;
 use crate::image_out::write_atomically;
 use crate::train::FilmSpec;
-use simd_tracer::spectra::angular::{ANGLE_ROWS, Network};
 use simd_tracer::spectra::MAX_COEFFS;
+use simd_tracer::spectra::angular::{ANGLE_ROWS, Network};
 use spectral_core::color::Xyz;
 use spectral_core::delta_e::delta_e2000;
 use spectral_core::registry::Builtin;

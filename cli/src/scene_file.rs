@@ -143,10 +143,12 @@ use crate::error::CliError;
 use crate::spectrum_file;
 use crate::texture_file::{TextureUse, load_texture};
 use glam::{Vec2, Vec3};
-use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network, REFERENCE_WAVELENGTH_NM};
 use simd_tracer::scene::camera::{Camera, CameraError};
-use simd_tracer::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
 use simd_tracer::scene::{MaterialId, SceneBuilder, SceneError, SpectrumId, TextureId};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
+use simd_tracer::spectra::angular::{
+    AngularFunction, FilmLayer, Ior, Network, REFERENCE_WAVELENGTH_NM,
+};
 use simd_tracer::spectra::{MAX_COEFFS, SpectrumSource};
 use spectral_core::registry::Builtin;
 use spectral_core::table::{FilmQuantity, FilmSide, MAX_LAYERS};

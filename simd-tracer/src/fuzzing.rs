@@ -10,9 +10,9 @@
 //!   build: `Err` or a valid scene, never a panic.
 
 use crate::accel::{Bvh, Hit, WideStack};
+use crate::packet::{LANES, Ray, RayPacket};
 use crate::scene::camera::Camera;
 use crate::scene::obj::{ObjSource, load_obj};
-use crate::packet::{LANES, Ray, RayPacket};
 use crate::scene::{SceneBuilder, SceneError};
 use glam::Vec3;
 use spectral_core::SpectralRange;

@@ -4,12 +4,12 @@
 //! the scene holds.
 
 use glam::Vec3;
-use simd_tracer::scene::camera::Camera;
 use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
-use simd_tracer::shading::material::{Albedo, Bsdf, Material};
 use simd_tracer::render::{RenderError, RenderSettings, render};
+use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::{SceneBuilder, SceneError};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::texture::Texture;
 use simd_tracer::transport::{Buffer, FourierTransport};

@@ -5,14 +5,14 @@
 //! images with 1 and 2 threads and across runs, in every transport.
 
 use glam::Vec3;
-use simd_tracer::scene::camera::Camera;
 use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
-use simd_tracer::shading::material::{Albedo, Bsdf, Material};
 use simd_tracer::render::{RenderResult, RenderSettings, render};
-use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::scene::builtin::{SCENES, SceneOptions, builtin_scene};
+use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::shapes::add_quad_uv;
+use simd_tracer::scene::{Scene, SceneBuilder};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::transport::{
     AlphaMode, Buffer, ControlVariateTransport, FourierTransport, SampledTransport, Transport,

@@ -4,13 +4,13 @@
 //! dielectric), and the spectral factors against the core's optics.
 
 use glam::{Vec2, Vec3};
-use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior};
 use simd_tracer::scene::camera::Camera;
+use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::shading::material::{
     Albedo, Bsdf, LaneSpectrum, Material, ShadingPoint, SpectralRef, diffuse_fresnel,
 };
-use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::spectra::SpectrumSource;
+use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior};
 use spectral_core::SpectralRange;
 use spectral_core::complex::Complex;
 use spectral_core::optics::{Layer, airy_film, fresnel_conductor};

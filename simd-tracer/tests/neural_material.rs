@@ -4,16 +4,16 @@
 //! error.
 
 use glam::Vec3;
-use simd_tracer::spectra::angular::{AngularFunction, AngularSpectrum, FilmLayer, Ior, Network};
-use simd_tracer::scene::camera::Camera;
 use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
-use simd_tracer::shading::material::{Bsdf, Material};
 use simd_tracer::render::{RenderSettings, render};
 use simd_tracer::scene::SceneBuilder;
 use simd_tracer::scene::builtin::FILM_NETWORK;
+use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::shapes::add_sphere;
+use simd_tracer::shading::material::{Bsdf, Material};
 use simd_tracer::spectra::SpectrumSource;
+use simd_tracer::spectra::angular::{AngularFunction, AngularSpectrum, FilmLayer, Ior, Network};
 use simd_tracer::transport::{Buffer, FourierTransport};
 use spectral_core::complex::Complex;
 use spectral_core::optics::{Layer, multilayer};

@@ -224,7 +224,8 @@ mod tests {
     /// occlusion; the queries run once per packed packet.
     #[test]
     fn compacted_queries_equal_per_packet_queries() {
-        let scene = crate::scene::builtin::cornell_box(spectral_core::SpectralRange::VISIBLE).unwrap();
+        let scene =
+            crate::scene::builtin::cornell_box(spectral_core::SpectralRange::VISIBLE).unwrap();
         let bvh = &scene.bvh;
         let mut rng = Rng::new(3, 4);
         for _ in 0..300 {

@@ -6,14 +6,14 @@
 //! material is two-sided. Degenerate triangles (zero area, non-finite) are
 //! dropped at build time and counted in [`Scene::skipped_triangles`].
 
-use crate::spectra::angular::{AngularFunction, AngularSpectrum};
 use crate::accel::{Bvh, TriangleSubset};
 use crate::scene::camera::Camera;
 use crate::shading::light::{Light, LightSet};
 use crate::shading::material::Material;
-use crate::spectra::{SceneSpectrum, SpectrumRegisters, SpectrumSource};
 use crate::shading::surface::{NO_ID, PackedSurfaces, Surface};
+use crate::spectra::angular::{AngularFunction, AngularSpectrum};
 use crate::spectra::texture::Texture;
+use crate::spectra::{SceneSpectrum, SpectrumRegisters, SpectrumSource};
 use glam::{Vec2, Vec3};
 use spectral_core::{SpectralError, SpectralRange};
 

@@ -13,9 +13,9 @@
 //! a record copy per lane. Both paths give the scalar sample bit for bit.
 
 use crate::packet::{LANES, LaneMask};
+use crate::shading::surface::{NO_ID, Surface, SurfacePacket};
 use crate::simd::{Vec3x8, lookup_f32x8, lookup_u32x8};
 use crate::spectra::SceneSpectrum;
-use crate::shading::surface::{NO_ID, Surface, SurfacePacket};
 use glam::Vec3;
 use std::f32::consts::PI;
 use wide::bytemuck::cast;
@@ -371,8 +371,8 @@ pub fn emits_towards(two_sided: bool, cos_light: f32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shading::material::Material;
     use crate::sampling::rng::Rng;
+    use crate::shading::material::Material;
     use crate::spectra::SpectrumSource;
     use spectral_core::SpectralRange;
 

@@ -16,12 +16,12 @@
 //! eight 32-bit words each: one 32-byte load per lane and one `8 × 8`
 //! transpose give the packet's eight fields.
 
+use crate::packet::{LANES, LaneMask};
+use crate::scene::{MaterialId, SpectrumId, triangle_area};
 use crate::shading::light::LightSet;
 #[cfg(doc)]
 use crate::shading::light::{emits_towards, light_pdf_solid_angle};
 use crate::shading::material::{Albedo, Bsdf, Material};
-use crate::packet::{LANES, LaneMask};
-use crate::scene::{MaterialId, SpectrumId, triangle_area};
 use crate::simd::Vec3x8;
 use glam::Vec3;
 use wide::bytemuck::cast;
@@ -264,10 +264,10 @@ pub fn validate(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::camera::Camera;
-    use crate::shading::light::{emits_towards, light_pdf_solid_angle};
     use crate::sampling::rng::Rng;
+    use crate::scene::camera::Camera;
     use crate::scene::{Scene, SceneBuilder};
+    use crate::shading::light::{emits_towards, light_pdf_solid_angle};
     use crate::spectra::SpectrumSource;
     use spectral_core::SpectralRange;
 

@@ -1,0 +1,223 @@
+//! [`Bvh::validate`]: the tree's invariants, checked iteratively (and by
+//! obvhs' own validation for trees of moderate depth).
+
+use super::Bvh;
+use super::build::{is_degenerate, pair_triangles, to_obvhs_triangle, tree_depth};
+use super::triangle::{PreparedTriangle, is_fan_pair};
+use glam::Vec3A;
+use obvhs::aabb::Aabb;
+use obvhs::triangle::Triangle as ObvhsTriangle;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+/// Deepest tree handed to obvhs' recursive `Bvh2::validate` (one stack
+/// frame per level; a few hundred KiB at this depth, well inside a 2 MiB
+/// thread stack). Deeper trees get only [`Bvh::validate`]'s own iterative
+/// checks, which cover the same invariants.
+pub(super) const OBVHS_VALIDATE_MAX_DEPTH: usize = 1024;
+
+impl Bvh {
+    /// Checks the invariants: every inner node bounds its children, every
+    /// leaf bounds its triangles, every node is reached exactly once from
+    /// the root, every non-degenerate input triangle is referenced exactly
+    /// once, obvhs' traversal stack covers the tree's depth, and `obvhs`'s
+    /// own validation (for trees up to 1024 levels deep). `Err` says what is
+    /// wrong.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.triangles.len();
+        let nodes = &self.bvh2.nodes;
+        if self.vertices.len() != n || self.original.len() != n {
+            return Err(format!(
+                "{} prepared triangles, {} vertex triples, {} original indices",
+                n,
+                self.vertices.len(),
+                self.original.len()
+            ));
+        }
+        if self.bvh2.primitive_indices.len() != n {
+            return Err(format!(
+                "{} primitive indices for {} triangles",
+                self.bvh2.primitive_indices.len(),
+                n
+            ));
+        }
+        if n + self.skipped != self.input_count {
+            return Err(format!(
+                "{} kept + {} skipped != {} input triangles",
+                n, self.skipped, self.input_count
+            ));
+        }
+        if n == 0 {
+            return if nodes.is_empty() {
+                Ok(())
+            } else {
+                Err(format!("no triangles but {} nodes", nodes.len()))
+            };
+        }
+
+        // Own structural checks.
+        let contains = |outer: &Aabb, inner_min: Vec3A, inner_max: Vec3A| {
+            outer.min.cmple(inner_min).all() && inner_max.cmple(outer.max).all()
+        };
+        let mut visited = vec![false; nodes.len()];
+        let mut references = vec![0u32; n];
+        let mut stack = vec![0usize];
+        while let Some(index) = stack.pop() {
+            let node = nodes
+                .get(index)
+                .ok_or_else(|| format!("node {index} out of range"))?;
+            let seen = visited
+                .get_mut(index)
+                .ok_or_else(|| format!("node {index} out of range"))?;
+            if *seen {
+                return Err(format!("node {index} is reached twice"));
+            }
+            *seen = true;
+            let aabb = node.aabb();
+            if !(aabb.min.is_finite() && aabb.max.is_finite() && aabb.min.cmple(aabb.max).all()) {
+                return Err(format!("node {index} has an invalid box {aabb:?}"));
+            }
+            if node.is_leaf() {
+                let first = node.first_index as usize;
+                let end = first + node.prim_count as usize;
+                if end > n {
+                    return Err(format!(
+                        "leaf {index} references slots {first}..{end} of {n}"
+                    ));
+                }
+                for (slot, (count, vertices)) in references[first..end]
+                    .iter_mut()
+                    .zip(&self.vertices[first..end])
+                    .enumerate()
+                    .map(|(k, pair)| (first + k, pair))
+                {
+                    *count += 1;
+                    let [a, b, c] = vertices.map(Vec3A::from);
+                    if !contains(aabb, a.min(b).min(c), a.max(b).max(c)) {
+                        return Err(format!(
+                            "leaf {index} does not bound triangle slot {slot} (input {})",
+                            self.original[slot]
+                        ));
+                    }
+                }
+            } else {
+                let left = node.first_index as usize;
+                for child in [left, left + 1] {
+                    let child_node = nodes
+                        .get(child)
+                        .ok_or_else(|| format!("node {index} has child {child} out of range"))?;
+                    let child_box = child_node.aabb();
+                    if !contains(aabb, child_box.min, child_box.max) {
+                        return Err(format!("node {index} does not bound its child {child}"));
+                    }
+                    stack.push(child);
+                }
+            }
+        }
+        if let Some(unreached) = visited.iter().position(|&v| !v) {
+            return Err(format!("node {unreached} is not reachable from the root"));
+        }
+        if let Some(slot) = references.iter().position(|&r| r != 1) {
+            return Err(format!(
+                "triangle slot {slot} (input {}) is referenced {} times",
+                self.original[slot], references[slot]
+            ));
+        }
+
+        // obvhs's validation (it asserts, so catch its panic). It wants the
+        // primitives in build order: slot i holds build primitive
+        // `primitive_indices[i]`. It recurses once per tree level, so on
+        // degenerate deep trees (thousands of coincident triangles make a
+        // chain) it would overflow the thread's stack: past
+        // OBVHS_VALIDATE_MAX_DEPTH only the iterative checks above run
+        // (which also rule out cycles, so the depth is finite).
+        let depth = tree_depth(nodes);
+        if depth >= self.bvh2.max_depth {
+            return Err(format!(
+                "tree depth {depth} but traversal stack {}",
+                self.bvh2.max_depth
+            ));
+        }
+        if depth <= OBVHS_VALIDATE_MAX_DEPTH {
+            let mut build_order = vec![ObvhsTriangle::default(); n];
+            for (slot, &primitive) in self.bvh2.primitive_indices.iter().enumerate() {
+                let target = build_order
+                    .get_mut(primitive as usize)
+                    .ok_or_else(|| format!("primitive index {primitive} out of range"))?;
+                *target = to_obvhs_triangle(&self.vertices[slot]);
+            }
+            catch_unwind(AssertUnwindSafe(|| {
+                self.bvh2.validate(&build_order, false, false);
+            }))
+            .map_err(|payload| {
+                let message = payload
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| payload.downcast_ref::<&str>().map(|s| (*s).to_owned()))
+                    .unwrap_or_else(|| "unknown panic".to_owned());
+                format!("obvhs validation failed: {message}")
+            })?;
+        }
+
+        self.wide
+            .validate(&self.triangles, &self.vertices)
+            .map_err(|e| format!("wide BVH: {e}"))?;
+
+        // Fan pairs and singles: every slot once; each pair a coplanar fan
+        // whose second triangle carries the first one's plane.
+        let mut plane_of = vec![None; n];
+        let mut listed = vec![0u32; n];
+        let mut count = |slot: u32| {
+            listed
+                .get_mut(slot as usize)
+                .map(|c| *c += 1)
+                .ok_or_else(|| format!("flat list slot {slot} out of range"))
+        };
+        for &[first, second] in &self.flat_pairs {
+            count(first)?;
+            count(second)?;
+            let (a, b) = (first as usize, second as usize);
+            if !is_fan_pair(&self.vertices[a], &self.vertices[b]) {
+                return Err(format!(
+                    "slots {first} and {second} are not a coplanar fan pair"
+                ));
+            }
+            plane_of[b] = Some(PreparedTriangle::new(&self.vertices[a]));
+        }
+        for &single in &self.flat_singles {
+            count(single)?;
+        }
+        if self.flat_pair_triangles != pair_triangles(&self.flat_pairs, &self.triangles) {
+            return Err("the flat pairs' triangle copies are stale".to_owned());
+        }
+        if let Some(slot) = listed.iter().position(|&c| c != 1) {
+            return Err(format!(
+                "slot {slot} is listed {} times in the flat lists",
+                listed[slot]
+            ));
+        }
+
+        // The slot data and the map back to the input.
+        let mut seen_input = vec![false; self.input_count];
+        for (slot, &input) in self.original.iter().enumerate() {
+            let flag = seen_input
+                .get_mut(input as usize)
+                .ok_or_else(|| format!("slot {slot} maps to input {input} out of range"))?;
+            if *flag {
+                return Err(format!("input triangle {input} appears twice"));
+            }
+            *flag = true;
+            let vertices = &self.vertices[slot];
+            if is_degenerate(vertices) {
+                return Err(format!("degenerate input triangle {input} is in the tree"));
+            }
+            let prepared = match &plane_of[slot] {
+                Some(first) => PreparedTriangle::on_plane_of(vertices, first),
+                None => PreparedTriangle::new(vertices),
+            };
+            if prepared != self.triangles[slot] {
+                return Err(format!("prepared data of slot {slot} is stale"));
+            }
+        }
+        Ok(())
+    }
+}

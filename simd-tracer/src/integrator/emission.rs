@@ -1,0 +1,132 @@
+//! Deferred emission products: `Σ w T` per emission spectrum, one product
+//! with `Le` per path (the truncated product is bilinear).
+
+use super::EMISSION_SLOTS;
+use crate::packet::{LANES, LaneMask};
+use crate::scene::{Scene, SpectrumId};
+use crate::transport::Transport;
+use wide::bytemuck::cast;
+use wide::{f32x8, u32x8};
+
+/// Deferred emission products. Every emitted contribution has the form
+/// `T ⊛ Le · w` with a per-lane scalar `w`; the truncated product is
+/// bilinear, so `Σ_k T_k ⊛ Le · w_k = (Σ_k w_k T_k) ⊛ Le`. Sums are kept per
+/// emission spectrum (up to [`EMISSION_SLOTS`], then products are formed
+/// directly) and multiplied by their spectrum once per path: one truncated
+/// product per bounce (the BSDF factor) instead of three.
+pub(super) struct EmissionSums<S> {
+    pub(super) ids: [Option<SpectrumId>; EMISSION_SLOTS],
+    pub(super) sums: [S; EMISSION_SLOTS],
+    pub(super) direct: S,
+}
+
+impl<S: Copy> EmissionSums<S> {
+    pub(super) fn new<T: Transport<Spectra = S>>(transport: &T) -> Self {
+        Self {
+            ids: [None; EMISSION_SLOTS],
+            sums: [transport.zero(); EMISSION_SLOTS],
+            direct: transport.zero(),
+        }
+    }
+
+    /// Empties the sums for a new path: the slots are released (a slot's
+    /// sum is set when it is claimed), the direct sum is zeroed.
+    pub(super) fn reset<T: Transport<Spectra = S>>(&mut self, transport: &T) {
+        self.ids = [None; EMISSION_SLOTS];
+        self.direct = transport.zero();
+    }
+
+    /// Adds `value ⊛ Le(ids[lane]) · weight(lane)` for each lane of `lanes`.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the spectra, the emissions and their weights"
+    )]
+    pub(super) fn add<T: Transport<Spectra = S>>(
+        &mut self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+        value: &S,
+        ids: &[SpectrumId; LANES],
+        lanes: LaneMask,
+        weight: f32x8,
+    ) {
+        let Some(first) = lanes.iter().next() else {
+            return;
+        };
+        let live = lanes.to_simd();
+        let weight = live.select(weight, f32x8::ZERO);
+        // Lanes whose weight is not 0 (a NaN weight counts).
+        let weighted = !weight.simd_eq(f32x8::ZERO);
+        // The common case, one emission among the lanes: one scaled sum,
+        // the same as the loop below forms for it.
+        let id = ids[first];
+        let same: f32x8 = cast(u32x8::new(*ids).simd_eq(u32x8::splat(id)));
+        if (same | !live).all() {
+            if weighted.any() {
+                self.add_scaled(transport, scene, wavelengths, value, id, weight);
+            }
+            return;
+        }
+        let mut done = LaneMask::NONE;
+        let weighted = LaneMask::from_simd(weighted);
+        for lane in lanes.and(weighted).iter() {
+            if done.contains(lane) {
+                continue;
+            }
+            let id = ids[lane];
+            let of_id: f32x8 = cast(u32x8::new(*ids).simd_eq(u32x8::splat(id)));
+            let of_id = LaneMask::from_simd(of_id).and(lanes);
+            done = done.or(of_id);
+            let lane_weights = of_id.to_simd().select(weight, f32x8::ZERO);
+            self.add_scaled(transport, scene, wavelengths, value, id, lane_weights);
+        }
+    }
+
+    /// Adds `value ⊛ Le(id) · weight(lane)` (to the slot of `id` if there
+    /// is one, else directly).
+    #[inline(always)]
+    pub(super) fn add_scaled<T: Transport<Spectra = S>>(
+        &mut self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+        value: &S,
+        id: SpectrumId,
+        lane_weights: f32x8,
+    ) {
+        let scaled = transport.scale(value, lane_weights);
+        let slot = match self.ids.iter().position(|&s| s == Some(id)) {
+            Some(slot) => Some(slot),
+            None => self.ids.iter().position(Option::is_none).inspect(|&slot| {
+                // A claimed slot starts from zero.
+                self.ids[slot] = Some(id);
+                self.sums[slot] = transport.zero();
+            }),
+        };
+        match slot {
+            Some(slot) => self.sums[slot] = transport.add(&self.sums[slot], &scaled),
+            None => {
+                let le = transport.gather_ids(scene, wavelengths, &[id; LANES], LaneMask::ALL);
+                self.direct = transport.add(&self.direct, &transport.mul(&scaled, &le));
+            }
+        }
+    }
+
+    /// The total radiance.
+    pub(super) fn finish<T: Transport<Spectra = S>>(
+        &self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+    ) -> S {
+        let mut radiance = self.direct;
+        for (id, sum) in self.ids.iter().zip(&self.sums) {
+            if let Some(id) = *id {
+                let le = transport.gather_ids(scene, wavelengths, &[id; LANES], LaneMask::ALL);
+                radiance = transport.add(&radiance, &transport.mul(sum, &le));
+            }
+        }
+        radiance
+    }
+}

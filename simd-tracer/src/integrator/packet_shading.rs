@@ -1,0 +1,249 @@
+//! How a packet's BSDFs are evaluated and sampled: 8-wide when every lane
+//! is Lambertian, lane by lane otherwise, and the spectral factors they hand
+//! the transport.
+
+use super::RAY_EPSILON;
+use crate::packet::PacketHit;
+use crate::packet::{LANES, LaneMask};
+use crate::sampling::rng::RngPacket;
+use crate::scene::{Scene, SpectrumId};
+use crate::shading::material::{
+    Bsdf, BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket, LaneSpectrum, ShadingPoint,
+};
+use crate::simd::Vec3x8;
+use crate::transport::Transport;
+use glam::Vec2;
+use wide::f32x8;
+
+/// Per-lane uniform numbers from the lanes' streams (0 in idle lanes).
+/// Every stream is advanced: a lane outside `active` has ended its path
+/// for good (a packet's active set only shrinks), so its stream is never
+/// read again, and drawing in all 8 lanes spares a branch per lane.
+#[inline(always)]
+pub(super) fn uniforms(rngs: &mut RngPacket, active: LaneMask) -> f32x8 {
+    active.to_simd().select(rngs.next_f32x8(), f32x8::ZERO)
+}
+
+/// Ray origins moved off the surface along `n`, relative to the
+/// coordinates' magnitude.
+#[inline(always)]
+pub(super) fn offset_x8(p: Vec3x8, n: Vec3x8) -> Vec3x8 {
+    let scale = p.max_abs().max(f32x8::ONE) * f32x8::splat(RAY_EPSILON);
+    n.mul_add(scale, p)
+}
+
+/// Power heuristic `a²/(a² + b²)`, 0 where both are 0.
+#[inline(always)]
+pub(super) fn power_heuristic_x8(a: f32x8, b: f32x8) -> f32x8 {
+    let (a2, b2) = (a * a, b * b);
+    let sum = a2 + b2;
+    sum.simd_gt(f32x8::ZERO).select(a2 / sum, f32x8::ZERO)
+}
+
+/// How a packet's BSDFs are evaluated and sampled.
+#[allow(
+    clippy::large_enum_variant,
+    reason = "one value per bounce on the stack; boxing the general variant would allocate per bounce"
+)]
+pub(super) enum Shading<'a> {
+    /// Every lane of `lanes` is Lambert with the spectrum albedo
+    /// `albedo[lane]`: 8-wide, with no per-lane material call, no texture
+    /// coordinates and the albedos gathered by id
+    /// ([`Transport::gather_ids`]).
+    Lambert {
+        albedo: [SpectrumId; LANES],
+        lanes: LaneMask,
+    },
+    /// Lane by lane through the materials (8-wide where all are Lambert).
+    General {
+        bsdfs: [Option<&'a Bsdf>; LANES],
+        points: [ShadingPoint; LANES],
+    },
+}
+
+impl<'a> Shading<'a> {
+    /// The per-lane materials and shading points of the hits in `active`
+    /// (`front`: lanes that hit the front face).
+    pub(super) fn general<T: Transport>(
+        scene: &'a Scene,
+        transport: &T,
+        wavelengths: &T::Wavelengths,
+        hit: &PacketHit,
+        active: LaneMask,
+        normal: Vec3x8,
+        front: f32x8,
+    ) -> Self {
+        let bsdfs: [Option<&Bsdf>; LANES] = core::array::from_fn(|lane| {
+            if active.contains(lane) {
+                scene
+                    .triangle_material
+                    .get(hit.triangle[lane] as usize)
+                    .and_then(|&m| scene.materials.get(m as usize))
+                    .map(|m| &m.bsdf)
+            } else {
+                None
+            }
+        });
+        let (normal_lanes, front) = (normal.to_lanes(), front.to_bitmask());
+        let (hit_u, hit_v) = (hit.u.to_array(), hit.v.to_array());
+        let points = core::array::from_fn(|lane| {
+            let uv = scene
+                .uvs
+                .get(hit.triangle[lane] as usize)
+                .map_or(Vec2::ZERO, |[a, b, c]| {
+                    *a * (1.0 - hit_u[lane] - hit_v[lane]) + *b * hit_u[lane] + *c * hit_v[lane]
+                });
+            ShadingPoint {
+                n: normal_lanes[lane],
+                front: front & (1 << lane) != 0,
+                uv,
+                hero_nm: transport.hero_wavelength(wavelengths, lane),
+            }
+        });
+        Self::General { bsdfs, points }
+    }
+
+    /// [`Bsdf::eval_packet`] for the lanes in `valid`.
+    #[inline(always)]
+    pub(super) fn eval(
+        &self,
+        scene: &Scene,
+        valid: LaneMask,
+        n: Vec3x8,
+        wo: Vec3x8,
+        wi: Vec3x8,
+    ) -> ShadingEval {
+        match self {
+            &Self::Lambert { albedo, lanes } => {
+                let value = Bsdf::eval_lambert_directions(n, wi);
+                ShadingEval {
+                    value,
+                    pdf: value,
+                    spectrum: Factors::Lambert { albedo, lanes },
+                }
+            }
+            Self::General { bsdfs, points } => {
+                let BsdfEvalPacket {
+                    value,
+                    pdf,
+                    spectrum,
+                } = Bsdf::eval_packet(scene, bsdfs, points, valid, n, wo, wi);
+                ShadingEval {
+                    value,
+                    pdf,
+                    spectrum: Factors::Lanes(spectrum),
+                }
+            }
+        }
+    }
+
+    /// [`Bsdf::sample_packet`] for the lanes in `active`.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the shading twin of `Bsdf::sample_packet`"
+    )]
+    pub(super) fn sample(
+        &self,
+        scene: &Scene,
+        active: LaneMask,
+        n: Vec3x8,
+        wo: Vec3x8,
+        u_lobe: &[f32; LANES],
+        u: f32x8,
+        v: f32x8,
+    ) -> ShadingSample {
+        match self {
+            &Self::Lambert { albedo, lanes } => {
+                let LambertSamplePacket {
+                    wi,
+                    pdf,
+                    weight,
+                    valid,
+                } = Bsdf::sample_lambert_directions(active, n, u, v);
+                ShadingSample {
+                    wi,
+                    pdf,
+                    weight,
+                    valid,
+                    terminate_secondary: LaneMask::NONE,
+                    spectrum: Factors::Lambert { albedo, lanes },
+                }
+            }
+            Self::General { bsdfs, points } => {
+                let BsdfSamplePacket {
+                    wi,
+                    pdf,
+                    weight,
+                    spectrum,
+                    valid,
+                    terminate_secondary,
+                } = Bsdf::sample_packet(scene, bsdfs, points, active, n, wo, u_lobe, u, v);
+                ShadingSample {
+                    wi,
+                    pdf,
+                    weight,
+                    valid,
+                    terminate_secondary,
+                    spectrum: Factors::Lanes(spectrum),
+                }
+            }
+        }
+    }
+}
+
+/// The spectral factors of a packet's BSDF values or sample.
+#[derive(PartialEq)]
+pub(super) enum Factors {
+    /// The Lambert albedos `albedo[lane]` in the lanes of `lanes`, 0
+    /// elsewhere ([`Transport::gather_ids`]).
+    Lambert {
+        albedo: [SpectrumId; LANES],
+        lanes: LaneMask,
+    },
+    /// One factor per lane ([`Transport::gather`]).
+    Lanes([LaneSpectrum; LANES]),
+}
+
+impl Factors {
+    /// Whether the factors agree in the lanes of `lanes`.
+    pub(super) fn agree(&self, other: &Self, lanes: LaneMask) -> bool {
+        match (self, other) {
+            (Self::Lanes(a), Self::Lanes(b)) => lanes.iter().all(|lane| a[lane] == b[lane]),
+            _ => self == other,
+        }
+    }
+
+    /// `throughput ⊛ f`.
+    pub(super) fn times<T: Transport>(
+        &self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+        throughput: &T::Spectra,
+    ) -> T::Spectra {
+        let factor = match self {
+            Self::Lambert { albedo, lanes } => {
+                transport.gather_ids(scene, wavelengths, albedo, *lanes)
+            }
+            Self::Lanes(spectrum) => transport.gather(scene, wavelengths, spectrum),
+        };
+        transport.mul(throughput, &factor)
+    }
+}
+
+/// A packet's BSDF values as a bounce uses them.
+pub(super) struct ShadingEval {
+    pub(super) value: f32x8,
+    pub(super) pdf: f32x8,
+    pub(super) spectrum: Factors,
+}
+
+/// A packet's BSDF sample as a bounce uses it.
+pub(super) struct ShadingSample {
+    pub(super) wi: Vec3x8,
+    pub(super) pdf: f32x8,
+    pub(super) weight: f32x8,
+    pub(super) valid: LaneMask,
+    pub(super) terminate_secondary: LaneMask,
+    pub(super) spectrum: Factors,
+}

@@ -1,0 +1,250 @@
+//! One packet's paths between bounces: throughput, emission sums, the
+//! light sample and the bounce itself.
+
+use super::emission::EmissionSums;
+use super::packet_shading::{Shading, offset_x8, power_heuristic_x8, uniforms};
+use super::{IntegratorSettings, RR_MAX_SURVIVAL, SHADOW_EPSILON};
+use crate::packet::PacketHit;
+use crate::packet::{LANES, LaneMask, RayPacket};
+use crate::sampling::rng::RngPacket;
+use crate::scene::{Scene, SpectrumId};
+use crate::simd::Vec3x8;
+use crate::transport::Transport;
+use wide::f32x8;
+
+/// One packet's paths between bounces.
+pub(super) struct PathState<S> {
+    pub(super) emitted: EmissionSums<S>,
+    pub(super) throughput: S,
+    /// Lanes whose path goes on.
+    pub(super) active: LaneMask,
+    /// Solid-angle pdf of the BSDF sample that produced each lane's ray (0:
+    /// no MIS).
+    pub(super) previous_pdf: f32x8,
+}
+
+/// A packet's light samples (next-event estimation) waiting for the
+/// group's shadow rays: `through_bsdf ⊛ Le(light) · weight` per lane that
+/// is not blocked.
+pub(super) struct NeeSample<S> {
+    pub(super) weight: f32x8,
+    /// The lights' emission spectra, in the lanes of `lanes`.
+    pub(super) light: [SpectrumId; LANES],
+    pub(super) lanes: LaneMask,
+    /// Throughput times the BSDF's spectral factor towards the light.
+    pub(super) through_bsdf: S,
+}
+
+impl<S: Copy> PathState<S> {
+    pub(super) fn new<T: Transport<Spectra = S>>(transport: &T, active: LaneMask) -> Self {
+        Self {
+            emitted: EmissionSums::new(transport),
+            throughput: transport.one(),
+            active,
+            previous_pdf: f32x8::ZERO,
+        }
+    }
+
+    /// The state of new paths in the lanes of `active` ([`PathState::new`]
+    /// without rebuilding the emission sums).
+    pub(super) fn reset<T: Transport<Spectra = S>>(&mut self, transport: &T, active: LaneMask) {
+        self.emitted.reset(transport);
+        self.throughput = transport.one();
+        self.active = active;
+        self.previous_pdf = f32x8::ZERO;
+    }
+
+    /// One bounce at the hits of `rays`: escapes and emission, the light
+    /// sample (its shadow rays to `shadow`, inactive where there is none,
+    /// its contribution to `nee`), and the BSDF sample, throughput and
+    /// Russian roulette that make the next `rays`.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "one packet's share of the group's state"
+    )]
+    pub(super) fn bounce<T: Transport<Spectra = S>>(
+        &mut self,
+        transport: &T,
+        scene: &Scene,
+        settings: &IntegratorSettings,
+        depth: u32,
+        rays: &mut RayPacket,
+        hit: &PacketHit,
+        shadow: &mut RayPacket,
+        nee: &mut NeeSample<S>,
+        rngs: &mut RngPacket,
+        wavelengths: &mut T::Wavelengths,
+    ) {
+        shadow.active = LaneMask::NONE;
+        if self.active.is_empty() {
+            return;
+        }
+        // Escaped lanes see the environment (no NEE for it, so no MIS).
+        let missed = self.active.and_not(hit.hit);
+        if let (Some(env), false) = (scene.environment, missed.is_empty()) {
+            self.emitted.add(
+                transport,
+                scene,
+                wavelengths,
+                &self.throughput,
+                &[env; LANES],
+                missed,
+                f32x8::ONE,
+            );
+        }
+        let mut active = self.active.and(hit.hit);
+        self.active = active;
+        if active.is_empty() {
+            return;
+        }
+
+        // Shading frame, 8-wide, from the hit triangles' records.
+        let surface = scene.packed_surfaces().gather(&hit.triangle, active);
+        let direction = Vec3x8::from_array(rays.direction);
+        let direction_length = direction.length();
+        let wo = -direction * (f32x8::ONE / direction_length);
+        let position = direction.mul_add(hit.t, Vec3x8::from_array(rays.origin));
+        let cos_o = surface.normal.dot(wo);
+        let front = cos_o.simd_ge(f32x8::ZERO);
+        let normal = Vec3x8::select(front, surface.normal, -surface.normal);
+
+        // Emission at the hit points, MIS-weighted against NEE (weight 1
+        // after a camera ray or a delta lobe: no MIS).
+        let emits = surface.emits_towards(cos_o).and(active);
+        if !emits.is_empty() {
+            let distance = hit.t * direction_length;
+            let p_light = surface.light_pdf(distance * distance, cos_o);
+            let weight = self
+                .previous_pdf
+                .simd_gt(f32x8::ZERO)
+                .select(power_heuristic_x8(self.previous_pdf, p_light), f32x8::ONE);
+            self.emitted.add(
+                transport,
+                scene,
+                wavelengths,
+                &self.throughput,
+                &surface.emission,
+                emits,
+                weight,
+            );
+        }
+        if depth >= settings.max_depth {
+            self.active = LaneMask::NONE;
+            return;
+        }
+        let origin = offset_x8(position, normal);
+        let shading = if surface.all_lambert(active) {
+            Shading::Lambert {
+                albedo: surface.lambert_albedo,
+                lanes: active,
+            }
+        } else {
+            Shading::general(scene, transport, wavelengths, hit, active, normal, front)
+        };
+
+        // Next-event estimation: one light sample per lane, one shadow packet.
+        let u_light = uniforms(rngs, active).to_array();
+        let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
+        let light = scene.lights.sample_packet(active, &u_light, u, v);
+        let to_light = light.point - origin;
+        let distance_sq = to_light.length_squared();
+        let wi = to_light * (f32x8::ONE / distance_sq.sqrt());
+        let cos_light = -light.surface.normal.dot(wi);
+        let eval = shading.eval(scene, light.valid, normal, wo, wi);
+        let p_light =
+            light.surface.light_pmf * distance_sq / (light.surface.area * cos_light.abs());
+        let emits = light.surface.emits_towards(cos_light).and(light.valid);
+        let usable = eval.value.simd_gt(f32x8::ZERO)
+            & p_light.simd_gt(f32x8::ZERO)
+            & distance_sq.simd_gt(f32x8::ZERO);
+        let nee_lanes = emits.and(LaneMask::from_simd(usable));
+        nee.weight = nee_lanes.to_simd().select(
+            eval.value * power_heuristic_x8(p_light, eval.pdf) / p_light,
+            f32x8::ZERO,
+        );
+        (nee.light, nee.lanes) = (light.surface.emission, nee_lanes);
+        *shadow = RayPacket {
+            origin: origin.to_array(),
+            direction: to_light.to_array(),
+            t_max: f32x8::splat(1.0 - SHADOW_EPSILON),
+            active: nee_lanes,
+        };
+
+        // BSDF sampling for the continuation.
+        let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
+        let u_lobe = uniforms(rngs, active).to_array();
+        let sample = shading.sample(scene, active, normal, wo, &u_lobe, u, v);
+        active = active
+            .and(sample.valid)
+            .and(LaneMask::from_simd(sample.weight.simd_gt(f32x8::ZERO)));
+        for lane in sample.terminate_secondary.and(active).iter() {
+            transport.terminate_secondary(wavelengths, lane);
+        }
+        let below = sample.wi.dot(normal).simd_lt(f32x8::ZERO);
+        let next_origin = Vec3x8::select(below, offset_x8(position, -normal), origin);
+        self.previous_pdf = sample.pdf;
+
+        // The one truncated product of the bounce: T ⊛ f(sampled direction),
+        // formed in place for the light sample, which shares it where the
+        // BSDF's spectral factor does not depend on the direction.
+        nee.through_bsdf = sample
+            .spectrum
+            .times(transport, scene, wavelengths, &self.throughput);
+        let weight = active.to_simd().select(sample.weight, f32x8::ZERO);
+        if eval.spectrum.agree(&sample.spectrum, nee_lanes) {
+            self.throughput = transport.scale(&nee.through_bsdf, weight);
+        } else {
+            let throughput_bsdf = nee.through_bsdf;
+            nee.through_bsdf = eval
+                .spectrum
+                .times(transport, scene, wavelengths, &self.throughput);
+            self.throughput = transport.scale(&throughput_bsdf, weight);
+        }
+
+        // Russian roulette, from the next segment on.
+        if depth.saturating_add(1) > settings.rr_depth {
+            let mean = transport.mean(&self.throughput).to_array();
+            let u_survive = rngs.next_f32x8().to_array();
+            let mut survival = [1.0f32; LANES];
+            for lane in active.iter() {
+                let q = mean[lane].min(RR_MAX_SURVIVAL);
+                if q > 0.0 && u_survive[lane] < q {
+                    survival[lane] = 1.0 / q;
+                } else {
+                    active = active.without(lane);
+                }
+            }
+            self.throughput = transport.scale(&self.throughput, f32x8::new(survival));
+        }
+        self.active = active;
+        *rays = RayPacket {
+            origin: next_origin.to_array(),
+            direction: sample.wi.to_array(),
+            t_max: f32x8::splat(f32::INFINITY),
+            active,
+        };
+    }
+
+    /// Adds the light samples of `nee` whose shadow rays are not `blocked`.
+    pub(super) fn add_light_sample<T: Transport<Spectra = S>>(
+        &mut self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+        nee: &NeeSample<S>,
+        blocked: LaneMask,
+    ) {
+        let weight = blocked.to_simd().select(f32x8::ZERO, nee.weight);
+        if weight.simd_gt(f32x8::ZERO).any() {
+            self.emitted.add(
+                transport,
+                scene,
+                wavelengths,
+                &nee.through_bsdf,
+                &nee.light,
+                nee.lanes,
+                weight,
+            );
+        }
+    }
+}

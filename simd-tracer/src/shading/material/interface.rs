@@ -1,0 +1,132 @@
+//! Smooth and rough dielectric interfaces: the lobe choice, the smooth
+//! interface's reflection or refraction, and the rough (GGX) interface's
+//! evaluation, shared by the dielectric and the film materials.
+
+use super::lane_spectrum::LaneSpectrum;
+use super::{BsdfEval, BsdfSample, angular_mean, angular_ref};
+use crate::scene::{AngularId, Scene};
+use crate::shading::microfacet::{self};
+use glam::Vec3;
+
+/// The probability of reflecting at a (film or bare) smooth interface:
+/// `c_0(R)` or `c_0(R)/(c_0(R) + c_0(T))` when a transmittance table is given.
+pub(super) fn reflect_probability(
+    scene: &Scene,
+    r: AngularId,
+    t: Option<AngularId>,
+    cos: f32,
+    thickness: f32,
+) -> f32 {
+    let mean_r = angular_mean(scene, r, cos, thickness).clamp(0.0, 1.0);
+    match t {
+        None => mean_r,
+        Some(t) => {
+            let mean_t = angular_mean(scene, t, cos, thickness).max(0.0);
+            if mean_r + mean_t > 0.0 {
+                mean_r / (mean_r + mean_t)
+            } else {
+                1.0
+            }
+        }
+    }
+}
+
+/// A smooth interface (bare dielectric: `t = None`, the transmittance is
+/// `1 − R`; film: `R` and `T` tables). Reflection or refraction by `u_lobe`.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one helper shared by dielectric and film"
+)]
+pub(super) fn sample_smooth_interface(
+    scene: &Scene,
+    n: Vec3,
+    wo: Vec3,
+    cos_o: f32,
+    u_lobe: f32,
+    r: AngularId,
+    t: Option<AngularId>,
+    eta: f32,
+    dispersed: bool,
+    thickness: f32,
+) -> Option<BsdfSample> {
+    let p_reflect = reflect_probability(scene, r, t, cos_o, thickness);
+    let reflectance = angular_ref(r, cos_o, thickness);
+    let refracted = if u_lobe < p_reflect {
+        None
+    } else {
+        microfacet::refract(wo, n, eta)
+    };
+    match (refracted, t) {
+        (None, _) => {
+            // Reflection (also where a rounding of p_reflect meets total
+            // internal reflection: then R = 1 and the weight stays right).
+            let p = if u_lobe < p_reflect { p_reflect } else { 1.0 };
+            (p > 0.0).then(|| BsdfSample {
+                wi: microfacet::reflect(wo, n),
+                pdf: 0.0,
+                weight: 1.0 / p,
+                spectrum: LaneSpectrum::of(reflectance),
+                terminate_secondary: false,
+            })
+        }
+        (Some(wi), transmittance) => {
+            let p_transmit = 1.0 - p_reflect;
+            let spectrum = match transmittance {
+                Some(t) => LaneSpectrum::of(angular_ref(t, cos_o, thickness)),
+                None => LaneSpectrum::complement(reflectance),
+            };
+            Some(BsdfSample {
+                wi,
+                pdf: 0.0,
+                weight: 1.0 / (p_transmit * eta * eta),
+                spectrum,
+                terminate_secondary: dispersed,
+            })
+        }
+    }
+}
+
+/// Rough dielectric `f cos θ_i` and pdf (Walter et al. 2007, pbrt-v4's
+/// generalised half vector `m ∝ wo + η' wi`).
+pub(super) fn eval_rough_dielectric(
+    scene: &Scene,
+    wo: Vec3,
+    wi: Vec3,
+    alpha: f32,
+    table: AngularId,
+    eta: f32,
+) -> BsdfEval {
+    let reflection = wi.z > 0.0;
+    let etap = if reflection { 1.0 } else { eta };
+    let mut m = wi * etap + wo;
+    if m.length_squared() == 0.0 {
+        return BsdfEval::ZERO;
+    }
+    m = m.normalize();
+    if m.z < 0.0 {
+        m = -m;
+    }
+    let (cos_om, cos_im) = (wo.dot(m), wi.dot(m));
+    if cos_om <= 0.0 || cos_im * wi.z <= 0.0 {
+        return BsdfEval::ZERO;
+    }
+    let p_reflect = reflect_probability(scene, table, None, cos_om, 0.0);
+    let fresnel = angular_ref(table, cos_om, 0.0);
+    let d = microfacet::distribution(m, alpha);
+    let g = microfacet::g2(wo, wi, alpha);
+    let pdf_m = microfacet::visible_normal_pdf(wo, m, alpha);
+    if reflection {
+        BsdfEval {
+            value: d * g / (4.0 * wo.z),
+            spectrum: LaneSpectrum::of(fresnel),
+            pdf: p_reflect * pdf_m / (4.0 * cos_om),
+        }
+    } else {
+        let denominator = (cos_im + cos_om / eta).powi(2);
+        BsdfEval {
+            value: d * g * cos_im.abs() * cos_om / (wo.z * denominator * eta * eta),
+            spectrum: LaneSpectrum::complement(fresnel),
+            pdf: (1.0 - p_reflect) * pdf_m * cos_im.abs() / denominator,
+        }
+    }
+}

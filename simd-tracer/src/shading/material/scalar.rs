@@ -1,0 +1,229 @@
+//! The BSDFs evaluated and sampled one lane at a time (the oracle of the
+//! packet forms).
+
+use super::coated::CoatLobes;
+use super::frame::{Frame, sample_cosine};
+use super::interface::{eval_rough_dielectric, reflect_probability, sample_smooth_interface};
+use super::lane_spectrum::LaneSpectrum;
+use super::{Bsdf, BsdfEval, BsdfSample, ShadingPoint, angular_ref, direction_ior};
+use crate::scene::Scene;
+use crate::shading::microfacet::{self, SMOOTH_ALPHA};
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+impl Bsdf {
+    /// Samples `wi` for `wo`; `u_lobe` picks the lobe, `(u, v)` the direction.
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        p: &ShadingPoint,
+        wo: Vec3,
+        u_lobe: f32,
+        u: f32,
+        v: f32,
+    ) -> Option<BsdfSample> {
+        let frame = Frame::new(p.n);
+        let wo_local = frame.to_local(wo);
+        if wo_local.z <= 0.0 {
+            return None;
+        }
+        match self {
+            Self::Lambert { albedo } => {
+                let wi = sample_cosine(p.n, u, v);
+                let cos = wi.dot(p.n);
+                (cos > 0.0).then(|| BsdfSample {
+                    wi,
+                    pdf: cos * FRAC_1_PI,
+                    weight: 1.0,
+                    spectrum: LaneSpectrum::of(albedo.at(p.uv)),
+                    terminate_secondary: false,
+                })
+            }
+            Self::Conductor { fresnel, roughness } => {
+                if *roughness < SMOOTH_ALPHA {
+                    let wi = microfacet::reflect(wo, p.n);
+                    return Some(BsdfSample {
+                        wi,
+                        pdf: 0.0,
+                        weight: 1.0,
+                        spectrum: LaneSpectrum::of(angular_ref(*fresnel, wo_local.z, 0.0)),
+                        terminate_secondary: false,
+                    });
+                }
+                let alpha = *roughness;
+                let m = microfacet::sample_visible_normal(wo_local, alpha, u, v);
+                let wi_local = microfacet::reflect(wo_local, m);
+                if wi_local.z <= 0.0 {
+                    return None;
+                }
+                let cos_om = wo_local.dot(m);
+                Some(BsdfSample {
+                    wi: frame.to_world(wi_local),
+                    pdf: microfacet::visible_normal_pdf(wo_local, m, alpha) / (4.0 * cos_om),
+                    weight: microfacet::g2(wo_local, wi_local, alpha)
+                        / microfacet::g1(wo_local, alpha),
+                    spectrum: LaneSpectrum::of(angular_ref(*fresnel, cos_om, 0.0)),
+                    terminate_secondary: false,
+                })
+            }
+            Self::Dielectric {
+                outside,
+                inside,
+                ior,
+                roughness,
+            } => {
+                let (ior_value, dispersed) = direction_ior(ior, p.hero_nm);
+                let (table, eta) = if p.front {
+                    (*outside, ior_value)
+                } else {
+                    (*inside, 1.0 / ior_value)
+                };
+                if *roughness < SMOOTH_ALPHA {
+                    return sample_smooth_interface(
+                        scene, p.n, wo, wo_local.z, u_lobe, table, None, eta, dispersed, 0.0,
+                    );
+                }
+                let alpha = *roughness;
+                let m = microfacet::sample_visible_normal(wo_local, alpha, u, v);
+                let cos_om = wo_local.dot(m);
+                if cos_om <= 0.0 {
+                    return None;
+                }
+                let p_reflect = reflect_probability(scene, table, None, cos_om, 0.0);
+                let fresnel = angular_ref(table, cos_om, 0.0);
+                let pdf_m = microfacet::visible_normal_pdf(wo_local, m, alpha);
+                if u_lobe < p_reflect {
+                    let wi_local = microfacet::reflect(wo_local, m);
+                    if wi_local.z <= 0.0 {
+                        return None;
+                    }
+                    Some(BsdfSample {
+                        wi: frame.to_world(wi_local),
+                        pdf: p_reflect * pdf_m / (4.0 * cos_om),
+                        weight: microfacet::g2(wo_local, wi_local, alpha)
+                            / microfacet::g1(wo_local, alpha)
+                            / p_reflect,
+                        spectrum: LaneSpectrum::of(fresnel),
+                        terminate_secondary: false,
+                    })
+                } else {
+                    let wi_local = microfacet::refract(wo_local, m, eta)?;
+                    if wi_local.z >= 0.0 {
+                        return None;
+                    }
+                    let cos_im = wi_local.dot(m);
+                    let denominator = (cos_im + cos_om / eta).powi(2);
+                    let p_transmit = 1.0 - p_reflect;
+                    Some(BsdfSample {
+                        wi: frame.to_world(wi_local),
+                        pdf: p_transmit * pdf_m * cos_im.abs() / denominator,
+                        weight: microfacet::g2(wo_local, wi_local, alpha)
+                            / (microfacet::g1(wo_local, alpha) * eta * eta * p_transmit),
+                        spectrum: LaneSpectrum::complement(fresnel),
+                        terminate_secondary: dispersed,
+                    })
+                }
+            }
+            Self::Coated {
+                albedo,
+                ior,
+                roughness,
+                fdr_inside,
+            } => {
+                let coat = CoatLobes::new(scene, albedo, *ior, *roughness, *fdr_inside, p.uv);
+                coat.sample(frame, wo_local, u_lobe, u, v)
+            }
+            Self::ThinFilm {
+                front_reflectance,
+                front_transmittance,
+                back,
+                substrate_ior,
+                thickness,
+            } => {
+                let t = thickness
+                    .and_then(|id| scene.textures.get(id as usize))
+                    .map_or(0.0, |tex| tex.scalar_at(p.uv.x, p.uv.y));
+                let (r, tr, eta) = match (p.front, back) {
+                    (false, Some((br, bt))) => (*br, Some(*bt), 1.0 / substrate_ior),
+                    _ => (*front_reflectance, *front_transmittance, *substrate_ior),
+                };
+                match tr {
+                    Some(_) => sample_smooth_interface(
+                        scene, p.n, wo, wo_local.z, u_lobe, r, tr, eta, false, t,
+                    ),
+                    // Opaque base: everything not reflected is absorbed.
+                    None => Some(BsdfSample {
+                        wi: microfacet::reflect(wo, p.n),
+                        pdf: 0.0,
+                        weight: 1.0,
+                        spectrum: LaneSpectrum::of(angular_ref(r, wo_local.z, t)),
+                        terminate_secondary: false,
+                    }),
+                }
+            }
+        }
+    }
+
+    /// `f cos θ_i` and the sampling pdf for `wi`.
+    pub fn eval(&self, scene: &Scene, p: &ShadingPoint, wo: Vec3, wi: Vec3) -> BsdfEval {
+        let frame = Frame::new(p.n);
+        let (wo_local, wi_local) = (frame.to_local(wo), frame.to_local(wi));
+        if wo_local.z <= 0.0 {
+            return BsdfEval::ZERO;
+        }
+        match self {
+            Self::Lambert { albedo } => {
+                if wi_local.z <= 0.0 {
+                    return BsdfEval::ZERO;
+                }
+                BsdfEval {
+                    value: wi_local.z * FRAC_1_PI,
+                    spectrum: LaneSpectrum::of(albedo.at(p.uv)),
+                    pdf: wi_local.z * FRAC_1_PI,
+                }
+            }
+            Self::Conductor { fresnel, roughness } => {
+                if *roughness < SMOOTH_ALPHA || wi_local.z <= 0.0 {
+                    return BsdfEval::ZERO;
+                }
+                let alpha = *roughness;
+                let m = (wo_local + wi_local).normalize();
+                let cos_om = wo_local.dot(m);
+                if cos_om.is_nan() || cos_om <= 0.0 {
+                    return BsdfEval::ZERO;
+                }
+                let d = microfacet::distribution(m, alpha);
+                BsdfEval {
+                    value: d * microfacet::g2(wo_local, wi_local, alpha) / (4.0 * wo_local.z),
+                    spectrum: LaneSpectrum::of(angular_ref(*fresnel, cos_om, 0.0)),
+                    pdf: microfacet::visible_normal_pdf(wo_local, m, alpha) / (4.0 * cos_om),
+                }
+            }
+            Self::Dielectric {
+                outside,
+                inside,
+                ior,
+                roughness,
+            } => {
+                if *roughness < SMOOTH_ALPHA || wi_local.z == 0.0 {
+                    return BsdfEval::ZERO;
+                }
+                let (ior_value, _) = direction_ior(ior, p.hero_nm);
+                let (table, eta) = if p.front {
+                    (*outside, ior_value)
+                } else {
+                    (*inside, 1.0 / ior_value)
+                };
+                eval_rough_dielectric(scene, wo_local, wi_local, *roughness, table, eta)
+            }
+            Self::Coated {
+                albedo,
+                ior,
+                roughness,
+                fdr_inside,
+            } => CoatLobes::new(scene, albedo, *ior, *roughness, *fdr_inside, p.uv)
+                .eval(wo_local, wi_local),
+            Self::ThinFilm { .. } => BsdfEval::ZERO,
+        }
+    }
+}

@@ -1,0 +1,376 @@
+//! [`FourierTransport<N>`]: `N` Fourier coefficients per lane, one truncated
+//! product per bounce; the film keeps coefficient sums or XYZ per sample.
+
+use super::{Buffer, Transport, all_finite, id_spectra};
+use crate::packet::{LANES, LaneMask};
+use crate::sampling::rng::Rng;
+use crate::scene::{Scene, SpectrumId};
+use crate::shading::material::{LaneSpectrum, SpectralRef};
+use crate::spectra::MAX_COEFFS;
+use spectral_core::color::Xyz;
+use spectral_core::xyz::{XyzConverter, XyzRoute};
+use spectral_core::{FourierSpectrum, Lane, SpectralError, SpectralRange};
+use wide::bytemuck::cast;
+use wide::{f32x8, u32x8};
+
+// ---------------------------------------------------------------- Fourier
+
+/// Light as `N` Fourier coefficients per ray lane.
+#[derive(Debug, Clone)]
+pub struct FourierTransport<const N: usize> {
+    pub(super) converter: Box<XyzConverter<N>>,
+    pub(super) buffer: Buffer,
+    pub(super) route: XyzRoute,
+}
+
+impl<const N: usize> FourierTransport<N> {
+    /// A Fourier transport over `range` converting by `route` in `buffer`.
+    pub fn new(
+        range: SpectralRange,
+        buffer: Buffer,
+        route: XyzRoute,
+    ) -> Result<Self, SpectralError> {
+        Ok(Self {
+            converter: Box::new(XyzConverter::new(range)?),
+            buffer,
+            route,
+        })
+    }
+
+    /// The XYZ converter (and its kernel).
+    pub fn converter(&self) -> &XyzConverter<N> {
+        &self.converter
+    }
+}
+
+/// A finished Fourier sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FourierSample<const N: usize> {
+    /// Coefficients (spectral buffer).
+    pub coeffs: [f32; N],
+    /// XYZ (XYZ buffer).
+    pub xyz: [f32; 3],
+}
+
+/// A Fourier pixel: coefficient sums, XYZ sums and the sample count.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FourierPixel<const N: usize> {
+    pub(super) coeffs: [f64; N],
+    pub(super) xyz: [f64; 3],
+    pub(super) count: f64,
+}
+
+/// Coefficient chunks of [`LANES`] each in a scene spectrum's
+/// [`MAX_COEFFS`] (the gather transposes one `LANES × LANES` block per chunk).
+pub(super) const CHUNKS: usize = MAX_COEFFS / LANES;
+
+/// Calls `with` on all [`MAX_COEFFS`] Fourier coefficients of a spectral
+/// reference (zeros if the reference dangles). Scene spectra are read in
+/// place; textures and angular tables fill a temporary.
+pub(super) fn with_reference_fourier<R>(
+    scene: &Scene,
+    reference: &SpectralRef,
+    with: impl FnOnce(&[f32; MAX_COEFFS]) -> R,
+) -> R {
+    match *reference {
+        SpectralRef::Scene(id) => with(
+            scene
+                .spectra
+                .get(id as usize)
+                .map_or(&[0.0; MAX_COEFFS], |s| s.coefficients_f32()),
+        ),
+        SpectralRef::Texture { texture, u, v } => with(
+            &scene
+                .textures
+                .get(texture as usize)
+                .map_or([0.0; MAX_COEFFS], |t| t.fourier_at(u, v)),
+        ),
+        SpectralRef::Angular { id, cos, thickness } => with(
+            &scene
+                .angular
+                .get(id as usize)
+                .map_or([0.0; MAX_COEFFS], |a| a.fourier(cos, thickness)),
+        ),
+    }
+}
+
+/// The exact value of a spectral reference at a wavelength.
+pub(super) fn reference_value(scene: &Scene, reference: &SpectralRef, lambda_nm: f32) -> f32 {
+    match *reference {
+        SpectralRef::Scene(id) => scene
+            .spectra
+            .get(id as usize)
+            .map_or(0.0, |s| s.value(lambda_nm)),
+        SpectralRef::Texture { texture, u, v } => scene
+            .textures
+            .get(texture as usize)
+            .map_or(0.0, |t| t.value_at(u, v, lambda_nm)),
+        SpectralRef::Angular { id, cos, thickness } => scene
+            .angular
+            .get(id as usize)
+            .map_or(0.0, |a| a.eval(cos, lambda_nm, thickness)),
+    }
+}
+
+/// The lanes' spectral factors `constant + scale · of` as packet-wide
+/// coefficients: per lane, `scale ·` each chunk of [`LANES`] coefficients
+/// is one 8-wide product, and a `LANES × LANES` transpose per chunk turns
+/// lanes-by-coefficients into coefficients-by-lanes (the same products and
+/// sums as lane by lane, so the same bits).
+pub(super) fn gather_fourier<const N: usize>(
+    scene: &Scene,
+    lanes: &[LaneSpectrum; LANES],
+) -> FourierSpectrum<f32x8, N> {
+    if let Some(spectrum) = gather_from_registers(scene, lanes) {
+        return spectrum;
+    }
+    let chunks = N.div_ceil(LANES);
+    debug_assert!(chunks <= CHUNKS);
+    // rows[chunk][lane]: coefficients chunk·LANES .. (chunk + 1)·LANES of a lane.
+    let mut rows = [[f32x8::ZERO; LANES]; CHUNKS];
+    for (lane, spectrum) in lanes.iter().enumerate() {
+        if let Some(reference) = &spectrum.of {
+            let scale = f32x8::splat(spectrum.scale);
+            with_reference_fourier(scene, reference, |coeffs| {
+                for (row, block) in rows.iter_mut().zip(coeffs.chunks_exact(LANES)).take(chunks) {
+                    row[lane] = scale * f32x8::new(block.try_into().unwrap_or([0.0; LANES]));
+                }
+            });
+        }
+    }
+    let mut coeffs = [f32x8::ZERO; N];
+    for (chunk, row) in rows.iter().enumerate().take(chunks) {
+        let columns = f32x8::transpose(*row);
+        for (coefficient, column) in coeffs.iter_mut().skip(chunk * LANES).zip(columns) {
+            *coefficient = column;
+        }
+    }
+    if let Some(first) = coeffs.first_mut() {
+        *first += f32x8::new(lanes.map(|l| l.constant));
+    }
+    FourierSpectrum::from_coeffs(coeffs)
+}
+
+/// [`gather_fourier`] where every lane's spectral part is absent or one of
+/// the spectra held in registers ([`Scene::spectrum_registers`]): one
+/// permute per coefficient and the same product `scale · c` per lane (so
+/// the same bits); `None` for any other lane.
+#[inline(always)]
+pub(super) fn gather_from_registers<const N: usize>(
+    scene: &Scene,
+    lanes: &[LaneSpectrum; LANES],
+) -> Option<FourierSpectrum<f32x8, N>> {
+    let registers = scene.spectrum_registers();
+    let mut ids = [0u32; LANES];
+    let mut spectral = LaneMask::NONE;
+    for (lane, spectrum) in lanes.iter().enumerate() {
+        match spectrum.of {
+            None => {}
+            Some(SpectralRef::Scene(id)) if registers.holds(id) => {
+                ids[lane] = id;
+                spectral = spectral.with(lane);
+            }
+            Some(_) => return None,
+        }
+    }
+    let (ids, live) = (u32x8::new(ids), spectral.to_simd());
+    let scale = f32x8::new(lanes.map(|l| l.scale));
+    let mut coeffs: [f32x8; N] =
+        core::array::from_fn(|j| live.select(scale * registers.coefficient(j, ids), f32x8::ZERO));
+    if let Some(first) = coeffs.first_mut() {
+        *first += f32x8::new(lanes.map(|l| l.constant));
+    }
+    Some(FourierSpectrum::from_coeffs(coeffs))
+}
+
+impl<const N: usize> Transport for FourierTransport<N> {
+    type Wavelengths = ();
+    type Spectra = FourierSpectrum<f32x8, N>;
+    type Sample = FourierSample<N>;
+    type Pixel = FourierPixel<N>;
+    type PassShared = ();
+
+    fn describe(&self) -> String {
+        format!("fourier N={N}")
+    }
+
+    fn empty_pixel(&self) -> Self::Pixel {
+        FourierPixel {
+            coeffs: [0.0; N],
+            xyz: [0.0; 3],
+            count: 0.0,
+        }
+    }
+
+    fn sample_wavelengths(&self, _stream: impl Fn(usize) -> Rng) {}
+
+    fn one(&self) -> Self::Spectra {
+        FourierSpectrum::constant(f32x8::splat(1.0))
+    }
+
+    fn zero(&self) -> Self::Spectra {
+        FourierSpectrum::zero()
+    }
+
+    fn gather(
+        &self,
+        scene: &Scene,
+        _wavelengths: &(),
+        lanes: &[LaneSpectrum; LANES],
+    ) -> Self::Spectra {
+        gather_fourier(scene, lanes)
+    }
+
+    /// Held spectra straight from the registers (one permute per
+    /// coefficient, the bits of the general gather of `1 · X + 0`).
+    fn gather_ids(
+        &self,
+        scene: &Scene,
+        wavelengths: &(),
+        ids: &[SpectrumId; LANES],
+        lanes: LaneMask,
+    ) -> Self::Spectra {
+        let registers = scene.spectrum_registers();
+        let live = lanes.to_simd();
+        let id_lanes = u32x8::new(*ids);
+        if !(registers.holds_x8(id_lanes) | !cast::<f32x8, u32x8>(live)).all() {
+            return self.gather(scene, wavelengths, &id_spectra(ids, lanes));
+        }
+        let ids = cast::<f32x8, u32x8>(live).select(id_lanes, u32x8::ZERO);
+        let mut coeffs: [f32x8; N] =
+            core::array::from_fn(|j| live.select(registers.coefficient(j, ids), f32x8::ZERO));
+        // The general gather adds the constant part (0) to `c_0`: `−0`
+        // becomes `+0` there, and here.
+        if let Some(first) = coeffs.first_mut() {
+            *first += f32x8::ZERO;
+        }
+        FourierSpectrum::from_coeffs(coeffs)
+    }
+
+    // Inlined: a 384-byte product returned from a call is copied again
+    // into its destination (`memcpy`), which costs more than the call.
+    #[inline(always)]
+    fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        a.product(b)
+    }
+
+    fn scale(&self, a: &Self::Spectra, weight: f32x8) -> Self::Spectra {
+        a.scale(weight)
+    }
+
+    fn add(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        *a + *b
+    }
+
+    fn mean(&self, a: &Self::Spectra) -> f32x8 {
+        a.mean()
+    }
+
+    fn samples(&self, radiance: &Self::Spectra, _wavelengths: &()) -> [Self::Sample; LANES] {
+        // Coefficients-by-lanes to lanes-by-coefficients, one 8 × 8
+        // transpose per chunk of 8 coefficients.
+        let mut coeffs = [[0.0f32; N]; LANES];
+        for (chunk, planes) in radiance.coeffs.chunks(LANES).enumerate() {
+            let block: [f32x8; LANES] =
+                core::array::from_fn(|j| planes.get(j).copied().unwrap_or(f32x8::ZERO));
+            for (lane, row) in f32x8::transpose(block).iter().enumerate() {
+                let row = row.to_array();
+                for (c, &value) in coeffs[lane][chunk * LANES..].iter_mut().zip(&row) {
+                    *c = value;
+                }
+            }
+        }
+        let xyz: [[f32; 3]; LANES] = match (self.buffer, self.route) {
+            (Buffer::Spectral, _) => [[0.0; 3]; LANES],
+            (Buffer::Xyz, XyzRoute::Mese) => core::array::from_fn(|lane| {
+                let c = radiance.lane(lane);
+                self.converter.mese(&c).map(|v| v as f32)
+            }),
+            (Buffer::Xyz, route) => {
+                let xyz = match route {
+                    XyzRoute::Series => self.converter.series(radiance),
+                    XyzRoute::Lut => self.converter.lut(radiance),
+                    _ => self.converter.zeroth(radiance),
+                };
+                core::array::from_fn(|lane| core::array::from_fn(|r| xyz[r].lane(lane) as f32))
+            }
+        };
+        core::array::from_fn(|lane| FourierSample {
+            coeffs: coeffs[lane],
+            xyz: xyz[lane],
+        })
+    }
+
+    fn sample_is_finite(sample: &Self::Sample) -> bool {
+        all_finite(&sample.coeffs) && all_finite(&sample.xyz)
+    }
+
+    /// The coefficients checked 8 lanes at a time on the radiance (a
+    /// sample's coefficients are its lane's, moved unchanged); the XYZ per
+    /// lane only where the buffer holds XYZ (else it is 0).
+    fn finite_lanes(&self, radiance: &Self::Spectra, samples: &[Self::Sample; LANES]) -> LaneMask {
+        let all = f32x8::ZERO.is_finite();
+        let coeffs = radiance
+            .coeffs
+            .iter()
+            .fold(all, |finite, c| finite & c.is_finite());
+        let lanes = LaneMask::from_simd(coeffs);
+        match self.buffer {
+            Buffer::Spectral => lanes,
+            Buffer::Xyz => (0..LANES)
+                .filter(|&lane| all_finite(&samples[lane].xyz))
+                .fold(LaneMask::NONE, LaneMask::with)
+                .and(lanes),
+        }
+    }
+
+    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
+        match self.buffer {
+            Buffer::Spectral => {
+                for (acc, &c) in pixel.coeffs.iter_mut().zip(&sample.coeffs) {
+                    *acc += f64::from(c);
+                }
+            }
+            Buffer::Xyz => {
+                for (acc, &c) in pixel.xyz.iter_mut().zip(&sample.xyz) {
+                    *acc += f64::from(c);
+                }
+            }
+        }
+        pixel.count += 1.0;
+    }
+
+    fn pass_shared<'a>(
+        &self,
+        _pixels: &mut dyn Iterator<Item = &'a Self::Pixel>,
+    ) -> Self::PassShared
+    where
+        Self::Pixel: 'a,
+    {
+    }
+
+    fn end_pass(&self, _pixel: &mut Self::Pixel, _shared: &()) {}
+
+    fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
+        if pixel.count == 0.0 {
+            return Xyz::default();
+        }
+        match self.buffer {
+            Buffer::Spectral => {
+                let mean = FourierSpectrum::from_coeffs(pixel.coeffs.map(|c| c / pixel.count));
+                self.converter.convert(self.route, &mean)
+            }
+            Buffer::Xyz => Xyz::from_array(pixel.xyz.map(|v| v / pixel.count)),
+        }
+    }
+
+    fn coefficients(&self, pixel: &Self::Pixel) -> Option<Vec<f64>> {
+        match self.buffer {
+            Buffer::Spectral if pixel.count > 0.0 => {
+                Some(pixel.coeffs.iter().map(|c| c / pixel.count).collect())
+            }
+            Buffer::Spectral => Some(vec![0.0; N]),
+            Buffer::Xyz => None,
+        }
+    }
+}
