@@ -66,7 +66,9 @@ pub enum ObjSource<'a> {
     },
 }
 
-fn load_options() -> tobj::LoadOptions {
+/// The `tobj` options of every OBJ load: triangulated, one index per
+/// vertex, points and lines dropped.
+pub fn load_options() -> tobj::LoadOptions {
     tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -130,10 +132,12 @@ pub fn load_obj(
     for m in &materials {
         let id = match material_override(&m.name) {
             Some(id) => id,
-            None => mtl_material(builder, m).map_err(|e| match e {
-                ObjError::Invalid(_, message) => ObjError::Invalid(label.clone(), message),
-                other => other,
-            })?,
+            None => mtl_material(builder, m)
+                .map(|material| builder.add_material(material))
+                .map_err(|e| match e {
+                    ObjError::Invalid(_, message) => ObjError::Invalid(label.clone(), message),
+                    other => other,
+                })?,
         };
         loaded.materials.insert(m.name.clone(), id);
         ids.push(id);
@@ -146,10 +150,7 @@ pub fn load_obj(
             None => match default_material {
                 Some(id) => id,
                 None => {
-                    let albedo = builder
-                        .add_spectrum("default grey", SpectrumSource::Constant(DEFAULT_ALBEDO))
-                        .map_err(ObjError::Scene)?;
-                    let id = builder.add_material(Material::lambert("default", albedo));
+                    let id = add_default_material(builder).map_err(ObjError::Scene)?;
                     default_material = Some(id);
                     id
                 }
@@ -178,8 +179,16 @@ fn check_colour(name: &str, key: &str, rgb: [f32; 3]) -> Result<[f64; 3], ObjErr
     Ok(rgb.map(f64::from))
 }
 
-/// The material an MTL entry describes (module docs).
-fn mtl_material(builder: &mut SceneBuilder, m: &tobj::Material) -> Result<MaterialId, ObjError> {
+/// Adds the material of faces without an MTL material (module docs).
+pub fn add_default_material(builder: &mut SceneBuilder) -> Result<MaterialId, SceneError> {
+    let albedo = builder.add_spectrum("default grey", SpectrumSource::Constant(DEFAULT_ALBEDO))?;
+    Ok(builder.add_material(Material::lambert("default", albedo)))
+}
+
+/// The material an MTL entry describes (module docs), with its spectra
+/// added to `builder`; the caller adds the material. An invalid colour is
+/// [`ObjError::Invalid`] with an empty path (the caller names the file).
+pub fn mtl_material(builder: &mut SceneBuilder, m: &tobj::Material) -> Result<Material, ObjError> {
     let kd = check_colour(
         &m.name,
         "Kd",
@@ -201,5 +210,5 @@ fn mtl_material(builder: &mut SceneBuilder, m: &tobj::Material) -> Result<Materi
             material.emission = Some(emission);
         }
     }
-    Ok(builder.add_material(material))
+    Ok(material)
 }

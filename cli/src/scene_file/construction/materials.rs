@@ -1,0 +1,249 @@
+//! Materials of a scene under construction: named materials, albedo
+//! checks, and the BSDFs whose Fresnel terms are angular functions.
+//!
+//! A front end reads a material's parameters (spectra, indices of
+//! refraction, roughness, film layers) and calls the builder of its BSDF
+//! here: [`Construction::conductor_fresnel`], [`Construction::dielectric`],
+//! [`coated`], [`Construction::thin_film`]; the angular functions are named
+//! after the material's key so that the builder's own errors are located.
+//! [`Construction::add_material`] adds the result and remembers whether it
+//! emits (for the "no light" warning); named materials are defined and
+//! referred to through [`Construction::define_material`] and
+//! [`Construction::use_material`].
+
+use super::Construction;
+use crate::error::CliError;
+use crate::scene_file::source::Spot;
+use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, REFERENCE_WAVELENGTH_NM};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
+use simd_tracer::scene::{MaterialId, SceneError, SpectrumId, TextureId};
+use spectral_core::table::{FilmQuantity, FilmSide};
+
+/// A material defined under a name.
+pub(super) struct NamedMaterial {
+    id: MaterialId,
+    at: Spot,
+    used: bool,
+}
+
+/// The parameters of a smooth thin-film stack ([`Construction::thin_film`]).
+pub(crate) struct ThinFilm {
+    /// Layers, the first on the incident side.
+    pub(crate) layers: Vec<FilmLayer>,
+    /// Index of refraction of the substrate.
+    pub(crate) substrate: Ior,
+    /// Extinction coefficient of the substrate.
+    pub(crate) substrate_k: f64,
+    /// Whether light refracts into the substrate (else reflection only).
+    pub(crate) transparent: bool,
+    /// Range that a thickness texture's 0 … 1 maps to, nm.
+    pub(crate) thickness_range_nm: Option<(f64, f64)>,
+    /// Grey texture of layer 0's thickness.
+    pub(crate) thickness: Option<TextureId>,
+}
+
+/// A dielectric coat of index `ior` (a dispersive one at the reference
+/// wavelength) over a Lambertian base.
+pub(crate) fn coated(albedo: Albedo, ior: Ior, roughness: f32) -> Bsdf {
+    let ior = match ior {
+        Ior::Constant(n) => n,
+        other => other.at(REFERENCE_WAVELENGTH_NM),
+    };
+    Bsdf::Coated {
+        albedo,
+        ior: ior as f32,
+        roughness,
+        fdr_inside: diffuse_fresnel(1.0 / ior) as f32,
+    }
+}
+
+impl Construction<'_> {
+    /// Adds `material`, remembering whether it emits.
+    pub(crate) fn add_material(&mut self, material: Material) -> MaterialId {
+        let emits = material.emission.is_some();
+        let id = self.builder.add_material(material);
+        if emits {
+            self.mesher.emissive.insert(id);
+        }
+        id
+    }
+
+    /// Names the material `id`, defined at `at`.
+    pub(crate) fn define_material(&mut self, name: &str, at: Spot, id: MaterialId) {
+        self.material_order.push(name.to_string());
+        self.materials.insert(
+            name.to_string(),
+            NamedMaterial {
+                id,
+                at,
+                used: false,
+            },
+        );
+    }
+
+    /// The material called `name` (marked used), or `None`: the front end
+    /// says where names come from.
+    pub(crate) fn use_material(&mut self, name: &str) -> Option<MaterialId> {
+        let entry = self.materials.get_mut(name)?;
+        entry.used = true;
+        Some(entry.id)
+    }
+
+    /// The reflectance spectrum `id` as an albedo, with a warning at `at`
+    /// when it exceeds 1 somewhere.
+    pub(crate) fn albedo_spectrum(&mut self, at: &Spot, id: SpectrumId) -> Albedo {
+        let max = self.builder.spectrum(id).map_or(0.0, |s| s.max_value());
+        if max > 1.001 {
+            self.warn(
+                at,
+                format!("reflectance exceeds 1 (max {max:.3}): the surface adds energy"),
+            );
+        }
+        Albedo::Spectrum(id)
+    }
+
+    /// `ior` if it stays finite and `>= 1` over the scene's range.
+    pub(crate) fn validate_ior(&self, at: &Spot, ior: Ior) -> Result<Ior, CliError> {
+        ior.validate(&self.range).map_err(|_| {
+            self.src.error_at(
+                at,
+                format!(
+                    "index of refraction must be finite and >= 1 over {}–{} nm",
+                    self.range.min_nm(),
+                    self.range.max_nm()
+                ),
+            )
+        })?;
+        Ok(ior)
+    }
+
+    /// Adds an angular function of the material at `at`.
+    pub(crate) fn add_angular(
+        &mut self,
+        at: &Spot,
+        name: &str,
+        f: AngularFunction,
+    ) -> Result<u32, CliError> {
+        self.builder.add_angular(name, f).map_err(|e| match e {
+            SceneError::Spectrum(_, e) => self.src.error_at(at, format!("invalid material: {e}")),
+            other => self.src.error_at(at, other),
+        })
+    }
+
+    /// The Fresnel term of a conductor of complex index `n + i k` (outside
+    /// medium n = 1), for the material at `at`; `origin` is where the
+    /// spectra were given.
+    pub(crate) fn conductor_fresnel(
+        &mut self,
+        at: &Spot,
+        origin: &Spot,
+        n: SpectrumId,
+        k: SpectrumId,
+    ) -> Result<u32, CliError> {
+        let function = AngularFunction::Conductor {
+            n: self.prepared(origin, n)?,
+            k: self.prepared(origin, k)?,
+            outside: 1.0,
+        };
+        self.add_angular(at, &at.key, function)
+    }
+
+    /// A smooth or GGX dielectric interface of index `ior` (inside relative
+    /// to outside), for the material at `at`.
+    pub(crate) fn dielectric(
+        &mut self,
+        at: &Spot,
+        ior: Ior,
+        roughness: f32,
+    ) -> Result<Bsdf, CliError> {
+        let name = &at.key;
+        let outside = self.add_angular(
+            at,
+            &format!("{name} (outside)"),
+            AngularFunction::Dielectric {
+                ior,
+                from_inside: false,
+            },
+        )?;
+        let inside = self.add_angular(
+            at,
+            &format!("{name} (inside)"),
+            AngularFunction::Dielectric {
+                ior,
+                from_inside: true,
+            },
+        )?;
+        Ok(Bsdf::Dielectric {
+            outside,
+            inside,
+            ior,
+            roughness,
+        })
+    }
+
+    /// A smooth thin-film stack, for the material at `at`.
+    pub(crate) fn thin_film(&mut self, at: &Spot, film: ThinFilm) -> Result<Bsdf, CliError> {
+        let ThinFilm {
+            layers,
+            substrate,
+            substrate_k,
+            transparent,
+            thickness_range_nm,
+            thickness,
+        } = film;
+        let film = |quantity, side| AngularFunction::Film {
+            layers: layers.clone(),
+            substrate,
+            substrate_k,
+            incident: 1.0,
+            quantity,
+            side,
+            thickness_range_nm,
+        };
+        let name = &at.key;
+        let front_reflectance = self.add_angular(
+            at,
+            &format!("{name} (R front)"),
+            film(FilmQuantity::Reflectance, FilmSide::Front),
+        )?;
+        let (front_transmittance, back) = if transparent {
+            let t = self.add_angular(
+                at,
+                &format!("{name} (T front)"),
+                film(FilmQuantity::Transmittance, FilmSide::Front),
+            )?;
+            let br = self.add_angular(
+                at,
+                &format!("{name} (R back)"),
+                film(FilmQuantity::Reflectance, FilmSide::Back),
+            )?;
+            let bt = self.add_angular(
+                at,
+                &format!("{name} (T back)"),
+                film(FilmQuantity::Transmittance, FilmSide::Back),
+            )?;
+            (Some(t), Some((br, bt)))
+        } else {
+            (None, None)
+        };
+        Ok(Bsdf::ThinFilm {
+            front_reflectance,
+            front_transmittance,
+            back,
+            substrate_ior: substrate.at(REFERENCE_WAVELENGTH_NM) as f32,
+            thickness,
+        })
+    }
+
+    /// Warns about defined materials that nothing referred to.
+    pub(super) fn warn_unused_materials(&mut self) {
+        for name in &self.material_order {
+            if let Some(m) = self.materials.get(name).filter(|m| !m.used) {
+                self.warnings.push(
+                    self.src
+                        .warning_at(&m.at, "defined but not used by any mesh or quad"),
+                );
+            }
+        }
+    }
+}

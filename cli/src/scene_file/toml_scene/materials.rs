@@ -1,0 +1,559 @@
+//! `[materials]`: one function per material type, each checking the keys
+//! of its type and reading their values (spectrum references, indices of
+//! refraction, roughness, film layers, a network file) before the
+//! construction builds the BSDF.
+
+use super::Loader;
+use crate::error::CliError;
+use crate::scene_file::construction::{ThinFilm, coated};
+use crate::scene_file::toml_reader::{Item, Table};
+use crate::texture_file::TextureUse;
+use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material};
+use simd_tracer::scene::MaterialId;
+use simd_tracer::spectra::SpectrumSource;
+use spectral_core::table::MAX_LAYERS;
+use toml::de::DeValue;
+
+/// The keys each material type allows (`type`, `emission`,
+/// `emission_scale` and `two_sided` for all).
+const LAMBERT_KEYS: &[&str] = &[
+    "type",
+    "emission",
+    "emission_scale",
+    "two_sided",
+    "albedo",
+    "albedo_texture",
+];
+const CONDUCTOR_KEYS: &[&str] = &[
+    "type",
+    "emission",
+    "emission_scale",
+    "two_sided",
+    "metal",
+    "n",
+    "k",
+    "n_const",
+    "k_const",
+    "roughness",
+];
+const DIELECTRIC_KEYS: &[&str] = &[
+    "type",
+    "emission",
+    "emission_scale",
+    "two_sided",
+    "ior",
+    "roughness",
+];
+const COATED_KEYS: &[&str] = &[
+    "type",
+    "emission",
+    "emission_scale",
+    "two_sided",
+    "albedo",
+    "albedo_texture",
+    "ior",
+    "roughness",
+];
+const THIN_FILM_KEYS: &[&str] = &[
+    "type",
+    "emission",
+    "emission_scale",
+    "two_sided",
+    "layers",
+    "substrate",
+    "base",
+    "thickness_texture",
+    "thickness_range_nm",
+];
+
+const NEURAL_KEYS: &[&str] = &[
+    "type",
+    "emission",
+    "emission_scale",
+    "two_sided",
+    "network",
+    "roughness",
+    "thickness_nm",
+    "thickness_texture",
+    "thickness_range_nm",
+];
+
+/// Metal names (case-insensitive) and their built-in spectra's prefix.
+const METALS: [(&str, &str); 5] = [
+    ("gold", "gold"),
+    ("silver", "silver"),
+    ("copper", "copper"),
+    ("aluminium", "aluminium"),
+    ("aluminum", "aluminium"),
+];
+
+impl Loader<'_> {
+    /// The `[materials]` section.
+    pub(super) fn materials_section(&mut self, item: &Item<'_, '_>) -> Result<(), CliError> {
+        let table = item.table(&self.src)?;
+        for (name, entry) in table.entries() {
+            let id = self.material(name, &entry)?;
+            self.cx.define_material(name, entry.spot(), id);
+        }
+        Ok(())
+    }
+
+    /// A material name from `[materials]`.
+    pub(super) fn material_ref(&mut self, item: &Item<'_, '_>) -> Result<MaterialId, CliError> {
+        let name = item.string(&self.src)?;
+        self.cx.use_material(name).ok_or_else(|| {
+            item.err(
+                &self.src,
+                format!("unknown material \"{name}\" (not in [materials])"),
+            )
+        })
+    }
+
+    fn material(&mut self, name: &str, item: &Item<'_, '_>) -> Result<MaterialId, CliError> {
+        let table = item.table(&self.src)?;
+        let kind_item = table.require(
+            &self.src,
+            "type",
+            "lambert, conductor, dielectric, coated, thin-film or neural",
+        )?;
+        let kind = kind_item.string(&self.src)?;
+        let keys = match kind {
+            "lambert" => LAMBERT_KEYS,
+            "conductor" => CONDUCTOR_KEYS,
+            "dielectric" => DIELECTRIC_KEYS,
+            "coated" => COATED_KEYS,
+            "thin-film" => THIN_FILM_KEYS,
+            "neural" => NEURAL_KEYS,
+            other => {
+                return Err(kind_item.err(
+                    &self.src,
+                    format!(
+                        "unknown material type \"{other}\" (lambert, conductor, dielectric, coated, thin-film or neural)"
+                    ),
+                ));
+            }
+        };
+        table.allow(&self.src, keys, &format!("a {kind} material"))?;
+        let bsdf = match kind {
+            "lambert" => Bsdf::Lambert {
+                albedo: self.albedo(&table, "lambert")?,
+            },
+            "conductor" => self.conductor(&table)?,
+            "dielectric" => self.dielectric(&table)?,
+            "coated" => self.coated(&table)?,
+            "neural" => self.neural(&table)?,
+            _ => self.thin_film(&table)?,
+        };
+        let mut material = Material::new(name, bsdf);
+        let scale = match table.get("emission_scale") {
+            Some(scale) => {
+                if !table.has("emission") {
+                    return Err(scale.err(&self.src, "`emission_scale` needs `emission`"));
+                }
+                scale.non_negative(&self.src)?
+            }
+            None => 1.0,
+        };
+        if let Some(emission) = table.get("emission") {
+            material.emission = Some(self.spectrum_ref(&emission, scale)?);
+        }
+        if let Some(two_sided) = table.get("two_sided") {
+            material.two_sided = two_sided.boolean(&self.src)?;
+        }
+        Ok(self.cx.add_material(material))
+    }
+
+    fn albedo(&mut self, table: &Table<'_, '_>, kind: &str) -> Result<Albedo, CliError> {
+        match (table.get("albedo"), table.get("albedo_texture")) {
+            (Some(albedo), None) => {
+                let id = self.spectrum_ref(&albedo, 1.0)?;
+                Ok(self.cx.albedo_spectrum(&albedo.spot(), id))
+            }
+            (None, Some(texture)) => {
+                Ok(Albedo::Texture(self.texture(&texture, TextureUse::Albedo)?))
+            }
+            (Some(_), Some(texture)) => Err(texture.err(
+                &self.src,
+                "give either `albedo` or `albedo_texture`, not both",
+            )),
+            (None, None) => Err(table.missing(
+                &self.src,
+                "albedo",
+                &format!("a {kind} material needs `albedo` or `albedo_texture`"),
+            )),
+        }
+    }
+
+    fn roughness(&self, table: &Table<'_, '_>) -> Result<f32, CliError> {
+        match table.get("roughness") {
+            Some(item) => Ok(item.non_negative(&self.src)? as f32),
+            None => Ok(0.0),
+        }
+    }
+
+    /// An index of refraction (module docs of `scene_file`); `dispersive`
+    /// allows the named, Cauchy and Sellmeier forms.
+    fn ior(&self, item: &Item<'_, '_>, dispersive: bool) -> Result<Ior, CliError> {
+        let src = &self.src;
+        let ior = match item.value.get_ref() {
+            DeValue::Integer(_) | DeValue::Float(_) => {
+                let n = item.number(src)?;
+                if n < 1.0 {
+                    return Err(item.err(src, format!("index of refraction {n} must be >= 1")));
+                }
+                return Ok(Ior::Constant(n));
+            }
+            _ if !dispersive => {
+                return Err(item.wrong_type(src, "a number (a coat's index is not dispersive)"));
+            }
+            DeValue::String(name) => {
+                if name.eq_ignore_ascii_case("bk7") {
+                    Ior::BK7
+                } else {
+                    return Err(item.err(
+                        src,
+                        format!("unknown glass \"{name}\" (the named one is \"bk7\"; or give a number, cauchy or sellmeier)"),
+                    ));
+                }
+            }
+            DeValue::Table(_) => {
+                let table = item.table(src)?;
+                table.allow(
+                    src,
+                    &["cauchy", "sellmeier_b", "sellmeier_c"],
+                    "an index of refraction",
+                )?;
+                match (
+                    table.get("cauchy"),
+                    table.get("sellmeier_b"),
+                    table.get("sellmeier_c"),
+                ) {
+                    (Some(c), None, None) => {
+                        let v = c.numbers(src, 2)?;
+                        Ior::Cauchy { a: v[0], b: v[1] }
+                    }
+                    (None, Some(b), Some(c)) => {
+                        let b = b.numbers(src, 3)?;
+                        let c = c.numbers(src, 3)?;
+                        Ior::Sellmeier {
+                            b: [b[0], b[1], b[2]],
+                            c: [c[0], c[1], c[2]],
+                        }
+                    }
+                    _ => {
+                        return Err(item.err(
+                            src,
+                            "give { cauchy = [a, b_um2] } or { sellmeier_b = [B1, B2, B3], sellmeier_c = [C1, C2, C3] }",
+                        ));
+                    }
+                }
+            }
+            _ => {
+                return Err(item.wrong_type(
+                    src,
+                    "an index of refraction (a number, \"bk7\", { cauchy = … } or { sellmeier_b = …, sellmeier_c = … })",
+                ));
+            }
+        };
+        self.cx.validate_ior(&item.spot(), ior)
+    }
+
+    fn conductor(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
+        let metal_item = table.get("metal");
+        let (n_item, k_item) = (table.get("n"), table.get("k"));
+        let (nc_item, kc_item) = (table.get("n_const"), table.get("k_const"));
+        let forms = [
+            metal_item.is_some(),
+            n_item.is_some() || k_item.is_some(),
+            nc_item.is_some() || kc_item.is_some(),
+        ];
+        if forms.iter().filter(|&&f| f).count() != 1 {
+            return Err(table.err(
+                &self.src,
+                "a conductor needs exactly one of: `metal`, `n` with `k`, `n_const` with `k_const`",
+            ));
+        }
+        let (n, k, origin) = if let Some(metal) = metal_item {
+            let name = metal.string(&self.src)?;
+            let Some(&(_, canonical)) = METALS.iter().find(|(m, _)| name.eq_ignore_ascii_case(m))
+            else {
+                return Err(metal.err(
+                    &self.src,
+                    format!("unknown metal \"{name}\" (gold, silver, copper or aluminium)"),
+                ));
+            };
+            let at = metal.spot();
+            let n = self.cx.builtin_spectrum(&at, &format!("{canonical}-n"))?;
+            let k = self.cx.builtin_spectrum(&at, &format!("{canonical}-k"))?;
+            (n, k, at)
+        } else if let (Some(n), Some(k)) = (&n_item, &k_item) {
+            (
+                self.spectrum_ref(n, 1.0)?,
+                self.spectrum_ref(k, 1.0)?,
+                n.spot(),
+            )
+        } else if let (Some(n), Some(k)) = (&nc_item, &kc_item) {
+            let nv = n.number(&self.src)?;
+            if nv <= 0.0 {
+                return Err(n.err(&self.src, "must be a number > 0"));
+            }
+            let kv = k.non_negative(&self.src)?;
+            (
+                self.cx
+                    .add_spectrum(&n.spot(), SpectrumSource::Constant(nv))?,
+                self.cx
+                    .add_spectrum(&k.spot(), SpectrumSource::Constant(kv))?,
+                n.spot(),
+            )
+        } else {
+            let (have, missing) = if n_item.is_some() || k_item.is_some() {
+                if n_item.is_some() {
+                    ("n", "k")
+                } else {
+                    ("k", "n")
+                }
+            } else if nc_item.is_some() {
+                ("n_const", "k_const")
+            } else {
+                ("k_const", "n_const")
+            };
+            return Err(table.missing(
+                &self.src,
+                missing,
+                &format!("`{have}` needs `{missing}` too"),
+            ));
+        };
+        let fresnel = self.cx.conductor_fresnel(&table.spot(), &origin, n, k)?;
+        Ok(Bsdf::Conductor {
+            fresnel,
+            roughness: self.roughness(table)?,
+        })
+    }
+
+    fn dielectric(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
+        let item = table.require(&self.src, "ior", "a dielectric needs `ior`")?;
+        let ior = self.ior(&item, true)?;
+        let roughness = self.roughness(table)?;
+        self.cx.dielectric(&table.spot(), ior, roughness)
+    }
+
+    fn coated(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
+        let albedo = self.albedo(table, "coated")?;
+        let item = table.require(&self.src, "ior", "a coated material needs `ior`")?;
+        let ior = self.ior(&item, false)?;
+        Ok(coated(albedo, ior, self.roughness(table)?))
+    }
+
+    fn thin_film(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
+        let src = &self.src;
+        let layers_item = table.require(src, "layers", "a thin film needs `layers`")?;
+        let layer_items = layers_item.array(src)?;
+        if layer_items.is_empty() {
+            return Err(layers_item.err(src, "needs at least one layer"));
+        }
+        if layer_items.len() > MAX_LAYERS {
+            return Err(layers_item.err(
+                src,
+                format!("at most {MAX_LAYERS} layers, found {}", layer_items.len()),
+            ));
+        }
+        let textured = match (
+            table.get("thickness_texture"),
+            table.get("thickness_range_nm"),
+        ) {
+            (Some(texture), Some(range)) => {
+                let r = range.numbers(src, 2)?;
+                if !(r[0] >= 0.0 && r[0] < r[1]) {
+                    return Err(range.err(src, "must be [min, max] with 0 <= min < max"));
+                }
+                Some((texture, (r[0], r[1])))
+            }
+            (None, None) => None,
+            (Some(_), None) => {
+                return Err(table.missing(
+                    src,
+                    "thickness_range_nm",
+                    "`thickness_texture` needs `thickness_range_nm`",
+                ));
+            }
+            (None, Some(range)) => {
+                return Err(range.err(src, "`thickness_range_nm` needs `thickness_texture`"));
+            }
+        };
+        let mut layers = Vec::with_capacity(layer_items.len());
+        for (index, layer_item) in layer_items.iter().enumerate() {
+            let layer = layer_item.table(src)?;
+            layer.allow(src, &["ior", "k", "thickness_nm"], "a film layer")?;
+            let ior = self.ior(&layer.require(src, "ior", "a layer needs `ior`")?, true)?;
+            let k = match layer.get("k") {
+                Some(k) => k.non_negative(src)?,
+                None => 0.0,
+            };
+            let thickness_nm = match (layer.get("thickness_nm"), &textured) {
+                (Some(t), _) => t.non_negative(src)?,
+                (None, Some((_, (lo, _)))) if index == 0 => *lo,
+                (None, _) => {
+                    return Err(layer.missing(src, "thickness_nm", "a layer needs `thickness_nm`"));
+                }
+            };
+            layers.push(FilmLayer {
+                ior,
+                k,
+                thickness_nm,
+            });
+        }
+        let substrate_item = table.require(
+            src,
+            "substrate",
+            "a thin film needs `substrate = { ior = …, k = … }`",
+        )?;
+        let substrate_table = substrate_item.table(src)?;
+        substrate_table.allow(src, &["ior", "k"], "a substrate")?;
+        let substrate = self.ior(
+            &substrate_table.require(src, "ior", "a substrate needs `ior`")?,
+            true,
+        )?;
+        let substrate_k = match substrate_table.get("k") {
+            Some(k) => k.non_negative(src)?,
+            None => 0.0,
+        };
+        let transparent = match table.get("base") {
+            None => false,
+            Some(base) => match base.string(src)? {
+                "opaque" => false,
+                "transparent" => true,
+                other => {
+                    return Err(base.err(
+                        src,
+                        format!("unknown base \"{other}\" (opaque or transparent)"),
+                    ));
+                }
+            },
+        };
+        if transparent && substrate_k > 0.0 {
+            return Err(
+                substrate_item.err(src, "a transparent base needs a lossless substrate (k = 0)")
+            );
+        }
+        let thickness_range_nm = textured.as_ref().map(|(_, r)| *r);
+        let thickness = match &textured {
+            Some((texture, _)) => Some(self.texture(texture, TextureUse::Thickness)?),
+            None => None,
+        };
+        let film = ThinFilm {
+            layers,
+            substrate,
+            substrate_k,
+            transparent,
+            thickness_range_nm,
+            thickness,
+        };
+        self.cx.thin_film(&table.spot(), film)
+    }
+
+    /// `neural`: a (GGX) reflector whose Fresnel reflectance is a network
+    /// written by `fspec train` (module docs of `scene_file`).
+    fn neural(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
+        let item = table.require(
+            &self.src,
+            "network",
+            "a neural material needs `network = \"file.nn\"` (written by `fspec train`)",
+        )?;
+        let path = self.file(&item)?;
+        let bytes = std::fs::read(&path)
+            .map_err(|e| item.err(&self.src, format!("{}: {e}", path.display())))?;
+        let network = Network::from_bytes(&bytes)
+            .map_err(|e| item.err(&self.src, format!("{}: {e}", path.display())))?;
+        let roughness = self.roughness(table)?;
+        let (fixed, texture, range) = (
+            table.get("thickness_nm"),
+            table.get("thickness_texture"),
+            table.get("thickness_range_nm"),
+        );
+        let at = table.spot();
+        let requested = match (fixed.as_ref(), range.as_ref()) {
+            (Some(t), _) => Some((t, vec![t.non_negative(&self.src)?; 2])),
+            (None, Some(r)) => Some((r, r.numbers(&self.src, 2)?)),
+            (None, None) => None,
+        };
+        if let (Some((item, values)), Some((trained_lo, trained_hi))) =
+            (requested, network.trained_input_range(1))
+            && let [lo, hi] = values.as_slice()
+        {
+            // 1 nm of slack for the f32 round trip of the normalisation.
+            if *lo < f64::from(trained_lo) - 1.0 || *hi > f64::from(trained_hi) + 1.0 {
+                self.cx.warn(
+                    &item.spot(),
+                    format!(
+                        "the network was trained on thicknesses {trained_lo:.0}–{trained_hi:.0} nm: outside them it extrapolates"
+                    ),
+                );
+            }
+        }
+        if network.inputs() == 1 {
+            if let Some(extra) = fixed.or(texture).or(range) {
+                return Err(extra.err(
+                    &self.src,
+                    "this network has one input (cos θ): it takes no thickness",
+                ));
+            }
+            let fresnel = self.cx.add_angular(
+                &at,
+                &at.key,
+                AngularFunction::Neural {
+                    network,
+                    thickness_range_nm: (0.0, 0.0),
+                },
+            )?;
+            return Ok(Bsdf::Conductor { fresnel, roughness });
+        }
+        match (fixed, texture, range) {
+            (Some(t), None, None) => {
+                let t = t.non_negative(&self.src)?;
+                let fresnel = self.cx.add_angular(
+                    &at,
+                    &at.key,
+                    AngularFunction::Neural {
+                        network,
+                        thickness_range_nm: (t, t),
+                    },
+                )?;
+                Ok(Bsdf::Conductor { fresnel, roughness })
+            }
+            (None, Some(texture), Some(range)) => {
+                let r = range.numbers(&self.src, 2)?;
+                if !(r[0] >= 0.0 && r[0] < r[1]) {
+                    return Err(range.err(&self.src, "must be [min, max] with 0 <= min < max"));
+                }
+                if roughness > 0.0 {
+                    return Err(table.err(
+                        &self.src,
+                        "a textured-thickness neural film is smooth: leave out `roughness`",
+                    ));
+                }
+                let thickness = Some(self.texture(&texture, TextureUse::Thickness)?);
+                let front_reflectance = self.cx.add_angular(
+                    &at,
+                    &at.key,
+                    AngularFunction::Neural {
+                        network,
+                        thickness_range_nm: (r[0], r[1]),
+                    },
+                )?;
+                Ok(Bsdf::ThinFilm {
+                    front_reflectance,
+                    front_transmittance: None,
+                    back: None,
+                    // Unused: an opaque base refracts nothing.
+                    substrate_ior: 1.0,
+                    thickness,
+                })
+            }
+            _ => Err(table.err(
+                &self.src,
+                "this network takes a thickness: give `thickness_nm`, or `thickness_texture` with `thickness_range_nm`",
+            )),
+        }
+    }
+}

@@ -1,0 +1,76 @@
+//! `[render]`, `[camera]` and `[environment]`: the sections that set one
+//! thing each.
+
+use super::Loader;
+use crate::error::CliError;
+use crate::scene_file::toml_reader::Item;
+use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults};
+use glam::Vec3;
+use simd_tracer::scene::camera::{Camera, CameraError};
+
+impl Loader<'_> {
+    /// `[render]`: the defaults that command-line flags override.
+    pub(super) fn render_section(&self, item: &Item<'_, '_>) -> Result<RenderDefaults, CliError> {
+        let src = &self.src;
+        let table = item.table(src)?;
+        table.allow(
+            src,
+            &["width", "height", "spp", "max_depth", "seed"],
+            "[render]",
+        )?;
+        let get = |key: &str, min: i64, max: i64| -> Result<Option<i64>, CliError> {
+            table.get(key).map(|i| i.integer(src, min, max)).transpose()
+        };
+        let u32_max = i64::from(u32::MAX);
+        Ok(RenderDefaults {
+            width: get("width", 1, MAX_IMAGE_EDGE)?.map(|v| v as u32),
+            height: get("height", 1, MAX_IMAGE_EDGE)?.map(|v| v as u32),
+            spp: get("spp", 1, u32_max)?.map(|v| v as u32),
+            max_depth: get("max_depth", 1, u32_max)?.map(|v| v as u32),
+            seed: get("seed", 0, i64::MAX)?.map(|v| v as u64),
+        })
+    }
+
+    /// `[camera]`: a pinhole camera.
+    pub(super) fn camera_section(&mut self, item: &Item<'_, '_>) -> Result<(), CliError> {
+        let src = &self.src;
+        let table = item.table(src)?;
+        table.allow(src, &["position", "target", "up", "fov_deg"], "[camera]")?;
+        let position_item =
+            table.require(src, "position", "the camera needs `position = [x, y, z]`")?;
+        let target_item = table.require(src, "target", "the camera needs `target = [x, y, z]`")?;
+        let fov_item = table.require(src, "fov_deg", "the camera needs `fov_deg`")?;
+        let position = position_item.vec3(src)?;
+        let target = target_item.vec3(src)?;
+        let up_item = table.get("up");
+        let up = match &up_item {
+            Some(up) => up.vec3(src)?,
+            None => Vec3::Y,
+        };
+        let fov = fov_item.number(src)? as f32;
+        let camera = Camera::look_at(position, target, up, fov).map_err(|e| match e {
+            CameraError::FieldOfView => fov_item.err(src, "must be between 0 and 180 degrees"),
+            CameraError::UpParallel => match &up_item {
+                Some(up) => up.err(src, e),
+                None => target_item.err(src, e),
+            },
+            CameraError::Degenerate => target_item.err(src, e),
+        })?;
+        self.cx.set_camera(camera);
+        Ok(())
+    }
+
+    /// `[environment]`: a constant radiance from every direction.
+    pub(super) fn environment_section(&mut self, item: &Item<'_, '_>) -> Result<(), CliError> {
+        let table = item.table(&self.src)?;
+        table.allow(&self.src, &["spectrum", "scale"], "[environment]")?;
+        let scale = match table.get("scale") {
+            Some(s) => s.non_negative(&self.src)?,
+            None => 1.0,
+        };
+        let spectrum = table.require(&self.src, "spectrum", "the environment needs `spectrum`")?;
+        let id = self.spectrum_ref(&spectrum, scale)?;
+        self.cx.set_environment(id);
+        Ok(())
+    }
+}
