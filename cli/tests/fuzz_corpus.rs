@@ -1,38 +1,22 @@
 //! Replays the committed fuzz corpora through the fuzz target bodies, so the
 //! seeds (and every crash turned regression input) run in CI on stable Rust.
+//! The walk is `test_support::replay_corpus`: every file, and an error if a
+//! corpus directory is missing or empty.
 
-use std::path::{Path, PathBuf};
+use test_support::{corpus_dir, replay_corpus};
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
-fn corpus(target: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../fuzz/corpus")
-        .join(target)
-}
-
-fn replay(target: &str, body: fn(&[u8])) -> TestResult<usize> {
-    let mut count = 0;
-    for entry in std::fs::read_dir(corpus(target))? {
-        let path = entry?.path();
-        if path.is_file() {
-            body(&std::fs::read(&path)?);
-            count += 1;
-        }
-    }
-    Ok(count)
-}
-
 #[test]
 fn csv_spectrum_corpus() -> TestResult {
-    let count = replay("csv_spectrum", fspec_cli::spectrum_file::fuzz_csv_spectrum)?;
+    let count = replay_corpus("csv_spectrum", fspec_cli::spectrum_file::fuzz_csv_spectrum)?;
     assert!(count >= 5, "only {count} seeds");
     Ok(())
 }
 
 #[test]
 fn scene_toml_corpus() -> TestResult {
-    let count = replay("scene_toml", fspec_cli::scene_file::fuzz_scene_toml)?;
+    let count = replay_corpus("scene_toml", fspec_cli::scene_file::fuzz_scene_toml)?;
     assert!(count >= 5, "only {count} seeds");
     Ok(())
 }
@@ -50,7 +34,7 @@ fn scene_toml_seeds_are_scenes() -> TestResult {
         "thin-film.toml",
         "spectra.toml",
     ] {
-        let loaded = fspec_cli::scene_file::load_scene_file(&corpus("scene_toml").join(seed))
+        let loaded = fspec_cli::scene_file::load_scene_file(&corpus_dir("scene_toml").join(seed))
             .map_err(|e| format!("{seed}: {e}"))?;
         loaded.builder.build().map_err(|e| format!("{seed}: {e}"))?;
     }
@@ -59,7 +43,7 @@ fn scene_toml_seeds_are_scenes() -> TestResult {
 
 #[test]
 fn coefficient_exr_corpus() -> TestResult {
-    let count = replay(
+    let count = replay_corpus(
         "coefficient_exr",
         fspec_cli::texture_file::fuzz_coefficient_exr,
     )?;
@@ -76,7 +60,7 @@ fn coefficient_exr_seeds_read_back() -> TestResult {
         ("coeffs-f16-tiled", 2),
     ] {
         let image =
-            fspec_cli::image_out::read_coefficients_exr(&corpus("coefficient_exr").join(seed))
+            fspec_cli::image_out::read_coefficients_exr(&corpus_dir("coefficient_exr").join(seed))
                 .map_err(|e| format!("{seed}: {e}"))?;
         assert_eq!(image.n, n, "{seed}");
     }

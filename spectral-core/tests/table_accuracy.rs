@@ -2,6 +2,12 @@
 //! random angles (max and RMS of the reconstructed reflectance on a 1 nm
 //! grid, printed with `--nocapture`), exact rows at the table ends, and the
 //! memory per table.
+//!
+//! The limits are about 1.5 times the errors measured on 2026-12-02 (x86-64,
+//! AVX2 + FMA), each stated beside its limit: the inputs are fixed (a
+//! low-discrepancy sequence of angles, the embedded data), so the errors are
+//! deterministic up to the last bits of f32 rounding, and a table that
+//! interpolates or projects worse than it does now fails.
 
 use spectral_core::complex::Complex;
 use spectral_core::data::tables::METALS;
@@ -39,8 +45,11 @@ fn interpolation_error(
     (max, (sum_sq / count as f64).sqrt())
 }
 
-fn check_ends(table: &FourierTable<N, L>, direct: impl Fn(f64, f64) -> f64) {
+/// The end rows against the projection of the function itself; returns the
+/// largest coefficient error, which must stay below `bound`.
+fn check_ends(table: &FourierTable<N, L>, direct: impl Fn(f64, f64) -> f64, bound: f64) -> f64 {
     let range = SpectralRange::VISIBLE;
+    let mut worst = 0.0f64;
     for cos_i in [0.0, 1.0] {
         let exact: FourierSpectrum<f64, N> = project_function(&range, |l| direct(cos_i, l));
         let row = table.lookup(cos_i);
@@ -49,9 +58,11 @@ fn check_ends(table: &FourierTable<N, L>, direct: impl Fn(f64, f64) -> f64) {
             // Rows project the 1 nm polyline of the function; the reference
             // is Gauss–Legendre on the function itself: they differ by the
             // 1 nm discretisation (h²f''/8 ≈ 3e-6 for a 400 nm film) and f32.
-            assert!(e < 1e-5, "cos θ = {cos_i}, j = {j}: {e}");
+            assert!(e < bound, "cos θ = {cos_i}, j = {j}: {e} (limit {bound})");
+            worst = worst.max(e);
         }
     }
+    worst
 }
 
 #[test]
@@ -63,10 +74,14 @@ fn gold_table_accuracy() {
     let k = TabulatedSpectrum::new(gold.lambda_nm, gold.k).unwrap();
     let direct =
         |cos_i: f64, l: f64| fresnel_conductor(cos_i, Complex::new(n.value(l), k.value(l)));
-    check_ends(&table, direct);
+    // Measured: 1.60e-6 (the 1 nm discretisation at normal incidence).
+    let ends = check_ends(&table, direct, 2.5e-6);
     let (max, rms) = interpolation_error(&table, direct, 200);
-    println!("gold conductor table (N = {N}, L = {L}): max {max:.2e}, rms {rms:.2e}");
-    assert!(max < 2e-3 && rms < 1e-4, "max {max}, rms {rms}");
+    println!(
+        "gold conductor table (N = {N}, L = {L}): max {max:.3e}, rms {rms:.3e}, ends {ends:.3e}"
+    );
+    // Measured: max 7.44e-5, rms 1.03e-5.
+    assert!(max < 1.1e-4 && rms < 1.5e-5, "max {max}, rms {rms}");
     assert_eq!(FourierTable::<N, L>::memory_bytes(), 8640);
 }
 
@@ -78,13 +93,26 @@ fn dielectric_table_accuracy_both_sides() {
         let sign = if from_inside { -1.0 } else { 1.0 };
         let direct =
             |cos_i: f64, _l: f64| spectral_core::optics::fresnel_dielectric(sign * cos_i, 1.5);
-        check_ends(&table, direct);
+        // A constant index: the end rows are constants (R = 1 at grazing
+        // incidence, 0.04 at normal incidence), so only their f32 rounding
+        // remains: f32(0.04) is 8.9e-10 off (half an ulp there is 1.9e-9).
+        // Measured: 8.9e-10.
+        let ends = check_ends(&table, direct, 1.5e-9);
         let (max, rms) = interpolation_error(&table, direct, 200);
-        println!("dielectric table, from inside = {from_inside}: max {max:.2e}, rms {rms:.2e}");
+        println!(
+            "dielectric table, from inside = {from_inside}: max {max:.3e}, rms {rms:.3e}, ends {ends:.3e}"
+        );
         // From inside, the total-internal-reflection kink at cos θ = 0.745
-        // falls between rows: the largest error sits there.
-        let bound = if from_inside { 0.05 } else { 2e-3 };
-        assert!(max < bound && rms < 5e-3, "max {max}, rms {rms}");
+        // falls between rows: the largest error sits there. Measured: from
+        // outside max 1.35e-4, rms 2.91e-5; from inside max 4.66e-2, rms
+        // 3.54e-3 (the limits from inside were already within 1.5 times the
+        // measured errors and stay as they were).
+        let (max_bound, rms_bound) = if from_inside {
+            (0.05, 5e-3)
+        } else {
+            (2e-4, 4.5e-5)
+        };
+        assert!(max < max_bound && rms < rms_bound, "max {max}, rms {rms}");
     }
 }
 
@@ -121,12 +149,23 @@ fn thin_film_tables_accuracy() {
                     FilmQuantity::Transmittance => r.transmittance(),
                 }
             };
-            check_ends(&table, direct);
+            // Measured: 4.63e-6 (the 1 nm discretisation of the 400 nm
+            // layer's fringes).
+            let ends = check_ends(&table, direct, 7e-6);
             let (max, rms) = interpolation_error(&table, direct, 100);
-            println!("film {quantity:?} {side:?}: max {max:.2e}, rms {rms:.2e}");
-            let bound = if side == FilmSide::Back { 0.05 } else { 5e-3 };
+            println!("film {quantity:?} {side:?}: max {max:.3e}, rms {rms:.3e}, ends {ends:.3e}");
+            // Measured, the same for reflectance and transmittance (a
+            // lossless stack: T = 1 − R): front max 1.90e-4, rms 3.30e-5;
+            // back max 1.87e-2, rms 1.60e-3 (from the substrate side total
+            // internal reflection sets in between rows, as for the
+            // dielectric from inside).
+            let (max_bound, rms_bound) = if side == FilmSide::Back {
+                (0.028, 2.4e-3)
+            } else {
+                (2.9e-4, 5e-5)
+            };
             assert!(
-                max < bound && rms < 5e-3,
+                max < max_bound && rms < rms_bound,
                 "{quantity:?} {side:?}: max {max}, rms {rms}"
             );
         }

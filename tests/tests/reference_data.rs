@@ -1,6 +1,7 @@
 //! The core against published reference data (palette-style): CIE tables,
-//! illuminant white points, ColorChecker colours and the CIEDE2000 test
-//! pairs of Sharma, Wu and Dalal (2005).
+//! illuminant white points, the published CIELAB of the 24 ColorChecker
+//! patches (X-Rite, D50) and the CIEDE2000 test pairs of Sharma, Wu and
+//! Dalal (2005).
 
 use spectral_core::SpectralRange;
 use spectral_core::cmf::{self, Y_BAR_INTEGRAL};
@@ -68,10 +69,12 @@ fn illuminant_white_points() {
     );
 }
 
-fn colorchecker_lab_d65() -> Vec<Lab> {
-    let d65 = Builtin::lookup("d65").unwrap().tabulated().unwrap();
+/// CIELAB of the 24 ColorChecker spectra lit by `illuminant` (CIE 1931 2°),
+/// relative to the white of the same illuminant.
+fn colorchecker_lab(illuminant: &str) -> Vec<Lab> {
+    let light = Builtin::lookup(illuminant).unwrap().tabulated().unwrap();
     let range = SpectralRange::VISIBLE;
-    let white = reference_xyz(&d65, &range);
+    let white = reference_xyz(&light, &range);
     (1..=24)
         .map(|patch| {
             let reflectance = Builtin::lookup(&format!("colorchecker-{patch}"))
@@ -86,7 +89,7 @@ fn colorchecker_lab_d65() -> Vec<Lab> {
                 .iter()
                 .map(|&l| {
                     use spectral_core::Spectrum;
-                    d65.value(l) * reflectance.value(l)
+                    light.value(l) * reflectance.value(l)
                 })
                 .collect();
             let radiance = spectral_core::TabulatedSpectrum::new(&nm, &product).unwrap();
@@ -95,36 +98,68 @@ fn colorchecker_lab_d65() -> Vec<Lab> {
         .collect()
 }
 
+/// `data/colorchecker_lab_d50.csv`: (patch name, published CIELAB).
+fn published_colorchecker_lab() -> Vec<(String, Lab)> {
+    let text = data_file("colorchecker_lab_d50.csv");
+    text.lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|line| {
+            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+            assert_eq!(cells.len(), 4, "{line}");
+            let v: Vec<f64> = cells[1..].iter().map(|c| c.parse().unwrap()).collect();
+            (cells[0].to_string(), Lab::new(v[0], v[1], v[2]))
+        })
+        .collect()
+}
+
+/// Every patch against X-Rite's published CIELAB (D50, 2°; the pre-November
+/// 2014 chart formulation, which matches GretagMacbeth's 2005 data), with
+/// the colorimetry the publisher used: the D50 spectrum times the
+/// reflectance, the CIE 1931 2° observer, the white of D50 (no chromatic
+/// adaptation: X-Rite computes D50 values from measured spectra directly).
+///
+/// The spectra (Ohta 1997 = ISO 17321-1) are the measurement of a chart
+/// of 1997, the published values X-Rite's reference for its production
+/// charts, so the two disagree by about a ΔE2000 per patch for that
+/// reason (different physical charts), not by our colorimetry. Measured
+/// (2026-12-02): mean 0.97, max 1.70 (orange); 0.43 (yellow green) to 1.70
+/// per patch, 12 patches above 1. The limits sit a small margin above:
+/// max 2.0, mean 1.1. For comparison, the same spectra against the
+/// post-November-2014 values: mean 1.24, max 2.38; and adapted from D65 by
+/// Bradford instead of lit by D50: mean 1.10, max 2.07 — so both the data
+/// set and the direct D50 colorimetry are the consistent choices.
 #[test]
-fn colorchecker_lab_under_d65_is_sane() {
-    let lab = colorchecker_lab_d65();
-    let index = |name: &str| COLORCHECKER_NAMES.iter().position(|n| *n == name).unwrap();
-    // Published CIELAB (D65, 2°) of the Ohta / ISO 17321 spectra, e.g. the
-    // colour-science "ColorChecker N Ohta" dataset: white L* ≈ 96, black ≈ 20.
-    let white = lab[index("white_9.5_(.05_D)")];
-    assert!(
-        (white.l - 96.0).abs() < 1.5 && white.a.abs() < 2.0 && white.b.abs() < 3.0,
-        "{white:?}"
-    );
-    let black = lab[index("black_2_(1.5_D)")];
-    assert!(
-        (black.l - 20.5).abs() < 2.0 && black.a.abs() < 2.0 && black.b.abs() < 2.0,
-        "{black:?}"
-    );
-    // The neutral row darkens monotonically.
-    for pair in lab[18..24].windows(2) {
-        assert!(pair[0].l > pair[1].l);
+fn colorchecker_lab_under_d50_matches_published_values() {
+    const MAX_DELTA_E: f64 = 2.0;
+    const MEAN_DELTA_E: f64 = 1.1;
+    let computed = colorchecker_lab("d50");
+    let published = published_colorchecker_lab();
+    assert_eq!(published.len(), 24);
+    assert_eq!(computed.len(), 24);
+    let mut sum = 0.0;
+    for ((name, expected), (got, our_name)) in published
+        .iter()
+        .zip(computed.iter().zip(COLORCHECKER_NAMES))
+    {
+        assert_eq!(name, our_name, "patch order");
+        let de = delta_e2000(*got, *expected);
+        println!(
+            "{name:>22}: computed ({:6.2} {:6.2} {:6.2}) published ({:6.2} {:6.2} {:6.2}) ΔE2000 {de:.2}",
+            got.l, got.a, got.b, expected.l, expected.a, expected.b
+        );
+        assert!(
+            de <= MAX_DELTA_E,
+            "{name}: ΔE2000 {de:.3} > {MAX_DELTA_E}: computed {got:?}, published {expected:?}"
+        );
+        sum += de;
     }
-    let red = lab[index("red")];
-    assert!(red.a > 40.0 && red.b > 15.0, "{red:?}");
-    let green = lab[index("green")];
-    assert!(green.a < -30.0 && green.b > 20.0, "{green:?}");
-    let blue = lab[index("blue")];
-    assert!(blue.b < -40.0, "{blue:?}");
-    let yellow = lab[index("yellow")];
-    assert!(yellow.l > 75.0 && yellow.b > 70.0, "{yellow:?}");
-    let cyan = lab[index("cyan")];
-    assert!(cyan.a < -20.0 && cyan.b < -20.0, "{cyan:?}");
+    let mean = sum / 24.0;
+    println!("mean ΔE2000 {mean:.3}");
+    assert!(
+        mean <= MEAN_DELTA_E,
+        "mean ΔE2000 {mean:.3} > {MEAN_DELTA_E}"
+    );
 }
 
 #[test]
