@@ -31,7 +31,8 @@ use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::{Ray as ObvhsRay, RayHit};
 use obvhs::triangle::Triangle as ObvhsTriangle;
 use simd_tracer::accel::Bvh;
-use simd_tracer::packet::{LANES, Ray, RayPacket};
+use simd_tracer::packet::{Ray, RayPacket};
+use simd_tracer::simd::LANES;
 
 /// SplitMix64.
 struct Rng(u64);

@@ -10,7 +10,8 @@
 //!   build: `Err` or a valid scene, never a panic.
 
 use crate::accel::{Bvh, Hit, WideStack};
-use crate::packet::{LANES, Ray, RayPacket};
+use crate::packet::{Ray, RayPacket};
+use crate::simd::LANES;
 use crate::scene::camera::Camera;
 use crate::scene::obj::{ObjSource, load_obj};
 use crate::scene::{SceneBuilder, SceneError};

@@ -16,6 +16,7 @@
 pub mod accel;
 pub mod film;
 pub mod fuzzing;
+pub mod ids;
 pub mod integrator;
 pub mod packet;
 pub mod render;

@@ -6,8 +6,10 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 use proptest::prelude::*;
-use simd_tracer::accel::{Bvh, Hit, NO_TRIANGLE, Traversal, WIDE_MIN_TRIANGLES};
-use simd_tracer::packet::{LANES, LaneMask, Ray, RayPacket};
+use simd_tracer::accel::{Bvh, Hit, Traversal, WIDE_MIN_TRIANGLES};
+use simd_tracer::ids::NO_TRIANGLE;
+use simd_tracer::packet::{Ray, RayPacket};
+use simd_tracer::simd::{LANES, LaneMask};
 
 // ---------------------------------------------------------------------------
 // Scenes.

@@ -7,7 +7,8 @@
 use glam::Vec3;
 use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::{GroupState, IntegratorSettings, RayCounts, trace, trace_group};
-use simd_tracer::packet::{LANES, LaneMask, Ray, RayPacket};
+use simd_tracer::packet::{Ray, RayPacket};
+use simd_tracer::simd::{LANES, LaneMask};
 use simd_tracer::render::{RenderResult, RenderSettings, render};
 use simd_tracer::sampling::rng::{Purpose, Rng, RngPacket};
 use simd_tracer::scene::builtin::{SceneOptions, builtin_scene};

@@ -3,8 +3,10 @@
 
 use super::packet_traversal::PacketRays;
 use super::triangle::weight;
-use super::{Bvh, NO_TRIANGLE, WideStack, index_u32};
-use crate::packet::{LaneMask, PacketHit, RayPacket};
+use super::{Bvh, WideStack, index_u32};
+use crate::ids::NO_TRIANGLE;
+use crate::packet::{PacketHit, RayPacket};
+use crate::simd::LaneMask;
 use wide::f32x8;
 
 /// A slot's bits in every lane (the flat tests select them per lane).

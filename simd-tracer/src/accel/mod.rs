@@ -146,6 +146,7 @@
 //! so they can find a hit on a triangle's edge that box rounding culls for
 //! the binary tree, never lose one).
 
+use crate::ids::NO_TRIANGLE;
 use std::cell::RefCell;
 
 use glam::Vec3;
@@ -153,7 +154,8 @@ use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::node::Bvh2Node;
 use wide::f32x8;
 
-use crate::packet::{LaneMask, PacketHit, Ray, RayPacket};
+use crate::packet::{PacketHit, Ray, RayPacket};
+use crate::simd::LaneMask;
 
 mod triangle;
 use triangle::{
@@ -171,8 +173,6 @@ mod wide_tree;
 use wide_tree::WideBvh;
 pub use wide_tree::{WIDTH as WIDE_WIDTH, WideStack};
 
-/// Triangle index of packet lanes that hit nothing.
-pub const NO_TRIANGLE: u32 = u32::MAX;
 
 /// Stack entries kept inline before spilling to the heap.
 const INLINE_STACK: usize = 64;
@@ -458,7 +458,7 @@ impl Bvh {
 mod tests {
     use super::build::tree_depth;
     use super::*;
-    use crate::packet::LANES;
+    use crate::simd::LANES;
     use obvhs::bvh2::DEFAULT_MAX_STACK_DEPTH;
 
     fn quad_box(min: Vec3, max: Vec3) -> Vec<[Vec3; 3]> {

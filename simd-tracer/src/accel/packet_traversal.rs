@@ -4,8 +4,10 @@
 use super::triangle::{
     PreparedTriangle, cross, dot, edge_weight, edge_weights, plane_terms, safe_inverse_x8, weight,
 };
-use super::{Bvh, NO_TRIANGLE, index_u32, with_node_stack};
-use crate::packet::{LANES, LaneMask, PacketHit, RayPacket};
+use super::{Bvh, index_u32, with_node_stack};
+use crate::ids::NO_TRIANGLE;
+use crate::packet::{PacketHit, RayPacket};
+use crate::simd::{LANES, LaneMask};
 use obvhs::aabb::Aabb;
 use wide::f32x8;
 

@@ -2,8 +2,10 @@
 //! scalar triangle test: the oracle of every packet path.
 
 use super::triangle::{ScalarHit, accept_scalar, cross, dot, edge_terms, safe_inverse};
-use super::{Bvh, Hit, NO_TRIANGLE};
-use crate::packet::{LANES, LaneMask, PacketHit, Ray, RayPacket};
+use super::{Bvh, Hit};
+use crate::ids::NO_TRIANGLE;
+use crate::packet::{PacketHit, Ray, RayPacket};
+use crate::simd::{LANES, LaneMask};
 use glam::Vec3A;
 use obvhs::ray::{Ray as ObvhsRay, RayHit};
 use wide::f32x8;

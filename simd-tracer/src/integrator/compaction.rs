@@ -26,7 +26,8 @@
 //!
 //! [`GROUP`]: crate::integrator::GROUP
 
-use crate::packet::{LANES, LaneMask, PacketHit, RayPacket};
+use crate::packet::{PacketHit, RayPacket};
+use crate::simd::{LANES, LaneMask};
 use wide::f32x8;
 
 /// `(packet, lane)` reduced into range, so that indexing needs no bounds

@@ -2,8 +2,9 @@
 //! with `Le` per path (the truncated product is bilinear).
 
 use super::EMISSION_SLOTS;
-use crate::packet::{LANES, LaneMask};
-use crate::scene::{Scene, SpectrumId};
+use crate::simd::{LANES, LaneMask};
+use crate::scene::Scene;
+use crate::ids::SpectrumId;
 use crate::transport::Transport;
 use wide::bytemuck::cast;
 use wide::{f32x8, u32x8};

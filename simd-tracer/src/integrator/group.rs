@@ -7,10 +7,11 @@ use super::last_segment::{LAST_SEGMENT_EMITTERS, last_segment_hits};
 use super::path::{NeeSample, PathState};
 use super::{IntegratorSettings, RayCounts};
 use crate::packet::PacketHit;
-use crate::packet::{LANES, LaneMask, RayPacket};
+use crate::packet::RayPacket;
+use crate::simd::{LANES, LaneMask};
 use crate::sampling::rng::RngPacket;
 use crate::scene::Scene;
-use crate::shading::surface::NO_ID;
+use crate::ids::NO_ID;
 use crate::transport::Transport;
 use wide::f32x8;
 

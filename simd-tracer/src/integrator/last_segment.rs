@@ -2,7 +2,7 @@
 //! are tested against the emitters alone.
 
 use super::compaction;
-use crate::accel::NO_TRIANGLE;
+use crate::ids::NO_TRIANGLE;
 use crate::packet::PacketHit;
 use crate::packet::RayPacket;
 use crate::scene::Scene;

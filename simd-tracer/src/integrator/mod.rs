@@ -94,9 +94,10 @@ mod tests {
     use super::last_segment::last_segment_hits;
     use super::packet_shading::{offset_x8, power_heuristic_x8};
     use super::*;
-    use crate::packet::{LANES, LaneMask, PacketHit, RayPacket};
-    use crate::scene::SpectrumId;
-    use crate::shading::surface::NO_ID;
+    use crate::packet::{PacketHit, RayPacket};
+use crate::simd::{LANES, LaneMask};
+    use crate::ids::SpectrumId;
+    use crate::ids::NO_ID;
     use crate::simd::Vec3x8;
     use wide::f32x8;
     use crate::sampling::rng::Rng;

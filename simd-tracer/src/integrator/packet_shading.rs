@@ -4,9 +4,10 @@
 
 use super::RAY_EPSILON;
 use crate::packet::PacketHit;
-use crate::packet::{LANES, LaneMask};
+use crate::simd::{LANES, LaneMask};
 use crate::sampling::rng::RngPacket;
-use crate::scene::{Scene, SpectrumId};
+use crate::scene::Scene;
+use crate::ids::SpectrumId;
 use crate::shading::material::{
     Bsdf, BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket, LaneSpectrum, ShadingPoint,
 };

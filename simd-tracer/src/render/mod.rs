@@ -23,7 +23,8 @@
 
 use crate::film::filter::Filter;
 use crate::integrator::{GROUP, GroupState, IntegratorSettings, RayCounts, trace_group};
-use crate::packet::{LANES, LaneMask, RayPacket};
+use crate::packet::RayPacket;
+use crate::simd::{LANES, LaneMask};
 use crate::sampling::rng::{Purpose, Rng, RngPacket, SampleKey};
 use crate::scene::Scene;
 use crate::simd::Vec3x8;

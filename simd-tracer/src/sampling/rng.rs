@@ -34,7 +34,7 @@ pub enum Purpose {
     Wavelengths = 2,
 }
 
-use crate::packet::LANES;
+use crate::simd::LANES;
 use wide::bytemuck::cast;
 use wide::{f32x8, i32x8, u32x8};
 

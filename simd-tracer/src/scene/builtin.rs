@@ -11,7 +11,8 @@
 use crate::scene::camera::Camera;
 use crate::scene::obj::{ObjError, ObjSource, load_obj};
 use crate::scene::shapes::{add_box, add_quad_uv, add_sphere};
-use crate::scene::{MaterialId, Scene, SceneBuilder, SceneError, SpectrumId};
+use crate::scene::{Scene, SceneBuilder, SceneError};
+use crate::ids::{MaterialId, SpectrumId};
 use crate::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
 use crate::spectra::SpectrumSource;
 use crate::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};

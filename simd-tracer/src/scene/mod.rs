@@ -6,25 +6,19 @@
 //! material is two-sided. Degenerate triangles (zero area, non-finite) are
 //! dropped at build time and counted in [`Scene::skipped_triangles`].
 
+use crate::ids::{AngularId, MaterialId, SpectrumId, TextureId};
 use crate::accel::{Bvh, TriangleSubset};
 use crate::scene::camera::Camera;
 use crate::shading::light::{Light, LightSet};
 use crate::shading::material::Material;
-use crate::shading::surface::{NO_ID, PackedSurfaces, Surface};
+use crate::shading::surface::{PackedSurfaces, Surface};
+use crate::ids::NO_ID;
 use crate::spectra::angular::{AngularFunction, AngularSpectrum};
 use crate::spectra::texture::Texture;
 use crate::spectra::{SceneSpectrum, SpectrumRegisters, SpectrumSource};
 use glam::{Vec2, Vec3};
 use spectral_core::{SpectralError, SpectralRange};
 
-/// Index of a spectrum in [`Scene::spectra`].
-pub type SpectrumId = u32;
-/// Index of a material in [`Scene::materials`].
-pub type MaterialId = u32;
-/// Index of an angular spectrum in [`Scene::angular`].
-pub type AngularId = u32;
-/// Index of a texture in [`Scene::textures`].
-pub type TextureId = u32;
 
 /// Why a scene could not be built.
 #[derive(Debug, Clone, PartialEq)]

@@ -12,8 +12,9 @@
 //! reads their records with one permute per field, instead of a search and
 //! a record copy per lane. Both paths give the scalar sample bit for bit.
 
-use crate::packet::{LANES, LaneMask};
-use crate::shading::surface::{NO_ID, Surface, SurfacePacket};
+use crate::simd::{LANES, LaneMask};
+use crate::shading::surface::{Surface, SurfacePacket};
+use crate::ids::NO_ID;
 use crate::simd::{Vec3x8, lookup_f32x8, lookup_u32x8};
 use crate::spectra::SceneSpectrum;
 use glam::Vec3;

@@ -16,8 +16,9 @@
 //! eight 32-bit words each: one 32-byte load per lane and one `8 × 8`
 //! transpose give the packet's eight fields.
 
-use crate::packet::{LANES, LaneMask};
-use crate::scene::{MaterialId, SpectrumId, triangle_area};
+use crate::simd::{LANES, LaneMask};
+use crate::scene::triangle_area;
+use crate::ids::{MaterialId, NO_ID, SpectrumId};
 use crate::shading::light::LightSet;
 #[cfg(doc)]
 use crate::shading::light::{emits_towards, light_pdf_solid_angle};
@@ -27,8 +28,6 @@ use glam::Vec3;
 use wide::bytemuck::cast;
 use wide::{f32x8, u32x8};
 
-/// "None" for the id fields of a [`Surface`].
-pub const NO_ID: u32 = u32::MAX;
 
 /// What shading reads of one triangle.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -5,7 +5,9 @@
 //! NaN policy: plain IEEE arithmetic; [`Vec3x8::normalize`] of a zero vector
 //! gives NaN lanes, as `glam::Vec3::normalize` does. Callers mask such lanes.
 
-use crate::packet::LANES;
+mod lanes;
+pub use lanes::{LANES, LaneMask};
+
 use glam::Vec3;
 use std::ops::{Add, Mul, Neg, Sub};
 use wide::bytemuck::cast;

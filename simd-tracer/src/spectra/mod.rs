@@ -16,7 +16,7 @@
 //! coefficient `j` of spectrum `s`, so a packet whose lanes name those
 //! spectra reads its coefficients with one permute per coefficient.
 
-use crate::packet::LANES;
+use crate::simd::LANES;
 use crate::simd::lookup_f32x8;
 use spectral_core::registry::Builtin;
 use spectral_core::spectrum::{Blackbody, ConstantSpectrum, Spectrum, TabulatedSpectrum};

@@ -4,7 +4,7 @@
 use super::fourier::{FourierTransport, gather_fourier};
 use super::sampled::{PacketWavelengths, SampledTransport, gather_sampled, sampled_lane};
 use super::{Buffer, Transport, all_finite};
-use crate::packet::LANES;
+use crate::simd::LANES;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
 use crate::shading::material::LaneSpectrum;

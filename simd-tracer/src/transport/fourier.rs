@@ -2,9 +2,10 @@
 //! product per bounce; the film keeps coefficient sums or XYZ per sample.
 
 use super::{Buffer, Transport, all_finite, id_spectra};
-use crate::packet::{LANES, LaneMask};
+use crate::simd::{LANES, LaneMask};
 use crate::sampling::rng::Rng;
-use crate::scene::{Scene, SpectrumId};
+use crate::scene::Scene;
+use crate::ids::SpectrumId;
 use crate::shading::material::{LaneSpectrum, SpectralRef};
 use crate::spectra::MAX_COEFFS;
 use spectral_core::color::Xyz;

@@ -18,9 +18,10 @@
 //!   the default: a single pixel's tens of samples give a noisy `α`) or per
 //!   pixel ([`AlphaMode::PerPixel`]).
 
-use crate::packet::{LANES, LaneMask};
+use crate::simd::{LANES, LaneMask};
 use crate::sampling::rng::Rng;
-use crate::scene::{Scene, SpectrumId};
+use crate::scene::Scene;
+use crate::ids::SpectrumId;
 use crate::shading::material::LaneSpectrum;
 use spectral_core::color::Xyz;
 use wide::f32x8;

@@ -3,7 +3,7 @@
 
 use super::fourier::reference_value;
 use super::{Transport, all_finite};
-use crate::packet::LANES;
+use crate::simd::LANES;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
 use crate::shading::material::{LaneSpectrum, SpectralRef};

@@ -15,7 +15,8 @@ use crate::error::CliError;
 use crate::scene_file::source::Spot;
 use glam::{Vec2, Vec3};
 use simd_tracer::scene::obj::{ObjError, add_default_material, load_obj_file, load_options, mtl_material};
-use simd_tracer::scene::{MaterialId, SceneBuilder};
+use simd_tracer::scene::SceneBuilder;
+use simd_tracer::ids::MaterialId;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 

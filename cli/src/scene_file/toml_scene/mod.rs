@@ -26,7 +26,7 @@ use super::source::Source;
 use super::toml_reader::{self, Item, Table};
 use crate::error::CliError;
 use crate::texture_file::TextureUse;
-use simd_tracer::scene::TextureId;
+use simd_tracer::ids::TextureId;
 use std::path::PathBuf;
 
 /// Loads the scene described by the TOML text of `src`, with file

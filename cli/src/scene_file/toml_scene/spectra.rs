@@ -7,7 +7,7 @@ use crate::error::CliError;
 use crate::scene_file::construction::{builtin_error, tabulated_message};
 use crate::scene_file::toml_reader::{Item, Table};
 use crate::spectrum_file;
-use simd_tracer::scene::SpectrumId;
+use simd_tracer::ids::SpectrumId;
 use simd_tracer::spectra::{MAX_COEFFS, SpectrumSource};
 use spectral_core::TabulatedSpectrum;
 use spectral_core::registry::Builtin;

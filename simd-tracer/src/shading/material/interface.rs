@@ -4,7 +4,8 @@
 
 use super::lane_spectrum::LaneSpectrum;
 use super::{BsdfEval, BsdfSample, angular_mean, angular_ref};
-use crate::scene::{AngularId, Scene};
+use crate::scene::Scene;
+use crate::ids::AngularId;
 use crate::shading::microfacet::{self};
 use glam::Vec3;
 

@@ -3,7 +3,7 @@
 //! angular spectrum at `cos θ` ([`SpectralRef`]); the transport evaluates
 //! `X` in its own representation.
 
-use crate::scene::{AngularId, SpectrumId, TextureId};
+use crate::ids::{AngularId, SpectrumId, TextureId};
 
 /// Where a lane's spectral factor comes from.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -15,7 +15,8 @@
 //! | Coated | a smooth or GGX dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic): specular `F(θo)` plus diffuse `ρ (1 − F_i)(1 − F_o)/(π η² (1 − F_dr,int))`, which conserves energy exactly for `ρ = 1` (the coat's Fresnel is achromatic, so it rides in the scalar part) |
 //! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
 
-use crate::scene::{AngularId, Scene, SpectrumId, TextureId};
+use crate::scene::Scene;
+use crate::ids::{AngularId, SpectrumId, TextureId};
 use crate::spectra::angular::{Ior, REFERENCE_WAVELENGTH_NM};
 use glam::{Vec2, Vec3};
 use spectral_core::optics::fresnel_dielectric;
@@ -262,7 +263,7 @@ fn direction_ior(ior: &Ior, hero_nm: Option<f32>) -> (f32, bool) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::packet::{LANES, LaneMask};
+    use crate::simd::{LANES, LaneMask};
     use crate::sampling::rng::Rng;
     use crate::simd::Vec3x8;
     use wide::f32x8;

@@ -4,7 +4,7 @@
 use super::frame::sample_cosine_x8;
 use super::lane_spectrum::LaneSpectrum;
 use super::{Bsdf, ShadingPoint};
-use crate::packet::{LANES, LaneMask};
+use crate::simd::{LANES, LaneMask};
 use crate::scene::Scene;
 use crate::simd::Vec3x8;
 use glam::Vec3;
