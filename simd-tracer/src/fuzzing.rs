@@ -11,10 +11,10 @@
 
 use crate::accel::{Bvh, Hit, WideStack};
 use crate::packet::{Ray, RayPacket};
-use crate::simd::LANES;
 use crate::scene::camera::Camera;
 use crate::scene::obj::{ObjSource, load_obj};
 use crate::scene::{SceneBuilder, SceneError};
+use crate::simd::LANES;
 use glam::Vec3;
 use spectral_core::SpectralRange;
 

@@ -6,13 +6,13 @@
 
 use glam::Vec3;
 use simd_tracer::film::filter::Filter;
+use simd_tracer::ids::MaterialId;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderResult, RenderSettings, render};
 use simd_tracer::scene::builtin::{SCENES, SceneOptions, builtin_scene};
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::shapes::{add_quad_uv, add_sphere};
 use simd_tracer::scene::{Scene, SceneBuilder};
-use simd_tracer::ids::MaterialId;
 use simd_tracer::shading::material::{Bsdf, Material};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior};

@@ -223,7 +223,7 @@ fn expected_bins(bsdf: &Bsdf, scene: &Scene, p: &ShadingPoint, wo: Vec3) -> Vec<
                 let wi = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
                 let d_omega =
                     2.0 / THETA_BINS as f64 * 2.0 * PI / PHI_BINS as f64 / (sub * sub) as f64;
-                *bin += f64::from(bsdf.eval(scene, p, wo, wi).pdf) * d_omega;
+                *bin += f64::from(bsdf.eval(&scene.material_tables(), p, wo, wi).pdf) * d_omega;
             }
         }
     }
@@ -253,7 +253,7 @@ fn sampling_matches_evaluation_chi_squared() -> TestResult {
             let mut weight_errors = 0;
             for _ in 0..draws {
                 let (ul, u, v) = (rng.f(), rng.f(), rng.f());
-                let Some(s) = bsdf.sample(&f.scene, &p, wo, ul, u, v) else {
+                let Some(s) = bsdf.sample(&f.scene.material_tables(), &p, wo, ul, u, v) else {
                     continue;
                 };
                 if s.pdf == 0.0 {
@@ -261,7 +261,7 @@ fn sampling_matches_evaluation_chi_squared() -> TestResult {
                 }
                 counts[bin_of(s.wi)] += 1;
                 // The weight is f cos/p of the same direction.
-                let e = bsdf.eval(&f.scene, &p, wo, s.wi);
+                let e = bsdf.eval(&f.scene.material_tables(), &p, wo, s.wi);
                 let from_eval =
                     f64::from(e.value) / f64::from(e.pdf) * spectral_value(&f.scene, &e.spectrum);
                 let from_sample = f64::from(s.weight) * spectral_value(&f.scene, &s.spectrum);
@@ -319,7 +319,7 @@ fn pdfs_integrate_to_at_most_one_and_energy_is_conserved() -> TestResult {
                 let mut albedo = 0.0;
                 for _ in 0..draws {
                     let (ul, u, v) = (rng.f(), rng.f(), rng.f());
-                    if let Some(s) = bsdf.sample(&f.scene, &p, wo, ul, u, v) {
+                    if let Some(s) = bsdf.sample(&f.scene.material_tables(), &p, wo, ul, u, v) {
                         let mut w = f64::from(s.weight) * spectral_value(&f.scene, &s.spectrum);
                         if s.wi.z < 0.0 {
                             let eta: f64 = if front { 1.5 } else { 1.0 / 1.5 };
@@ -355,7 +355,10 @@ fn reflection_lobes_are_reciprocal() -> TestResult {
         Vec3::new(-0.5, 0.4, 0.6).normalize(),
     );
     for (name, bsdf) in &f.bsdfs {
-        let (ab, ba) = (bsdf.eval(&f.scene, &p, a, b), bsdf.eval(&f.scene, &p, b, a));
+        let (ab, ba) = (
+            bsdf.eval(&f.scene.material_tables(), &p, a, b),
+            bsdf.eval(&f.scene.material_tables(), &p, b, a),
+        );
         // f(a→b) = f(b→a): value/cos of the incident side, spectral at 550 nm.
         let fab = f64::from(ab.value) / f64::from(b.z) * spectral_value(&f.scene, &ab.spectrum);
         let fba = f64::from(ba.value) / f64::from(a.z) * spectral_value(&f.scene, &ba.spectrum);
@@ -378,7 +381,14 @@ fn spectral_factors_equal_the_core_optics() -> TestResult {
         .find(|(n, _)| *n == "smooth gold")
         .ok_or("gold")?;
     let s = gold
-        .sample(&f.scene, &point(true), Vec3::Z, 0.5, 0.5, 0.5)
+        .sample(
+            &f.scene.material_tables(),
+            &point(true),
+            Vec3::Z,
+            0.5,
+            0.5,
+            0.5,
+        )
         .ok_or("sample")?;
     let Some(SpectralRef::Angular { id, cos, .. }) = s.spectrum.of else {
         return Err("angular".into());
@@ -394,7 +404,14 @@ fn spectral_factors_equal_the_core_optics() -> TestResult {
         .find(|(n, _)| *n == "film on glass")
         .ok_or("film")?;
     let s = film
-        .sample(&f.scene, &point(true), Vec3::Z, 0.0, 0.5, 0.5)
+        .sample(
+            &f.scene.material_tables(),
+            &point(true),
+            Vec3::Z,
+            0.0,
+            0.5,
+            0.5,
+        )
         .ok_or("film sample")?;
     let Some(SpectralRef::Angular { id, cos, .. }) = s.spectrum.of else {
         return Err("angular".into());

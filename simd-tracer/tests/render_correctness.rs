@@ -8,13 +8,13 @@ use glam::Vec3;
 use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::{GroupState, IntegratorSettings, RayCounts, trace, trace_group};
 use simd_tracer::packet::{Ray, RayPacket};
-use simd_tracer::simd::{LANES, LaneMask};
 use simd_tracer::render::{RenderResult, RenderSettings, render};
 use simd_tracer::sampling::rng::{Purpose, Rng, RngPacket};
 use simd_tracer::scene::builtin::{SceneOptions, builtin_scene};
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::shading::material::Material;
+use simd_tracer::simd::{LANES, LaneMask};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::transport::{
     AlphaMode, Buffer, ControlVariateTransport, FourierTransport, SampledTransport, Transport,

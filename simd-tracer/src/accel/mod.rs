@@ -173,7 +173,6 @@ mod wide_tree;
 use wide_tree::WideBvh;
 pub use wide_tree::{WIDTH as WIDE_WIDTH, WideStack};
 
-
 /// Stack entries kept inline before spilling to the heap.
 const INLINE_STACK: usize = 64;
 

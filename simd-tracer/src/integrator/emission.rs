@@ -2,9 +2,9 @@
 //! with `Le` per path (the truncated product is bilinear).
 
 use super::EMISSION_SLOTS;
-use crate::simd::{LANES, LaneMask};
-use crate::scene::Scene;
 use crate::ids::SpectrumId;
+use crate::scene::Scene;
+use crate::simd::{LANES, LaneMask};
 use crate::transport::Transport;
 use wide::bytemuck::cast;
 use wide::{f32x8, u32x8};

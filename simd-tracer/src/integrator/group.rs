@@ -6,12 +6,12 @@ use super::compaction;
 use super::last_segment::{LAST_SEGMENT_EMITTERS, last_segment_hits};
 use super::path::{NeeSample, PathState};
 use super::{IntegratorSettings, RayCounts};
+use crate::ids::NO_ID;
 use crate::packet::PacketHit;
 use crate::packet::RayPacket;
-use crate::simd::{LANES, LaneMask};
 use crate::sampling::rng::RngPacket;
 use crate::scene::Scene;
-use crate::ids::NO_ID;
+use crate::simd::{LANES, LaneMask};
 use crate::transport::Transport;
 use wide::f32x8;
 

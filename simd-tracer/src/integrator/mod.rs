@@ -34,7 +34,6 @@
 //! Russian roulette starts at `rr_depth` (Mitsuba's default 5) with
 //! survival probability `min(0.95, mean spectral throughput)`.
 
-
 mod emission;
 mod group;
 mod packet_shading;
@@ -94,14 +93,14 @@ mod tests {
     use super::last_segment::last_segment_hits;
     use super::packet_shading::{offset_x8, power_heuristic_x8};
     use super::*;
-    use crate::packet::{PacketHit, RayPacket};
-use crate::simd::{LANES, LaneMask};
-    use crate::ids::SpectrumId;
     use crate::ids::NO_ID;
-    use crate::simd::Vec3x8;
-    use wide::f32x8;
+    use crate::ids::SpectrumId;
+    use crate::packet::{PacketHit, RayPacket};
     use crate::sampling::rng::Rng;
+    use crate::simd::Vec3x8;
+    use crate::simd::{LANES, LaneMask};
     use glam::Vec3;
+    use wide::f32x8;
 
     /// The last segment's emitter-only query keeps exactly the emitter hits
     /// of the closest-hit query (bit for bit) and misses everywhere else,

@@ -3,15 +3,15 @@
 //! the transport.
 
 use super::RAY_EPSILON;
+use crate::ids::SpectrumId;
 use crate::packet::PacketHit;
-use crate::simd::{LANES, LaneMask};
 use crate::sampling::rng::RngPacket;
 use crate::scene::Scene;
-use crate::ids::SpectrumId;
 use crate::shading::material::{
     Bsdf, BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket, LaneSpectrum, ShadingPoint,
 };
 use crate::simd::Vec3x8;
+use crate::simd::{LANES, LaneMask};
 use crate::transport::Transport;
 use glam::Vec2;
 use wide::f32x8;
@@ -128,7 +128,7 @@ impl<'a> Shading<'a> {
                     value,
                     pdf,
                     spectrum,
-                } = Bsdf::eval_packet(scene, bsdfs, points, valid, n, wo, wi);
+                } = Bsdf::eval_packet(&scene.material_tables(), bsdfs, points, valid, n, wo, wi);
                 ShadingEval {
                     value,
                     pdf,
@@ -178,7 +178,17 @@ impl<'a> Shading<'a> {
                     spectrum,
                     valid,
                     terminate_secondary,
-                } = Bsdf::sample_packet(scene, bsdfs, points, active, n, wo, u_lobe, u, v);
+                } = Bsdf::sample_packet(
+                    &scene.material_tables(),
+                    bsdfs,
+                    points,
+                    active,
+                    n,
+                    wo,
+                    u_lobe,
+                    u,
+                    v,
+                );
                 ShadingSample {
                     wi,
                     pdf,

@@ -4,13 +4,13 @@
 use super::emission::EmissionSums;
 use super::packet_shading::{Shading, offset_x8, power_heuristic_x8, uniforms};
 use super::{IntegratorSettings, RR_MAX_SURVIVAL, SHADOW_EPSILON};
+use crate::ids::SpectrumId;
 use crate::packet::PacketHit;
 use crate::packet::RayPacket;
-use crate::simd::{LANES, LaneMask};
 use crate::sampling::rng::RngPacket;
 use crate::scene::Scene;
-use crate::ids::SpectrumId;
 use crate::simd::Vec3x8;
+use crate::simd::{LANES, LaneMask};
 use crate::transport::Transport;
 use wide::f32x8;
 

@@ -24,10 +24,10 @@
 use crate::film::filter::Filter;
 use crate::integrator::{GROUP, GroupState, IntegratorSettings, RayCounts, trace_group};
 use crate::packet::RayPacket;
-use crate::simd::{LANES, LaneMask};
 use crate::sampling::rng::{Purpose, Rng, RngPacket, SampleKey};
 use crate::scene::Scene;
 use crate::simd::Vec3x8;
+use crate::simd::{LANES, LaneMask};
 use crate::transport::Transport;
 use rayon::prelude::*;
 use spectral_core::color::Xyz;

@@ -8,11 +8,11 @@
 //! | `materials` | the paper's figure 4: diffuse, gold, copper, glass, coated plastic, a single-layer and a multi-layer thin film, on a textured floor |
 //! | `colorchecker` | the 24 ColorChecker patches lit directly by an illuminant (a constant environment, D65 by default, scaled to Y = 1) in front of a black backdrop |
 
+use crate::ids::{MaterialId, SpectrumId};
 use crate::scene::camera::Camera;
 use crate::scene::obj::{ObjError, ObjSource, load_obj};
 use crate::scene::shapes::{add_box, add_quad_uv, add_sphere};
 use crate::scene::{Scene, SceneBuilder, SceneError};
-use crate::ids::{MaterialId, SpectrumId};
 use crate::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
 use crate::spectra::SpectrumSource;
 use crate::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};

@@ -6,19 +6,18 @@
 //! material is two-sided. Degenerate triangles (zero area, non-finite) are
 //! dropped at build time and counted in [`Scene::skipped_triangles`].
 
-use crate::ids::{AngularId, MaterialId, SpectrumId, TextureId};
 use crate::accel::{Bvh, TriangleSubset};
+use crate::ids::NO_ID;
+use crate::ids::{AngularId, MaterialId, SpectrumId, TextureId};
 use crate::scene::camera::Camera;
 use crate::shading::light::{Light, LightSet};
-use crate::shading::material::Material;
-use crate::shading::surface::{PackedSurfaces, Surface};
-use crate::ids::NO_ID;
+use crate::shading::material::{Material, MaterialTables};
+use crate::shading::surface::{PackedSurfaces, Surface, triangle_area};
 use crate::spectra::angular::{AngularFunction, AngularSpectrum};
 use crate::spectra::texture::Texture;
 use crate::spectra::{SceneSpectrum, SpectrumRegisters, SpectrumSource};
 use glam::{Vec2, Vec3};
 use spectral_core::{SpectralError, SpectralRange};
-
 
 /// Why a scene could not be built.
 #[derive(Debug, Clone, PartialEq)]
@@ -117,6 +116,15 @@ fn emitters(bvh: &Bvh, surfaces: &[Surface]) -> TriangleSubset {
 }
 
 impl Scene {
+    /// The tables materials read (spectra, angular spectra, textures).
+    pub fn material_tables(&self) -> MaterialTables<'_> {
+        MaterialTables {
+            spectra: &self.spectra,
+            angular: &self.angular,
+            textures: &self.textures,
+        }
+    }
+
     /// Triangles dropped at build time as degenerate.
     pub fn skipped_triangles(&self) -> usize {
         self.skipped_triangles
@@ -129,7 +137,7 @@ impl Scene {
     /// against the records and the spectrum registers against
     /// [`Scene::spectra`].
     pub fn validate_surfaces(&self) -> Result<(), String> {
-        crate::shading::surface::validate(
+        validate_surface_records(
             &self.surfaces,
             &self.triangles,
             &self.normals,
@@ -218,9 +226,45 @@ impl Scene {
     }
 }
 
-/// Area of a triangle, `|(b − a) × (c − a)| / 2`.
-pub fn triangle_area([a, b, c]: &[Vec3; 3]) -> f32 {
-    0.5 * (*b - *a).cross(*c - *a).length()
+/// Checks a record table against its sources: one record per triangle,
+/// each equal to [`Surface::new`] of its triangle with the light set's
+/// selection probability.
+pub(crate) fn validate_surface_records(
+    surfaces: &[Surface],
+    triangles: &[[Vec3; 3]],
+    normals: &[Vec3],
+    triangle_material: &[MaterialId],
+    materials: &[Material],
+    lights: &LightSet,
+) -> Result<(), String> {
+    if surfaces.len() != normals.len() {
+        return Err(format!(
+            "{} surface records for {} triangles",
+            surfaces.len(),
+            normals.len()
+        ));
+    }
+    for (index, surface) in surfaces.iter().enumerate() {
+        let expected = match (
+            normals.get(index),
+            triangles.get(index),
+            triangle_material.get(index),
+        ) {
+            (Some(&normal), Some(vertices), Some(&id)) => {
+                materials.get(id as usize).map(|m| Surface {
+                    light_pmf: lights.pmf_of_triangle(index as u32),
+                    ..Surface::new(normal, triangle_area(vertices), id, m)
+                })
+            }
+            _ => None,
+        };
+        if expected.as_ref() != Some(surface) {
+            return Err(format!(
+                "surface record {index} does not match its triangle"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Bytes the BVH keeps per node: obvhs' `Bvh2Node` and its parent index.

@@ -7,8 +7,8 @@
 //! material gets the default grey. Degenerate faces are skipped by the scene
 //! builder and counted.
 
-use crate::scene::{SceneBuilder, SceneError};
 use crate::ids::MaterialId;
+use crate::scene::{SceneBuilder, SceneError};
 use crate::shading::material::Material;
 use crate::spectra::SpectrumSource;
 use glam::Vec3;

@@ -2,8 +2,8 @@
 //! UV spheres, with outward (counter-clockwise) winding and texture
 //! coordinates.
 
-use crate::scene::SceneBuilder;
 use crate::ids::MaterialId;
+use crate::scene::SceneBuilder;
 use glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 

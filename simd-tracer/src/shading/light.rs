@@ -12,9 +12,9 @@
 //! reads their records with one permute per field, instead of a search and
 //! a record copy per lane. Both paths give the scalar sample bit for bit.
 
-use crate::simd::{LANES, LaneMask};
-use crate::shading::surface::{Surface, SurfacePacket};
 use crate::ids::NO_ID;
+use crate::shading::surface::{Surface, SurfacePacket};
+use crate::simd::{LANES, LaneMask};
 use crate::simd::{Vec3x8, lookup_f32x8, lookup_u32x8};
 use crate::spectra::SceneSpectrum;
 use glam::Vec3;
@@ -352,28 +352,12 @@ pub struct LightSamplePacket {
     pub valid: LaneMask,
 }
 
-/// Solid-angle pdf of sampling `point` on a light of area `area` chosen with
-/// `pmf`, seen along a segment of squared length `distance_sq` that makes
-/// cosine `cos_light` with the light's normal (0 if the cosine is 0).
-pub fn light_pdf_solid_angle(pmf: f32, area: f32, distance_sq: f32, cos_light: f32) -> f32 {
-    let cos = cos_light.abs();
-    if cos <= 0.0 || area <= 0.0 {
-        return 0.0;
-    }
-    pmf * distance_sq / (area * cos)
-}
-
-/// Whether a light with this material emits towards a viewer on the side
-/// given by `cos_light = normal · (to viewer)`.
-pub fn emits_towards(two_sided: bool, cos_light: f32) -> bool {
-    cos_light > 0.0 || (two_sided && cos_light < 0.0)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampling::rng::Rng;
     use crate::shading::material::Material;
+    use crate::shading::surface::{emits_towards, light_pdf_solid_angle};
     use crate::spectra::SpectrumSource;
     use spectral_core::SpectralRange;
 

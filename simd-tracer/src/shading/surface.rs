@@ -16,18 +16,13 @@
 //! eight 32-bit words each: one 32-byte load per lane and one `8 × 8`
 //! transpose give the packet's eight fields.
 
-use crate::simd::{LANES, LaneMask};
-use crate::scene::triangle_area;
 use crate::ids::{MaterialId, NO_ID, SpectrumId};
-use crate::shading::light::LightSet;
-#[cfg(doc)]
-use crate::shading::light::{emits_towards, light_pdf_solid_angle};
 use crate::shading::material::{Albedo, Bsdf, Material};
 use crate::simd::Vec3x8;
+use crate::simd::{LANES, LaneMask};
 use glam::Vec3;
 use wide::bytemuck::cast;
 use wide::{f32x8, u32x8};
-
 
 /// What shading reads of one triangle.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -219,45 +214,26 @@ impl SurfacePacket {
     }
 }
 
-/// Checks a record table against its sources: one record per triangle,
-/// each equal to [`Surface::new`] of its triangle with the light set's
-/// selection probability.
-pub fn validate(
-    surfaces: &[Surface],
-    triangles: &[[Vec3; 3]],
-    normals: &[Vec3],
-    triangle_material: &[MaterialId],
-    materials: &[Material],
-    lights: &LightSet,
-) -> Result<(), String> {
-    if surfaces.len() != normals.len() {
-        return Err(format!(
-            "{} surface records for {} triangles",
-            surfaces.len(),
-            normals.len()
-        ));
+/// Area of a triangle, `|(b − a) × (c − a)| / 2`.
+pub fn triangle_area([a, b, c]: &[Vec3; 3]) -> f32 {
+    0.5 * (*b - *a).cross(*c - *a).length()
+}
+
+/// Solid-angle pdf of sampling `point` on a light of area `area` chosen with
+/// `pmf`, seen along a segment of squared length `distance_sq` that makes
+/// cosine `cos_light` with the light's normal (0 if the cosine is 0).
+pub fn light_pdf_solid_angle(pmf: f32, area: f32, distance_sq: f32, cos_light: f32) -> f32 {
+    let cos = cos_light.abs();
+    if cos <= 0.0 || area <= 0.0 {
+        return 0.0;
     }
-    for (index, surface) in surfaces.iter().enumerate() {
-        let expected = match (
-            normals.get(index),
-            triangles.get(index),
-            triangle_material.get(index),
-        ) {
-            (Some(&normal), Some(vertices), Some(&id)) => {
-                materials.get(id as usize).map(|m| Surface {
-                    light_pmf: lights.pmf_of_triangle(index as u32),
-                    ..Surface::new(normal, triangle_area(vertices), id, m)
-                })
-            }
-            _ => None,
-        };
-        if expected.as_ref() != Some(surface) {
-            return Err(format!(
-                "surface record {index} does not match its triangle"
-            ));
-        }
-    }
-    Ok(())
+    pmf * distance_sq / (area * cos)
+}
+
+/// Whether a light with this material emits towards a viewer on the side
+/// given by `cos_light = normal · (to viewer)`.
+pub fn emits_towards(two_sided: bool, cos_light: f32) -> bool {
+    cos_light > 0.0 || (two_sided && cos_light < 0.0)
 }
 
 #[cfg(test)]
@@ -266,7 +242,7 @@ mod tests {
     use crate::sampling::rng::Rng;
     use crate::scene::camera::Camera;
     use crate::scene::{Scene, SceneBuilder};
-    use crate::shading::light::{emits_towards, light_pdf_solid_angle};
+
     use crate::spectra::SpectrumSource;
     use spectral_core::SpectralRange;
 
@@ -348,7 +324,7 @@ mod tests {
 
         // Each kind of corruption is caught.
         let check = |surfaces: &[Surface]| {
-            validate(
+            crate::scene::validate_surface_records(
                 surfaces,
                 &scene.triangles,
                 &scene.normals,

@@ -4,10 +4,10 @@
 use super::fourier::{FourierTransport, gather_fourier};
 use super::sampled::{PacketWavelengths, SampledTransport, gather_sampled, sampled_lane};
 use super::{Buffer, Transport, all_finite};
-use crate::simd::LANES;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
 use crate::shading::material::LaneSpectrum;
+use crate::simd::LANES;
 use spectral_core::color::Xyz;
 use spectral_core::control_variate::{AlphaStatistics, ControlVariate};
 use spectral_core::sampling::{SampledSpectrum, WavelengthStrategy};

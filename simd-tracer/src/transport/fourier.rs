@@ -2,11 +2,11 @@
 //! product per bounce; the film keeps coefficient sums or XYZ per sample.
 
 use super::{Buffer, Transport, all_finite, id_spectra};
-use crate::simd::{LANES, LaneMask};
+use crate::ids::SpectrumId;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
-use crate::ids::SpectrumId;
 use crate::shading::material::{LaneSpectrum, SpectralRef};
+use crate::simd::{LANES, LaneMask};
 use crate::spectra::MAX_COEFFS;
 use spectral_core::color::Xyz;
 use spectral_core::xyz::{XyzConverter, XyzRoute};

@@ -18,11 +18,11 @@
 //!   the default: a single pixel's tens of samples give a noisy `α`) or per
 //!   pixel ([`AlphaMode::PerPixel`]).
 
-use crate::simd::{LANES, LaneMask};
+use crate::ids::SpectrumId;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
-use crate::ids::SpectrumId;
 use crate::shading::material::LaneSpectrum;
+use crate::simd::{LANES, LaneMask};
 use spectral_core::color::Xyz;
 use wide::f32x8;
 

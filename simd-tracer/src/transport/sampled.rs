@@ -3,10 +3,10 @@
 
 use super::fourier::reference_value;
 use super::{Transport, all_finite};
-use crate::simd::LANES;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
 use crate::shading::material::{LaneSpectrum, SpectralRef};
+use crate::simd::LANES;
 use crate::spectra::DensePoint;
 use spectral_core::SpectralRange;
 use spectral_core::color::Xyz;

@@ -14,10 +14,10 @@
 use super::Construction;
 use crate::error::CliError;
 use crate::scene_file::source::Spot;
-use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, REFERENCE_WAVELENGTH_NM};
-use simd_tracer::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
-use simd_tracer::scene::SceneError;
 use simd_tracer::ids::{MaterialId, SpectrumId, TextureId};
+use simd_tracer::scene::SceneError;
+use simd_tracer::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
+use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, REFERENCE_WAVELENGTH_NM};
 use spectral_core::table::{FilmQuantity, FilmSide};
 
 /// A material defined under a name.

@@ -14,9 +14,11 @@ use super::Construction;
 use crate::error::CliError;
 use crate::scene_file::source::Spot;
 use glam::{Vec2, Vec3};
-use simd_tracer::scene::obj::{ObjError, add_default_material, load_obj_file, load_options, mtl_material};
-use simd_tracer::scene::SceneBuilder;
 use simd_tracer::ids::MaterialId;
+use simd_tracer::scene::SceneBuilder;
+use simd_tracer::scene::obj::{
+    ObjError, add_default_material, load_obj_file, load_options, mtl_material,
+};
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 

@@ -10,8 +10,8 @@
 use super::Construction;
 use crate::error::CliError;
 use crate::scene_file::source::Spot;
-use simd_tracer::scene::SceneError;
 use simd_tracer::ids::SpectrumId;
+use simd_tracer::scene::SceneError;
 use simd_tracer::spectra::{SceneSpectrum, SpectrumSource};
 use spectral_core::registry::Builtin;
 use spectral_core::upsample::srgb_reflectance;

@@ -8,10 +8,10 @@ use crate::error::CliError;
 use crate::scene_file::construction::{ThinFilm, coated};
 use crate::scene_file::toml_reader::{Item, Table};
 use crate::texture_file::TextureUse;
-use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
-use simd_tracer::shading::material::{Albedo, Bsdf, Material};
 use simd_tracer::ids::MaterialId;
+use simd_tracer::shading::material::{Albedo, Bsdf, Material};
 use simd_tracer::spectra::SpectrumSource;
+use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
 use spectral_core::table::MAX_LAYERS;
 use toml::de::DeValue;
 

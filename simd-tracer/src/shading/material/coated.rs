@@ -1,10 +1,10 @@
 //! The coated material's two lobes: a dielectric coat (constant IOR,
 //! achromatic Fresnel) over a Lambertian base.
 
+use super::MaterialTables;
 use super::frame::{Frame, sample_cosine};
 use super::lane_spectrum::{LaneSpectrum, SpectralRef};
 use super::{Albedo, BsdfEval, BsdfSample};
-use crate::scene::Scene;
 use crate::shading::microfacet::{self, SMOOTH_ALPHA};
 use glam::{Vec2, Vec3};
 use spectral_core::optics::fresnel_dielectric;
@@ -21,7 +21,7 @@ pub(super) struct CoatLobes {
 
 impl CoatLobes {
     pub(super) fn new(
-        scene: &Scene,
+        tables: &MaterialTables<'_>,
         albedo: &Albedo,
         eta: f32,
         alpha: f32,
@@ -30,11 +30,11 @@ impl CoatLobes {
     ) -> Self {
         let base = albedo.at(uv);
         let mean_albedo = match base {
-            SpectralRef::Scene(id) => scene
+            SpectralRef::Scene(id) => tables
                 .spectra
                 .get(id as usize)
                 .map_or(0.5, |s| s.mean() as f32),
-            SpectralRef::Texture { texture, u, v } => scene
+            SpectralRef::Texture { texture, u, v } => tables
                 .textures
                 .get(texture as usize)
                 .map_or(0.5, |t| t.scalar_at(u, v)),

@@ -2,9 +2,9 @@
 //! interface's reflection or refraction, and the rough (GGX) interface's
 //! evaluation, shared by the dielectric and the film materials.
 
+use super::MaterialTables;
 use super::lane_spectrum::LaneSpectrum;
 use super::{BsdfEval, BsdfSample, angular_mean, angular_ref};
-use crate::scene::Scene;
 use crate::ids::AngularId;
 use crate::shading::microfacet::{self};
 use glam::Vec3;
@@ -12,17 +12,17 @@ use glam::Vec3;
 /// The probability of reflecting at a (film or bare) smooth interface:
 /// `c_0(R)` or `c_0(R)/(c_0(R) + c_0(T))` when a transmittance table is given.
 pub(super) fn reflect_probability(
-    scene: &Scene,
+    tables: &MaterialTables<'_>,
     r: AngularId,
     t: Option<AngularId>,
     cos: f32,
     thickness: f32,
 ) -> f32 {
-    let mean_r = angular_mean(scene, r, cos, thickness).clamp(0.0, 1.0);
+    let mean_r = angular_mean(tables, r, cos, thickness).clamp(0.0, 1.0);
     match t {
         None => mean_r,
         Some(t) => {
-            let mean_t = angular_mean(scene, t, cos, thickness).max(0.0);
+            let mean_t = angular_mean(tables, t, cos, thickness).max(0.0);
             if mean_r + mean_t > 0.0 {
                 mean_r / (mean_r + mean_t)
             } else {
@@ -39,7 +39,7 @@ pub(super) fn reflect_probability(
     reason = "one helper shared by dielectric and film"
 )]
 pub(super) fn sample_smooth_interface(
-    scene: &Scene,
+    tables: &MaterialTables<'_>,
     n: Vec3,
     wo: Vec3,
     cos_o: f32,
@@ -50,7 +50,7 @@ pub(super) fn sample_smooth_interface(
     dispersed: bool,
     thickness: f32,
 ) -> Option<BsdfSample> {
-    let p_reflect = reflect_probability(scene, r, t, cos_o, thickness);
+    let p_reflect = reflect_probability(tables, r, t, cos_o, thickness);
     let reflectance = angular_ref(r, cos_o, thickness);
     let refracted = if u_lobe < p_reflect {
         None
@@ -90,7 +90,7 @@ pub(super) fn sample_smooth_interface(
 /// Rough dielectric `f cos θ_i` and pdf (Walter et al. 2007, pbrt-v4's
 /// generalised half vector `m ∝ wo + η' wi`).
 pub(super) fn eval_rough_dielectric(
-    scene: &Scene,
+    tables: &MaterialTables<'_>,
     wo: Vec3,
     wi: Vec3,
     alpha: f32,
@@ -111,7 +111,7 @@ pub(super) fn eval_rough_dielectric(
     if cos_om <= 0.0 || cos_im * wi.z <= 0.0 {
         return BsdfEval::ZERO;
     }
-    let p_reflect = reflect_probability(scene, table, None, cos_om, 0.0);
+    let p_reflect = reflect_probability(tables, table, None, cos_om, 0.0);
     let fresnel = angular_ref(table, cos_om, 0.0);
     let d = microfacet::distribution(m, alpha);
     let g = microfacet::g2(wo, wi, alpha);

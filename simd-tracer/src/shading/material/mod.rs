@@ -15,9 +15,11 @@
 //! | Coated | a smooth or GGX dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic): specular `F(θo)` plus diffuse `ρ (1 − F_i)(1 − F_o)/(π η² (1 − F_dr,int))`, which conserves energy exactly for `ρ = 1` (the coat's Fresnel is achromatic, so it rides in the scalar part) |
 //! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
 
-use crate::scene::Scene;
 use crate::ids::{AngularId, SpectrumId, TextureId};
+use crate::spectra::SceneSpectrum;
+use crate::spectra::angular::AngularSpectrum;
 use crate::spectra::angular::{Ior, REFERENCE_WAVELENGTH_NM};
+use crate::spectra::texture::Texture;
 use glam::{Vec2, Vec3};
 use spectral_core::optics::fresnel_dielectric;
 
@@ -30,6 +32,19 @@ mod interface;
 mod packet;
 mod scalar;
 pub use packet::{BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket};
+/// What BSDFs read of a scene: the tables their ids index. Materials see
+/// only these, never the scene itself (its geometry, tree and lights are
+/// upstream of shading).
+#[derive(Debug, Clone, Copy)]
+pub struct MaterialTables<'a> {
+    /// Spectra, indexed by [`SpectrumId`].
+    pub spectra: &'a [SceneSpectrum],
+    /// Angle-dependent spectra, indexed by [`AngularId`].
+    pub angular: &'a [AngularSpectrum],
+    /// Textures, indexed by [`TextureId`].
+    pub textures: &'a [Texture],
+}
+
 /// A reflectance that is a spectrum or a texture.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Albedo {
@@ -241,8 +256,8 @@ pub fn diffuse_fresnel(eta: f64) -> f64 {
         .sum()
 }
 
-fn angular_mean(scene: &Scene, id: AngularId, cos: f32, thickness: f32) -> f32 {
-    scene
+fn angular_mean(tables: &MaterialTables<'_>, id: AngularId, cos: f32, thickness: f32) -> f32 {
+    tables
         .angular
         .get(id as usize)
         .map_or(0.0, |a| a.mean(cos, thickness))
@@ -263,9 +278,9 @@ fn direction_ior(ior: &Ior, hero_nm: Option<f32>) -> (f32, bool) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::simd::{LANES, LaneMask};
     use crate::sampling::rng::Rng;
     use crate::simd::Vec3x8;
+    use crate::simd::{LANES, LaneMask};
     use wide::f32x8;
 
     /// Each lane of the 8-wide cosine sampler is the scalar sampler's
@@ -362,9 +377,17 @@ mod tests {
             });
             let n = Vec3x8::from_lanes(&normals);
             let (wo8, wi8) = (Vec3x8::from_lanes(&wo), Vec3x8::from_lanes(&wi));
-            let eval = Bsdf::eval_packet(&scene, &bsdfs, &points, LaneMask::ALL, n, wo8, wi8);
+            let eval = Bsdf::eval_packet(
+                &scene.material_tables(),
+                &bsdfs,
+                &points,
+                LaneMask::ALL,
+                n,
+                wo8,
+                wi8,
+            );
             let sample = Bsdf::sample_packet(
-                &scene,
+                &scene.material_tables(),
                 &bsdfs,
                 &points,
                 LaneMask::ALL,
@@ -377,7 +400,7 @@ mod tests {
             let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0);
             for (lane, bsdf) in bsdfs.iter().enumerate() {
                 let Some(bsdf) = bsdf else { continue };
-                let e = bsdf.eval(&scene, &points[lane], wo[lane], wi[lane]);
+                let e = bsdf.eval(&scene.material_tables(), &points[lane], wo[lane], wi[lane]);
                 assert!(
                     close(eval.value.to_array()[lane], e.value),
                     "round {round} lane {lane}"
@@ -390,7 +413,7 @@ mod tests {
                     assert_eq!(eval.spectrum[lane], e.spectrum);
                 }
                 let s = bsdf.sample(
-                    &scene,
+                    &scene.material_tables(),
                     &points[lane],
                     wo[lane],
                     u_lobe[lane],

@@ -1,12 +1,12 @@
 //! The BSDFs for a packet of 8 lanes: all-Lambert packets 8-wide, others
 //! through the scalar forms lane by lane.
 
+use super::MaterialTables;
 use super::frame::sample_cosine_x8;
 use super::lane_spectrum::LaneSpectrum;
 use super::{Bsdf, ShadingPoint};
-use crate::simd::{LANES, LaneMask};
-use crate::scene::Scene;
 use crate::simd::Vec3x8;
+use crate::simd::{LANES, LaneMask};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 use wide::f32x8;
@@ -144,7 +144,7 @@ impl Bsdf {
     /// inactive lanes.
     #[allow(clippy::too_many_arguments, reason = "the packet twin of `sample`")]
     pub fn sample_packet(
-        scene: &Scene,
+        tables: &MaterialTables<'_>,
         bsdfs: &[Option<&Bsdf>; LANES],
         points: &[ShadingPoint; LANES],
         active: LaneMask,
@@ -167,7 +167,7 @@ impl Bsdf {
         for lane in active.iter() {
             let sample = bsdfs[lane].and_then(|b| {
                 b.sample(
-                    scene,
+                    tables,
                     &points[lane],
                     wol[lane],
                     u_lobe[lane],
@@ -199,7 +199,7 @@ impl Bsdf {
     /// Evaluates every active lane: 8-wide when all are Lambertian, else
     /// lane by lane through [`Bsdf::eval`].
     pub fn eval_packet(
-        scene: &Scene,
+        tables: &MaterialTables<'_>,
         bsdfs: &[Option<&Bsdf>; LANES],
         points: &[ShadingPoint; LANES],
         active: LaneMask,
@@ -216,7 +216,7 @@ impl Bsdf {
         let mut spectrum = [LaneSpectrum::ZERO; LANES];
         for lane in active.iter() {
             if let Some(b) = bsdfs[lane] {
-                let e = b.eval(scene, &points[lane], wol[lane], wil[lane]);
+                let e = b.eval(tables, &points[lane], wol[lane], wil[lane]);
                 if e.value.is_finite() && e.pdf.is_finite() {
                     value[lane] = e.value;
                     pdf[lane] = e.pdf;

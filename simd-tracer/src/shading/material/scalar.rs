@@ -1,12 +1,12 @@
 //! The BSDFs evaluated and sampled one lane at a time (the oracle of the
 //! packet forms).
 
+use super::MaterialTables;
 use super::coated::CoatLobes;
 use super::frame::{Frame, sample_cosine};
 use super::interface::{eval_rough_dielectric, reflect_probability, sample_smooth_interface};
 use super::lane_spectrum::LaneSpectrum;
 use super::{Bsdf, BsdfEval, BsdfSample, ShadingPoint, angular_ref, direction_ior};
-use crate::scene::Scene;
 use crate::shading::microfacet::{self, SMOOTH_ALPHA};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -15,7 +15,7 @@ impl Bsdf {
     /// Samples `wi` for `wo`; `u_lobe` picks the lobe, `(u, v)` the direction.
     pub fn sample(
         &self,
-        scene: &Scene,
+        tables: &MaterialTables<'_>,
         p: &ShadingPoint,
         wo: Vec3,
         u_lobe: f32,
@@ -80,7 +80,7 @@ impl Bsdf {
                 };
                 if *roughness < SMOOTH_ALPHA {
                     return sample_smooth_interface(
-                        scene, p.n, wo, wo_local.z, u_lobe, table, None, eta, dispersed, 0.0,
+                        tables, p.n, wo, wo_local.z, u_lobe, table, None, eta, dispersed, 0.0,
                     );
                 }
                 let alpha = *roughness;
@@ -89,7 +89,7 @@ impl Bsdf {
                 if cos_om <= 0.0 {
                     return None;
                 }
-                let p_reflect = reflect_probability(scene, table, None, cos_om, 0.0);
+                let p_reflect = reflect_probability(tables, table, None, cos_om, 0.0);
                 let fresnel = angular_ref(table, cos_om, 0.0);
                 let pdf_m = microfacet::visible_normal_pdf(wo_local, m, alpha);
                 if u_lobe < p_reflect {
@@ -130,7 +130,7 @@ impl Bsdf {
                 roughness,
                 fdr_inside,
             } => {
-                let coat = CoatLobes::new(scene, albedo, *ior, *roughness, *fdr_inside, p.uv);
+                let coat = CoatLobes::new(tables, albedo, *ior, *roughness, *fdr_inside, p.uv);
                 coat.sample(frame, wo_local, u_lobe, u, v)
             }
             Self::ThinFilm {
@@ -141,7 +141,7 @@ impl Bsdf {
                 thickness,
             } => {
                 let t = thickness
-                    .and_then(|id| scene.textures.get(id as usize))
+                    .and_then(|id| tables.textures.get(id as usize))
                     .map_or(0.0, |tex| tex.scalar_at(p.uv.x, p.uv.y));
                 let (r, tr, eta) = match (p.front, back) {
                     (false, Some((br, bt))) => (*br, Some(*bt), 1.0 / substrate_ior),
@@ -149,7 +149,7 @@ impl Bsdf {
                 };
                 match tr {
                     Some(_) => sample_smooth_interface(
-                        scene, p.n, wo, wo_local.z, u_lobe, r, tr, eta, false, t,
+                        tables, p.n, wo, wo_local.z, u_lobe, r, tr, eta, false, t,
                     ),
                     // Opaque base: everything not reflected is absorbed.
                     None => Some(BsdfSample {
@@ -165,7 +165,13 @@ impl Bsdf {
     }
 
     /// `f cos θ_i` and the sampling pdf for `wi`.
-    pub fn eval(&self, scene: &Scene, p: &ShadingPoint, wo: Vec3, wi: Vec3) -> BsdfEval {
+    pub fn eval(
+        &self,
+        tables: &MaterialTables<'_>,
+        p: &ShadingPoint,
+        wo: Vec3,
+        wi: Vec3,
+    ) -> BsdfEval {
         let frame = Frame::new(p.n);
         let (wo_local, wi_local) = (frame.to_local(wo), frame.to_local(wi));
         if wo_local.z <= 0.0 {
@@ -214,14 +220,14 @@ impl Bsdf {
                 } else {
                     (*inside, 1.0 / ior_value)
                 };
-                eval_rough_dielectric(scene, wo_local, wi_local, *roughness, table, eta)
+                eval_rough_dielectric(tables, wo_local, wi_local, *roughness, table, eta)
             }
             Self::Coated {
                 albedo,
                 ior,
                 roughness,
                 fdr_inside,
-            } => CoatLobes::new(scene, albedo, *ior, *roughness, *fdr_inside, p.uv)
+            } => CoatLobes::new(tables, albedo, *ior, *roughness, *fdr_inside, p.uv)
                 .eval(wo_local, wi_local),
             Self::ThinFilm { .. } => BsdfEval::ZERO,
         }
