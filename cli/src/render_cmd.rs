@@ -579,7 +579,7 @@ fn fourier<const N: usize>(
         BufferKind::Spectral => Buffer::Spectral,
         BufferKind::Rgb => Buffer::Xyz,
     };
-    let transport = FourierTransport::<N>::new(scene.range, buffer, route(args))
+    let transport = FourierTransport::<N>::new(scene.range(), buffer, route(args))
         .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
     run_render(&transport, scene, settings, args.quiet, preflight)
 }
@@ -591,7 +591,7 @@ fn sampled<const C: usize>(
     preflight: Preflight,
 ) -> Result<(RenderResult, MemoryPrediction), CliError> {
     run_render(
-        &SampledTransport::<C>::new(scene.range, strategy(args)),
+        &SampledTransport::<C>::new(scene.range(), strategy(args)),
         scene,
         settings,
         args.quiet,
@@ -610,7 +610,7 @@ fn cv<const C: usize, const N: usize>(
     } else {
         AlphaMode::Shared
     };
-    let transport = ControlVariateTransport::<C, N>::new(scene.range, strategy(args), alpha)
+    let transport = ControlVariateTransport::<C, N>::new(scene.range(), strategy(args), alpha)
         .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
     run_render(&transport, scene, settings, args.quiet, preflight)
 }
@@ -811,7 +811,7 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
             scene.skipped_triangles()
         );
     }
-    let wavelengths = spectral_wavelengths(&scene.range, args.spectral_step_nm);
+    let wavelengths = spectral_wavelengths(&scene.range(), args.spectral_step_nm);
     let scene_bytes = scene.memory_bytes() as u64;
     let limit_bytes = memory_limit_bytes();
     let preflight = |film_pixel_bytes: u64, transport_bytes: u64| {
@@ -847,12 +847,12 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
     }
     if let Some((n, coeffs)) = &result.coefficients {
         if let Some(path) = &args.coefficients_exr {
-            let range = (scene.range.min_nm(), scene.range.max_nm());
+            let range = (scene.range().min_nm(), scene.range().max_nm());
             write_coefficients_exr(path, result.width, result.height, *n, coeffs, range)?;
             written.push(path.clone());
         }
         if let Some(path) = &args.spectral_exr {
-            let radiance = spectral_planes(&scene.range, *n, coeffs, &wavelengths);
+            let radiance = spectral_planes(&scene.range(), *n, coeffs, &wavelengths);
             write_spectral_exr(
                 path,
                 result.width,

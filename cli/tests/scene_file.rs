@@ -111,7 +111,7 @@ fn small_settings() -> RenderSettings {
 
 /// Renders at 16 × 16, 2 spp with an 8-coefficient Fourier transport.
 fn render_small(scene: &Scene) -> TestResult<Vec<Xyz>> {
-    let transport = FourierTransport::<8>::new(scene.range, Buffer::Spectral, XyzRoute::Zeroth)?;
+    let transport = FourierTransport::<8>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
     Ok(render(&transport, scene, &small_settings(), &mut |_| true)?.xyz)
 }
 
@@ -190,9 +190,9 @@ fn bare_obj_is_framed_and_lit_by_a_white_environment() -> TestResult {
     let loaded = load_obj_scene(&path)?;
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
     let scene = assert_renders("bare OBJ", loaded)?;
-    let environment = scene.environment.ok_or("no environment")?;
+    let environment = scene.environment().ok_or("no environment")?;
     // D65 with luminance Y = 1.
-    let white = &scene.spectra[environment as usize];
+    let white = &scene.spectra()[environment as usize];
     let y_bar = Builtin::lookup("cie-y")?;
     let (mut num, mut den) = (0.0, 0.0);
     for l in 360..=830 {
@@ -212,9 +212,9 @@ fn bare_obj_is_framed_and_lit_by_a_white_environment() -> TestResult {
         "not D65-shaped"
     );
     // The camera is on +z looking at the centre, the quad fills the view.
-    let p = scene.camera.position();
+    let p = scene.camera().position();
     assert!(p.x.abs() < 1e-6 && p.y.abs() < 1e-6 && p.z > 1.0, "{p}");
-    assert!((scene.camera.fov_deg() - 40.0).abs() < 1e-6);
+    assert!((scene.camera().fov_deg() - 40.0).abs() < 1e-6);
     let image = render_small(&scene)?;
     let centre = image[8 * 16 + 8].to_array()[1];
     assert!(centre > 0.0, "centre pixel is black");
@@ -227,8 +227,8 @@ fn bare_obj_with_an_emitter_has_no_environment() -> TestResult {
     write(&dir, "quad.mtl", "newmtl grey\nKd 0.5 0.5 0.5\nKe 1 1 1\n")?;
     let path = write(&dir, "quad.obj", QUAD_OBJ)?;
     let scene = assert_renders("bare OBJ with light", load_obj_scene(&path)?)?;
-    assert!(scene.environment.is_none());
-    assert_eq!(scene.lights.len(), 2);
+    assert!(scene.environment().is_none());
+    assert_eq!(scene.lights().len(), 2);
     Ok(())
 }
 
@@ -278,10 +278,10 @@ fn csv_spectrum_and_png_texture_load() -> TestResult {
     let loaded = load_scene_file(&path)?;
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
     let scene = assert_renders("csv + png", loaded)?;
-    assert_eq!(scene.textures.len(), 1);
+    assert_eq!(scene.textures().len(), 1);
     // The scaled CSV: twice the tabulated values.
     let lamp = scene
-        .spectra
+        .spectra()
         .iter()
         .find(|s| (s.value(550.0) - 2.0).abs() < 1e-4)
         .ok_or("no spectrum with value 2 at 550 nm")?;
@@ -309,8 +309,8 @@ fn scale_multiplies_every_source() -> TestResult {
                 format!("{BASE}\n[environment]\nspectrum = {{ {source}, scale = {scale} }}\n");
             let path = write(&dir, "scene.toml", &text)?;
             let scene = load_scene_file(&path)?.builder.build()?;
-            let id = scene.environment.ok_or("no environment")?;
-            means.push(scene.spectra[id as usize].mean());
+            let id = scene.environment().ok_or("no environment")?;
+            means.push(scene.spectra()[id as usize].mean());
         }
         let ratio = means[1] / means[0];
         assert!((ratio - 2.5).abs() < 1e-3, "{source}: ratio {ratio}");
@@ -324,15 +324,15 @@ fn scale_multiplies_every_source() -> TestResult {
     let scene = load_scene_file(&write(&dir, "named.toml", &text)?)?
         .builder
         .build()?;
-    let env = scene.environment.ok_or("no environment")?;
-    assert!((scene.spectra[env as usize].mean() - 2.0).abs() < 1e-9);
+    let env = scene.environment().ok_or("no environment")?;
+    assert!((scene.spectra()[env as usize].mean() - 2.0).abs() < 1e-9);
     let w2 = scene
-        .materials
+        .materials()
         .iter()
         .find(|m| m.name == "w2")
         .ok_or("no w2")?;
     let emission = w2.emission.ok_or("no emission")?;
-    assert!((scene.spectra[emission as usize].mean() - 1.5).abs() < 1e-9);
+    assert!((scene.spectra()[emission as usize].mean() - 1.5).abs() < 1e-9);
     Ok(())
 }
 
@@ -345,7 +345,7 @@ fn texture_coordinates_of_obj_faces_are_kept() -> TestResult {
     let scene = load_scene_file(&write(&dir, "scene.toml", &text)?)?
         .builder
         .build()?;
-    let uvs = scene.uvs.iter().flatten().map(|t| t.x + t.y).sum::<f32>();
+    let uvs = scene.uvs().iter().flatten().map(|t| t.x + t.y).sum::<f32>();
     assert!(uvs > 0.0, "texture coordinates were dropped");
     Ok(())
 }

@@ -124,7 +124,7 @@ fn an_empty_image_is_an_error() -> TestResult {
     b.set_camera(camera()?);
     b.add_triangle(TRIANGLE, m);
     let scene = b.build()?;
-    let transport = FourierTransport::<4>::new(scene.range, Buffer::Spectral, XyzRoute::Zeroth)?;
+    let transport = FourierTransport::<4>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
     for (width, height, spp) in [(0, 4, 1), (4, 0, 1), (4, 4, 0)] {
         let settings = RenderSettings {
             width,

@@ -363,8 +363,8 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
     lamp.emission = Some(glow);
     let lamp = b.add_material(lamp);
     let scene_template = simd_tracer::scene::builtin::cornell_box(range)?;
-    for (i, tri) in scene_template.triangles.iter().enumerate() {
-        let is_light = scene_template.materials[scene_template.triangle_material[i] as usize]
+    for (i, tri) in scene_template.triangles().iter().enumerate() {
+        let is_light = scene_template.materials()[scene_template.triangle_material()[i] as usize]
             .emission
             .is_some();
         let m = if is_light {
@@ -376,7 +376,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
         };
         b.add_triangle(*tri, m);
     }
-    b.set_camera(scene_template.camera);
+    b.set_camera(*scene_template.camera());
     let scene = b.build()?;
     let fourier = FourierTransport::<8>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?;
     let sampled = SampledTransport::<4>::new(range, WavelengthStrategy::Uniform);
@@ -391,9 +391,9 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
                 let x = (packet_index * 8 + lane as u64) % 32;
                 let y = (packet_index * 8 + lane as u64) / 32;
                 Ray {
-                    origin: scene.camera.position(),
+                    origin: scene.camera().position(),
                     direction: scene
-                        .camera
+                        .camera()
                         .direction(x as f32 + 0.5, y as f32 + 0.5, 32, 16),
                     t_max: f32::INFINITY,
                 }
@@ -564,8 +564,8 @@ fn group_matches_single<T: Transport>(
         let camera: [RayPacket; 4] = core::array::from_fn(|_| {
             let rays: Vec<Ray> = (0..LANES)
                 .map(|_| Ray {
-                    origin: scene.camera.position(),
-                    direction: scene.camera.direction(
+                    origin: scene.camera().position(),
+                    direction: scene.camera().direction(
                         rng.next_f32() * width as f32,
                         rng.next_f32() * height as f32,
                         width,

@@ -185,7 +185,7 @@ fn fourier<const N: usize>(
     buffer: Buffer,
     settings: &RenderSettings,
 ) -> Result<RenderResult, CliError> {
-    let transport = FourierTransport::<N>::new(scene.range, buffer, route)
+    let transport = FourierTransport::<N>::new(scene.range(), buffer, route)
         .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
     run(&transport, scene, settings)
 }
@@ -196,7 +196,7 @@ fn sampled<const C: usize>(
     settings: &RenderSettings,
 ) -> Result<RenderResult, CliError> {
     run(
-        &SampledTransport::<C>::new(scene.range, strategy),
+        &SampledTransport::<C>::new(scene.range(), strategy),
         scene,
         settings,
     )

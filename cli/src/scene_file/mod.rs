@@ -252,8 +252,12 @@ pub fn fuzz_scene_toml(bytes: &[u8]) {
     }
     match loaded.builder.build() {
         Ok(scene) => {
-            assert!(scene.bvh.validate().is_ok(), "{:?}", scene.bvh.validate());
-            assert!(scene.normals.iter().all(|n| n.is_finite()));
+            assert!(
+                scene.bvh().validate().is_ok(),
+                "{:?}",
+                scene.bvh().validate()
+            );
+            assert!(scene.normals().iter().all(|n| n.is_finite()));
         }
         // A tree that fails its own validation is a bug, not bad input.
         Err(SceneError::Bvh(message)) => panic!("BVH validation failed: {message}"),

@@ -227,7 +227,7 @@ mod tests {
     fn compacted_queries_equal_per_packet_queries() {
         let scene =
             crate::scene::builtin::cornell_box(spectral_core::SpectralRange::VISIBLE).unwrap();
-        let bvh = &scene.bvh;
+        let bvh = &scene.bvh();
         let mut rng = Rng::new(3, 4);
         for _ in 0..300 {
             let group: [RayPacket; 4] = packets(&mut rng);

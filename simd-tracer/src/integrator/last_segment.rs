@@ -31,7 +31,9 @@ pub(super) fn last_segment_hits<const G: usize>(
     shadows: &mut [RayPacket; G],
 ) -> u64 {
     compaction::intersect(rays, hits, |packet| {
-        scene.bvh.intersect_packet_subset(packet, &scene.emitters)
+        scene
+            .bvh()
+            .intersect_packet_subset(packet, &scene.emitters())
     });
     let mut count = 0;
     for ((shadow, rays), hit) in shadows.iter_mut().zip(rays).zip(hits.iter()) {
@@ -42,7 +44,7 @@ pub(super) fn last_segment_hits<const G: usize>(
         };
         count += hit.hit.count() as u64;
     }
-    let blocked = compaction::occluded(shadows, |packet| scene.bvh.occluded_incoherent(packet));
+    let blocked = compaction::occluded(shadows, |packet| scene.bvh().occluded_incoherent(packet));
     for ((hit, rays), blocked) in hits.iter_mut().zip(rays).zip(blocked) {
         if !blocked.is_empty() {
             let missed = PacketHit::misses(rays);

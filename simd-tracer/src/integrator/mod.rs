@@ -136,10 +136,10 @@ mod tests {
             let mut shadows = rays;
             last_segment_hits(&scene, &rays, &mut last, &mut shadows);
             for (p, packet) in rays.iter().enumerate() {
-                let closest = scene.bvh.intersect_incoherent(packet);
+                let closest = scene.bvh().intersect_incoherent(packet);
                 for lane in 0..LANES {
                     let emissive = closest.hit.contains(lane)
-                        && scene.surfaces[closest.triangle[lane] as usize].emission != NO_ID;
+                        && scene.surfaces()[closest.triangle[lane] as usize].emission != NO_ID;
                     let lane_bits = |h: &PacketHit| {
                         (
                             h.hit.contains(lane),

@@ -77,9 +77,9 @@ impl<'a> Shading<'a> {
         let bsdfs: [Option<&Bsdf>; LANES] = core::array::from_fn(|lane| {
             if active.contains(lane) {
                 scene
-                    .triangle_material
+                    .triangle_material()
                     .get(hit.triangle[lane] as usize)
-                    .and_then(|&m| scene.materials.get(m as usize))
+                    .and_then(|&m| scene.materials().get(m as usize))
                     .map(|m| &m.bsdf)
             } else {
                 None
@@ -88,12 +88,13 @@ impl<'a> Shading<'a> {
         let (normal_lanes, front) = (normal.to_lanes(), front.to_bitmask());
         let (hit_u, hit_v) = (hit.u.to_array(), hit.v.to_array());
         let points = core::array::from_fn(|lane| {
-            let uv = scene
-                .uvs
-                .get(hit.triangle[lane] as usize)
-                .map_or(Vec2::ZERO, |[a, b, c]| {
-                    *a * (1.0 - hit_u[lane] - hit_v[lane]) + *b * hit_u[lane] + *c * hit_v[lane]
-                });
+            let uv =
+                scene
+                    .uvs()
+                    .get(hit.triangle[lane] as usize)
+                    .map_or(Vec2::ZERO, |[a, b, c]| {
+                        *a * (1.0 - hit_u[lane] - hit_v[lane]) + *b * hit_u[lane] + *c * hit_v[lane]
+                    });
             ShadingPoint {
                 n: normal_lanes[lane],
                 front: front & (1 << lane) != 0,

@@ -83,7 +83,7 @@ impl<S: Copy> PathState<S> {
         }
         // Escaped lanes see the environment (no NEE for it, so no MIS).
         let missed = self.active.and_not(hit.hit);
-        if let (Some(env), false) = (scene.environment, missed.is_empty()) {
+        if let (Some(env), false) = (scene.environment(), missed.is_empty()) {
             self.emitted.add(
                 transport,
                 scene,
@@ -147,7 +147,7 @@ impl<S: Copy> PathState<S> {
         // Next-event estimation: one light sample per lane, one shadow packet.
         let u_light = uniforms(rngs, active).to_array();
         let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
-        let light = scene.lights.sample_packet(active, &u_light, u, v);
+        let light = scene.lights().sample_packet(active, &u_light, u, v);
         let to_light = light.point - origin;
         let distance_sq = to_light.length_squared();
         let wi = to_light * (f32x8::ONE / distance_sq.sqrt());

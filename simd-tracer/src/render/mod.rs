@@ -166,7 +166,7 @@ fn camera_packet<P>(
         }
     }
     let (dx, dy) = settings.filter.sample_offset_x8(u, v);
-    let direction = scene.camera.direction_x8(
+    let direction = scene.camera().direction_x8(
         f32x8::new(pixel_x) + dx,
         f32x8::new(pixel_y) + dy,
         settings.width,
@@ -174,7 +174,7 @@ fn camera_packet<P>(
     );
     let live = active.to_simd();
     RayPacket {
-        origin: Vec3x8::splat(scene.camera.position()).to_array(),
+        origin: Vec3x8::splat(scene.camera().position()).to_array(),
         direction: Vec3x8::select(live, direction, Vec3x8::splat(glam::Vec3::Z)).to_array(),
         t_max: live.select(f32x8::splat(f32::INFINITY), f32x8::ZERO),
         active,

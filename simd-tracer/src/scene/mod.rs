@@ -68,36 +68,36 @@ impl std::error::Error for SceneError {}
 #[derive(Debug)]
 pub struct Scene {
     /// The spectral range of every spectrum and of the render.
-    pub range: SpectralRange,
+    range: SpectralRange,
     /// Prepared spectra.
-    pub spectra: Vec<SceneSpectrum>,
+    spectra: Vec<SceneSpectrum>,
     /// Angle-dependent spectra (Fresnel, films) with their Fourier tables.
-    pub angular: Vec<AngularSpectrum>,
+    angular: Vec<AngularSpectrum>,
     /// Textures.
-    pub textures: Vec<Texture>,
+    textures: Vec<Texture>,
     /// Materials.
-    pub materials: Vec<Material>,
+    materials: Vec<Material>,
     /// Triangle vertices (non-degenerate ones only).
-    pub triangles: Vec<[Vec3; 3]>,
+    triangles: Vec<[Vec3; 3]>,
     /// Unit geometric normal of each triangle (right-handed, CCW front).
-    pub normals: Vec<Vec3>,
+    normals: Vec<Vec3>,
     /// Material of each triangle.
-    pub triangle_material: Vec<MaterialId>,
+    triangle_material: Vec<MaterialId>,
     /// Texture coordinates of each triangle's vertices (zero if none).
-    pub uvs: Vec<[Vec2; 3]>,
+    uvs: Vec<[Vec2; 3]>,
     /// The camera.
-    pub camera: Camera,
+    camera: Camera,
     /// Radiance arriving from every direction that escapes the scene.
-    pub environment: Option<SpectrumId>,
+    environment: Option<SpectrumId>,
     /// The acceleration structure.
-    pub bvh: Bvh,
+    bvh: Bvh,
     /// Emissive triangles and their sampling distribution.
-    pub lights: LightSet,
+    lights: LightSet,
     /// One shading record per triangle (derived from the fields above).
-    pub surfaces: Vec<Surface>,
+    surfaces: Vec<Surface>,
     /// The emissive triangles in the BVH, for the last segment of a path
     /// (only an emitter hit counts there: [`crate::integrator`]).
-    pub emitters: TriangleSubset,
+    emitters: TriangleSubset,
     /// The first spectra's coefficients in registers (derived from
     /// [`Scene::spectra`]).
     spectrum_registers: SpectrumRegisters,
@@ -116,6 +116,81 @@ fn emitters(bvh: &Bvh, surfaces: &[Surface]) -> TriangleSubset {
 }
 
 impl Scene {
+    /// range
+    pub fn range(&self) -> SpectralRange {
+        self.range
+    }
+
+    /// spectra
+    pub fn spectra(&self) -> &[SceneSpectrum] {
+        &self.spectra
+    }
+
+    /// angular
+    pub fn angular(&self) -> &[AngularSpectrum] {
+        &self.angular
+    }
+
+    /// textures
+    pub fn textures(&self) -> &[Texture] {
+        &self.textures
+    }
+
+    /// materials
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// triangles
+    pub fn triangles(&self) -> &[[Vec3; 3]] {
+        &self.triangles
+    }
+
+    /// normals
+    pub fn normals(&self) -> &[Vec3] {
+        &self.normals
+    }
+
+    /// triangle_material
+    pub fn triangle_material(&self) -> &[MaterialId] {
+        &self.triangle_material
+    }
+
+    /// uvs
+    pub fn uvs(&self) -> &[[Vec2; 3]] {
+        &self.uvs
+    }
+
+    /// camera
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// environment
+    pub fn environment(&self) -> Option<SpectrumId> {
+        self.environment
+    }
+
+    /// bvh
+    pub fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    /// lights
+    pub fn lights(&self) -> &LightSet {
+        &self.lights
+    }
+
+    /// surfaces
+    pub fn surfaces(&self) -> &[Surface] {
+        &self.surfaces
+    }
+
+    /// emitters
+    pub fn emitters(&self) -> &TriangleSubset {
+        &self.emitters
+    }
+
     /// The tables materials read (spectra, angular spectra, textures).
     pub fn material_tables(&self) -> MaterialTables<'_> {
         MaterialTables {
@@ -502,3 +577,22 @@ pub mod builtin;
 pub mod camera;
 pub mod obj;
 pub mod shapes;
+
+#[cfg(test)]
+mod tests {
+    use super::builtin::cornell_box;
+    use spectral_core::SpectralRange;
+
+    #[test]
+    fn stale_derived_data_fails_validation() -> Result<(), Box<dyn std::error::Error>> {
+        let scene = cornell_box(SpectralRange::VISIBLE)?;
+        scene.validate_surfaces()?;
+        let mut stale = cornell_box(SpectralRange::VISIBLE)?;
+        stale.emitters = scene.bvh.subset(&[0, 1]);
+        assert!(stale.validate_surfaces().is_err());
+        let mut stale = cornell_box(SpectralRange::VISIBLE)?;
+        stale.surfaces.swap(0, 1);
+        assert!(stale.validate_surfaces().is_err());
+        Ok(())
+    }
+}

@@ -76,19 +76,19 @@ pub(super) fn with_reference_fourier<R>(
     match *reference {
         SpectralRef::Scene(id) => with(
             scene
-                .spectra
+                .spectra()
                 .get(id as usize)
                 .map_or(&[0.0; MAX_COEFFS], |s| s.coefficients_f32()),
         ),
         SpectralRef::Texture { texture, u, v } => with(
             &scene
-                .textures
+                .textures()
                 .get(texture as usize)
                 .map_or([0.0; MAX_COEFFS], |t| t.fourier_at(u, v)),
         ),
         SpectralRef::Angular { id, cos, thickness } => with(
             &scene
-                .angular
+                .angular()
                 .get(id as usize)
                 .map_or([0.0; MAX_COEFFS], |a| a.fourier(cos, thickness)),
         ),
@@ -99,15 +99,15 @@ pub(super) fn with_reference_fourier<R>(
 pub(super) fn reference_value(scene: &Scene, reference: &SpectralRef, lambda_nm: f32) -> f32 {
     match *reference {
         SpectralRef::Scene(id) => scene
-            .spectra
+            .spectra()
             .get(id as usize)
             .map_or(0.0, |s| s.value(lambda_nm)),
         SpectralRef::Texture { texture, u, v } => scene
-            .textures
+            .textures()
             .get(texture as usize)
             .map_or(0.0, |t| t.value_at(u, v, lambda_nm)),
         SpectralRef::Angular { id, cos, thickness } => scene
-            .angular
+            .angular()
             .get(id as usize)
             .map_or(0.0, |a| a.eval(cos, lambda_nm, thickness)),
     }

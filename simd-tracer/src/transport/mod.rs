@@ -234,7 +234,7 @@ mod tests {
         let Ok(scene) = crate::scene::builtin::cornell_box(SpectralRange::VISIBLE) else {
             panic!("Cornell box");
         };
-        let spectra = scene.spectra.len() as u32;
+        let spectra = scene.spectra().len() as u32;
         assert!(spectra >= 3);
         // A constant lane and a dangling reference (zeros).
         let lanes = mixed_lanes(spectra, |lane| {
@@ -273,7 +273,7 @@ mod tests {
         let Ok(scene) = crate::scene::builtin::cornell_box(SpectralRange::VISIBLE) else {
             panic!("Cornell box");
         };
-        let spectra = scene.spectra.len() as u32;
+        let spectra = scene.spectra().len() as u32;
         let Ok(narrow) = SpectralRange::new(380.0, 780.0) else {
             panic!("range");
         };
@@ -337,7 +337,7 @@ mod tests {
         else {
             panic!("transport");
         };
-        let spectra = scene.spectra.len() as u32;
+        let spectra = scene.spectra().len() as u32;
         let mut rng = Rng::new(5, 6);
         for round in 0..500 {
             let lanes = LaneMask((rng.next_u32() & 0xff) as u8);

@@ -83,7 +83,7 @@ pub(super) fn gather_sampled<const C: usize>(
         let (constant, scale) = (spectrum.constant, spectrum.scale);
         let on_grid = match &spectrum.of {
             Some(SpectralRef::Scene(id)) => scene
-                .spectra
+                .spectra()
                 .get(*id as usize)
                 .filter(|s| s.range() == &wavelengths.grid),
             _ => None,
