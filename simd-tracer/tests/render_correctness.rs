@@ -6,6 +6,7 @@
 
 use glam::Vec3;
 use simd_tracer::film::filter::Filter;
+use simd_tracer::integrator::PathContext;
 use simd_tracer::integrator::{GroupState, IntegratorSettings, RayCounts, trace, trace_group};
 use simd_tracer::packet::{Ray, RayPacket};
 use simd_tracer::render::{RenderResult, RenderSettings, render};
@@ -409,9 +410,11 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
         let mut rngs = RngPacket::new(seeds);
         let mut counts = Default::default();
         let f = trace(
-            &fourier,
-            &scene,
-            &integrator,
+            &PathContext {
+                transport: &fourier,
+                scene: &scene,
+                settings: &integrator,
+            },
             &packet,
             &mut rngs,
             &mut (),
@@ -420,9 +423,11 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
         let mut rngs = RngPacket::new(seeds);
         let mut w = sampled.sample_wavelengths(|lane| wavelength_rngs[lane]);
         let s = trace(
-            &sampled,
-            &scene,
-            &integrator,
+            &PathContext {
+                transport: &sampled,
+                scene: &scene,
+                settings: &integrator,
+            },
             &packet,
             &mut rngs,
             &mut w,
@@ -598,9 +603,11 @@ fn group_matches_single<T: Transport>(
         let (mut group_rngs, mut group_wavelengths) = (rngs(), wavelengths());
         let mut group_counts = Default::default();
         let together = trace_group(
-            transport,
-            scene,
-            &integrator,
+            &PathContext {
+                transport,
+                scene,
+                settings: &integrator,
+            },
             &mut state,
             &camera,
             &mut group_rngs,
@@ -611,9 +618,11 @@ fn group_matches_single<T: Transport>(
         let mut alone_counts: RayCounts = Default::default();
         for p in 0..4 {
             let alone = trace(
-                transport,
-                scene,
-                &integrator,
+                &PathContext {
+                    transport,
+                    scene,
+                    settings: &integrator,
+                },
                 &camera[p],
                 &mut alone_rngs[p],
                 &mut alone_wavelengths[p],

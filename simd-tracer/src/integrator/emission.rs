@@ -9,6 +9,18 @@ use crate::transport::Transport;
 use wide::bytemuck::cast;
 use wide::{f32x8, u32x8};
 
+/// One emission term per lane: the spectrum `through` which the emission
+/// reaches the camera (a throughput, or a throughput times a BSDF), the
+/// emission spectrum of each lane, the lanes that see it and their scalar
+/// weights (MIS, or 1).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Emitted<'a, S> {
+    pub(super) through: &'a S,
+    pub(super) emission: &'a [SpectrumId; LANES],
+    pub(super) lanes: LaneMask,
+    pub(super) weight: f32x8,
+}
+
 /// Deferred emission products. Every emitted contribution has the form
 /// `T ⊛ Le · w` with a per-lane scalar `w`; the truncated product is
 /// bilinear, so `Σ_k T_k ⊛ Le · w_k = (Σ_k w_k T_k) ⊛ Le`. Sums are kept per
@@ -37,21 +49,21 @@ impl<S: Copy> EmissionSums<S> {
         self.direct = transport.zero();
     }
 
-    /// Adds `value ⊛ Le(ids[lane]) · weight(lane)` for each lane of `lanes`.
-    #[allow(
-        clippy::too_many_arguments,
-        reason = "the spectra, the emissions and their weights"
-    )]
+    /// Adds `through ⊛ Le(emission[lane]) · weight(lane)` for each lane of
+    /// `lanes` ([`Emitted`]).
     pub(super) fn add<T: Transport<Spectra = S>>(
         &mut self,
         transport: &T,
         scene: &Scene,
         wavelengths: &T::Wavelengths,
-        value: &S,
-        ids: &[SpectrumId; LANES],
-        lanes: LaneMask,
-        weight: f32x8,
+        emitted: &Emitted<'_, S>,
     ) {
+        let Emitted {
+            through: value,
+            emission: ids,
+            lanes,
+            weight,
+        } = *emitted;
         let Some(first) = lanes.iter().next() else {
             return;
         };

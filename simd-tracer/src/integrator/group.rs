@@ -4,13 +4,12 @@
 
 use super::compaction;
 use super::last_segment::{LAST_SEGMENT_EMITTERS, last_segment_hits};
-use super::path::{NeeSample, PathState};
-use super::{IntegratorSettings, RayCounts};
+use super::path::{BounceLanes, NeeSample, PathState};
+use super::{PathContext, RayCounts};
 use crate::ids::NO_ID;
 use crate::packet::PacketHit;
 use crate::packet::RayPacket;
 use crate::sampling::rng::RngPacket;
-use crate::scene::Scene;
 use crate::simd::{LANES, LaneMask};
 use crate::transport::Transport;
 use wide::f32x8;
@@ -56,19 +55,15 @@ impl<S: Copy, const G: usize> GroupState<S, G> {
 /// the rays cast are added to `counts`. The same as a [`trace_group`] of
 /// one packet.
 pub fn trace<T: Transport>(
-    transport: &T,
-    scene: &Scene,
-    settings: &IntegratorSettings,
+    context: &PathContext<'_, T>,
     camera_rays: &RayPacket,
     rngs: &mut RngPacket,
     wavelengths: &mut T::Wavelengths,
     counts: &mut RayCounts,
 ) -> T::Spectra {
     let [radiance] = trace_group(
-        transport,
-        scene,
-        settings,
-        &mut GroupState::new(transport),
+        context,
+        &mut GroupState::new(context.transport),
         core::array::from_ref(camera_rays),
         core::array::from_mut(rngs),
         core::array::from_mut(wavelengths),
@@ -87,20 +82,19 @@ pub fn trace<T: Transport>(
 /// contribution is added once the group's shadow rays are answered, after
 /// the BSDF sample that its product shares). `state` is reset here; it
 /// carries nothing from one group to the next.
-#[allow(
-    clippy::too_many_arguments,
-    reason = "the group's inputs, its state and its outputs"
-)]
 pub fn trace_group<T: Transport, const G: usize>(
-    transport: &T,
-    scene: &Scene,
-    settings: &IntegratorSettings,
+    context: &PathContext<'_, T>,
     state: &mut GroupState<T::Spectra, G>,
     camera_rays: &[RayPacket; G],
     rngs: &mut [RngPacket; G],
     wavelengths: &mut [T::Wavelengths; G],
     counts: &mut RayCounts,
 ) -> [T::Spectra; G] {
+    let PathContext {
+        transport,
+        scene,
+        settings,
+    } = *context;
     let GroupState { paths, nee } = state;
     for (path, rays) in paths.iter_mut().zip(camera_rays) {
         path.reset(transport, rays.active);
@@ -131,16 +125,16 @@ pub fn trace_group<T: Transport, const G: usize>(
         }
         for p in 0..G {
             paths[p].bounce(
-                transport,
-                scene,
-                settings,
+                context,
                 depth,
-                &mut rays[p],
                 &hits[p],
-                &mut shadows[p],
-                &mut nee[p],
-                &mut rngs[p],
-                &mut wavelengths[p],
+                BounceLanes {
+                    rays: &mut rays[p],
+                    shadow: &mut shadows[p],
+                    nee: &mut nee[p],
+                    rngs: &mut rngs[p],
+                    wavelengths: &mut wavelengths[p],
+                },
             );
             counts.shadow += shadows[p].active.count() as u64;
         }

@@ -33,7 +33,7 @@ pub(super) fn last_segment_hits<const G: usize>(
     compaction::intersect(rays, hits, |packet| {
         scene
             .bvh()
-            .intersect_packet_subset(packet, &scene.emitters())
+            .intersect_packet_subset(packet, scene.emitters())
     });
     let mut count = 0;
     for ((shadow, rays), hit) in shadows.iter_mut().zip(rays).zip(hits.iter()) {

@@ -34,12 +34,26 @@
 //! Russian roulette starts at `rr_depth` (Mitsuba's default 5) with
 //! survival probability `min(0.95, mean spectral throughput)`.
 
+use crate::scene::Scene;
+
 mod emission;
 mod group;
 mod packet_shading;
 pub use group::{GROUP, GroupState, trace, trace_group};
 mod last_segment;
 mod path;
+
+/// What every step of a path reads and nothing changes: the transport, the
+/// scene and the integrator settings.
+#[derive(Debug, Clone, Copy)]
+pub struct PathContext<'a, T> {
+    /// How light is carried.
+    pub transport: &'a T,
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Depth limits.
+    pub settings: &'a IntegratorSettings,
+}
 
 /// Depth and roulette settings.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -89,7 +103,7 @@ impl RayCounts {
 
 #[cfg(test)]
 mod tests {
-    use super::emission::EmissionSums;
+    use super::emission::{EmissionSums, Emitted};
     use super::last_segment::last_segment_hits;
     use super::packet_shading::{offset_x8, power_heuristic_x8};
     use super::*;
@@ -214,10 +228,12 @@ mod tests {
                     &transport,
                     &scene,
                     &(),
-                    &value,
-                    &lane_ids,
-                    lanes,
-                    f32x8::new(weight),
+                    &Emitted {
+                        through: &value,
+                        emission: &lane_ids,
+                        lanes,
+                        weight: f32x8::new(weight),
+                    },
                 );
                 for lane in lanes.iter() {
                     let c = emissions[ids.iter().position(|&id| id == lane_ids[lane]).unwrap_or(0)];

@@ -8,7 +8,8 @@ use crate::packet::PacketHit;
 use crate::sampling::rng::RngPacket;
 use crate::scene::Scene;
 use crate::shading::material::{
-    Bsdf, BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket, LaneSpectrum, ShadingPoint,
+    Bsdf, BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket, LaneSpectrum, PacketSurfaces,
+    SampleUniforms, ShadingPoint,
 };
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
@@ -129,7 +130,17 @@ impl<'a> Shading<'a> {
                     value,
                     pdf,
                     spectrum,
-                } = Bsdf::eval_packet(&scene.material_tables(), bsdfs, points, valid, n, wo, wi);
+                } = Bsdf::eval_packet(
+                    &scene.material_tables(),
+                    &PacketSurfaces {
+                        bsdfs,
+                        points,
+                        n,
+                        wo,
+                    },
+                    valid,
+                    wi,
+                );
                 ShadingEval {
                     value,
                     pdf,
@@ -140,19 +151,13 @@ impl<'a> Shading<'a> {
     }
 
     /// [`Bsdf::sample_packet`] for the lanes in `active`.
-    #[allow(
-        clippy::too_many_arguments,
-        reason = "the shading twin of `Bsdf::sample_packet`"
-    )]
     pub(super) fn sample(
         &self,
         scene: &Scene,
         active: LaneMask,
         n: Vec3x8,
         wo: Vec3x8,
-        u_lobe: &[f32; LANES],
-        u: f32x8,
-        v: f32x8,
+        uniforms: &SampleUniforms<'_>,
     ) -> ShadingSample {
         match self {
             &Self::Lambert { albedo, lanes } => {
@@ -161,7 +166,7 @@ impl<'a> Shading<'a> {
                     pdf,
                     weight,
                     valid,
-                } = Bsdf::sample_lambert_directions(active, n, u, v);
+                } = Bsdf::sample_lambert_directions(active, n, uniforms.u, uniforms.v);
                 ShadingSample {
                     wi,
                     pdf,
@@ -181,14 +186,14 @@ impl<'a> Shading<'a> {
                     terminate_secondary,
                 } = Bsdf::sample_packet(
                     &scene.material_tables(),
-                    bsdfs,
-                    points,
+                    &PacketSurfaces {
+                        bsdfs,
+                        points,
+                        n,
+                        wo,
+                    },
                     active,
-                    n,
-                    wo,
-                    u_lobe,
-                    u,
-                    v,
+                    uniforms,
                 );
                 ShadingSample {
                     wi,

@@ -1,18 +1,30 @@
 //! One packet's paths between bounces: throughput, emission sums, the
 //! light sample and the bounce itself.
 
-use super::emission::EmissionSums;
+use super::emission::{EmissionSums, Emitted};
 use super::packet_shading::{Shading, offset_x8, power_heuristic_x8, uniforms};
-use super::{IntegratorSettings, RR_MAX_SURVIVAL, SHADOW_EPSILON};
+use super::{PathContext, RR_MAX_SURVIVAL, SHADOW_EPSILON};
 use crate::ids::SpectrumId;
 use crate::packet::PacketHit;
 use crate::packet::RayPacket;
 use crate::sampling::rng::RngPacket;
 use crate::scene::Scene;
+use crate::shading::material::SampleUniforms;
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
 use crate::transport::Transport;
 use wide::f32x8;
+
+/// One packet's share of its group's state in a bounce: its rays (made
+/// the next segment's), its shadow rays and light sample, its random
+/// streams and its wavelengths.
+pub(super) struct BounceLanes<'a, S, W> {
+    pub(super) rays: &'a mut RayPacket,
+    pub(super) shadow: &'a mut RayPacket,
+    pub(super) nee: &'a mut NeeSample<S>,
+    pub(super) rngs: &'a mut RngPacket,
+    pub(super) wavelengths: &'a mut W,
+}
 
 /// One packet's paths between bounces.
 pub(super) struct PathState<S> {
@@ -60,23 +72,25 @@ impl<S: Copy> PathState<S> {
     /// sample (its shadow rays to `shadow`, inactive where there is none,
     /// its contribution to `nee`), and the BSDF sample, throughput and
     /// Russian roulette that make the next `rays`.
-    #[allow(
-        clippy::too_many_arguments,
-        reason = "one packet's share of the group's state"
-    )]
     pub(super) fn bounce<T: Transport<Spectra = S>>(
         &mut self,
-        transport: &T,
-        scene: &Scene,
-        settings: &IntegratorSettings,
+        context: &PathContext<'_, T>,
         depth: u32,
-        rays: &mut RayPacket,
         hit: &PacketHit,
-        shadow: &mut RayPacket,
-        nee: &mut NeeSample<S>,
-        rngs: &mut RngPacket,
-        wavelengths: &mut T::Wavelengths,
+        lanes: BounceLanes<'_, S, T::Wavelengths>,
     ) {
+        let PathContext {
+            transport,
+            scene,
+            settings,
+        } = *context;
+        let BounceLanes {
+            rays,
+            shadow,
+            nee,
+            rngs,
+            wavelengths,
+        } = lanes;
         shadow.active = LaneMask::NONE;
         if self.active.is_empty() {
             return;
@@ -88,10 +102,12 @@ impl<S: Copy> PathState<S> {
                 transport,
                 scene,
                 wavelengths,
-                &self.throughput,
-                &[env; LANES],
-                missed,
-                f32x8::ONE,
+                &Emitted {
+                    through: &self.throughput,
+                    emission: &[env; LANES],
+                    lanes: missed,
+                    weight: f32x8::ONE,
+                },
             );
         }
         let mut active = self.active.and(hit.hit);
@@ -124,10 +140,12 @@ impl<S: Copy> PathState<S> {
                 transport,
                 scene,
                 wavelengths,
-                &self.throughput,
-                &surface.emission,
-                emits,
-                weight,
+                &Emitted {
+                    through: &self.throughput,
+                    emission: &surface.emission,
+                    lanes: emits,
+                    weight,
+                },
             );
         }
         if depth >= settings.max_depth {
@@ -175,7 +193,12 @@ impl<S: Copy> PathState<S> {
         // BSDF sampling for the continuation.
         let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
         let u_lobe = uniforms(rngs, active).to_array();
-        let sample = shading.sample(scene, active, normal, wo, &u_lobe, u, v);
+        let uniforms = SampleUniforms {
+            lobe: &u_lobe,
+            u,
+            v,
+        };
+        let sample = shading.sample(scene, active, normal, wo, &uniforms);
         active = active
             .and(sample.valid)
             .and(LaneMask::from_simd(sample.weight.simd_gt(f32x8::ZERO)));
@@ -242,10 +265,12 @@ impl<S: Copy> PathState<S> {
                 transport,
                 scene,
                 wavelengths,
-                &nee.through_bsdf,
-                &nee.light,
-                nee.lanes,
-                weight,
+                &Emitted {
+                    through: &nee.through_bsdf,
+                    emission: &nee.light,
+                    lanes: nee.lanes,
+                    weight,
+                },
             );
         }
     }

@@ -22,7 +22,9 @@
 //! [`RenderResult::rejected`].
 
 use crate::film::filter::Filter;
-use crate::integrator::{GROUP, GroupState, IntegratorSettings, RayCounts, trace_group};
+use crate::integrator::{
+    GROUP, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
+};
 use crate::packet::RayPacket;
 use crate::sampling::rng::{Purpose, Rng, RngPacket, SampleKey};
 use crate::scene::Scene;
@@ -261,10 +263,13 @@ fn render_tile<T: Transport>(
             let pixels = pixels(&lanes[g]);
             transport.sample_wavelengths(|lane| Rng::for_pixel(pixels[lane], wavelength_key))
         });
-        let radiance = trace_group(
+        let context = PathContext {
             transport,
             scene,
-            &settings.integrator,
+            settings: &settings.integrator,
+        };
+        let radiance = trace_group(
+            &context,
             state,
             &camera_rays,
             &mut path_rngs,

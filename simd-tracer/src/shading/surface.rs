@@ -323,11 +323,11 @@ mod tests {
         let check = |surfaces: &[Surface]| {
             crate::scene::validate_surface_records(
                 surfaces,
-                &scene.triangles(),
-                &scene.normals(),
-                &scene.triangle_material(),
-                &scene.materials(),
-                &scene.lights(),
+                scene.triangles(),
+                scene.normals(),
+                scene.triangle_material(),
+                scene.materials(),
+                scene.lights(),
             )
         };
         assert!(check(&s[..4]).is_err());

@@ -32,24 +32,36 @@ pub(super) fn reflect_probability(
     }
 }
 
-/// A smooth interface (bare dielectric: `t = None`, the transmittance is
-/// `1 − R`; film: `R` and `T` tables). Reflection or refraction by `u_lobe`.
-#[allow(
-    clippy::too_many_arguments,
-    reason = "one helper shared by dielectric and film"
-)]
+/// A smooth interface: its reflectance table `r`, its transmittance table
+/// `t` (a film's; `None` for a bare dielectric, whose transmittance is
+/// `1 − R`), the relative index `eta` across it, whether the refraction
+/// follows a dispersed hero wavelength, and the film thickness (0 for none).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct SmoothInterface {
+    pub(super) r: AngularId,
+    pub(super) t: Option<AngularId>,
+    pub(super) eta: f32,
+    pub(super) dispersed: bool,
+    pub(super) thickness: f32,
+}
+
+/// Reflection or refraction by `u_lobe` at a [`SmoothInterface`] with
+/// normal `n`, seen from `wo` (`cos_o = n · wo`).
 pub(super) fn sample_smooth_interface(
     tables: &MaterialTables<'_>,
     n: Vec3,
     wo: Vec3,
     cos_o: f32,
     u_lobe: f32,
-    r: AngularId,
-    t: Option<AngularId>,
-    eta: f32,
-    dispersed: bool,
-    thickness: f32,
+    interface: &SmoothInterface,
 ) -> Option<BsdfSample> {
+    let SmoothInterface {
+        r,
+        t,
+        eta,
+        dispersed,
+        thickness,
+    } = *interface;
     let p_reflect = reflect_probability(tables, r, t, cos_o, thickness);
     let reflectance = angular_ref(r, cos_o, thickness);
     let refracted = if u_lobe < p_reflect {

@@ -31,7 +31,9 @@ mod coated;
 mod interface;
 mod packet;
 mod scalar;
-pub use packet::{BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket};
+pub use packet::{
+    BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket, PacketSurfaces, SampleUniforms,
+};
 /// What BSDFs read of a scene: the tables their ids index. Materials see
 /// only these, never the scene itself (its geometry, tree and lights are
 /// upstream of shading).
@@ -377,26 +379,20 @@ mod tests {
             });
             let n = Vec3x8::from_lanes(&normals);
             let (wo8, wi8) = (Vec3x8::from_lanes(&wo), Vec3x8::from_lanes(&wi));
-            let eval = Bsdf::eval_packet(
-                &scene.material_tables(),
-                &bsdfs,
-                &points,
-                LaneMask::ALL,
+            let at = PacketSurfaces {
+                bsdfs: &bsdfs,
+                points: &points,
                 n,
-                wo8,
-                wi8,
-            );
-            let sample = Bsdf::sample_packet(
-                &scene.material_tables(),
-                &bsdfs,
-                &points,
-                LaneMask::ALL,
-                n,
-                wo8,
-                &u_lobe,
-                f32x8::new(u),
-                f32x8::new(v),
-            );
+                wo: wo8,
+            };
+            let eval = Bsdf::eval_packet(&scene.material_tables(), &at, LaneMask::ALL, wi8);
+            let uniforms = SampleUniforms {
+                lobe: &u_lobe,
+                u: f32x8::new(u),
+                v: f32x8::new(v),
+            };
+            let sample =
+                Bsdf::sample_packet(&scene.material_tables(), &at, LaneMask::ALL, &uniforms);
             let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0);
             for (lane, bsdf) in bsdfs.iter().enumerate() {
                 let Some(bsdf) = bsdf else { continue };

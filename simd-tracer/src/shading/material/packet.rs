@@ -11,6 +11,33 @@ use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 use wide::f32x8;
 
+/// Where a packet's BSDFs are evaluated or sampled: per lane its BSDF
+/// (`None` only in inactive lanes) and shading point, and the packet's
+/// shading normals and outgoing directions.
+#[derive(Debug, Clone, Copy)]
+pub struct PacketSurfaces<'a> {
+    /// The BSDF of each lane.
+    pub bsdfs: &'a [Option<&'a Bsdf>; LANES],
+    /// The shading point of each lane.
+    pub points: &'a [ShadingPoint; LANES],
+    /// Shading normals.
+    pub n: Vec3x8,
+    /// Outgoing directions (towards the viewer).
+    pub wo: Vec3x8,
+}
+
+/// The random numbers of a packet's BSDF samples: the lobe choice per lane
+/// and the two direction numbers.
+#[derive(Debug, Clone, Copy)]
+pub struct SampleUniforms<'a> {
+    /// Lobe choice, per lane.
+    pub lobe: &'a [f32; LANES],
+    /// First direction number.
+    pub u: f32x8,
+    /// Second direction number.
+    pub v: f32x8,
+}
+
 /// BSDF samples of a packet.
 #[derive(Debug, Clone, Copy)]
 pub struct BsdfSamplePacket {
@@ -142,18 +169,19 @@ impl Bsdf {
     /// Samples every active lane: 8-wide when all are Lambertian, else lane
     /// by lane through [`Bsdf::sample`]. `bsdfs[lane]` is `None` only for
     /// inactive lanes.
-    #[allow(clippy::too_many_arguments, reason = "the packet twin of `sample`")]
     pub fn sample_packet(
         tables: &MaterialTables<'_>,
-        bsdfs: &[Option<&Bsdf>; LANES],
-        points: &[ShadingPoint; LANES],
+        at: &PacketSurfaces<'_>,
         active: LaneMask,
-        n: Vec3x8,
-        wo: Vec3x8,
-        u_lobe: &[f32; LANES],
-        u: f32x8,
-        v: f32x8,
+        uniforms: &SampleUniforms<'_>,
     ) -> BsdfSamplePacket {
+        let PacketSurfaces {
+            bsdfs,
+            points,
+            n,
+            wo,
+        } = *at;
+        let SampleUniforms { lobe: u_lobe, u, v } = *uniforms;
         if let Some(spectrum) = all_lambert(bsdfs, points, active) {
             return Self::sample_lambert_packet(&spectrum, active, n, u, v);
         }
@@ -200,13 +228,16 @@ impl Bsdf {
     /// lane by lane through [`Bsdf::eval`].
     pub fn eval_packet(
         tables: &MaterialTables<'_>,
-        bsdfs: &[Option<&Bsdf>; LANES],
-        points: &[ShadingPoint; LANES],
+        at: &PacketSurfaces<'_>,
         active: LaneMask,
-        n: Vec3x8,
-        wo: Vec3x8,
         wi: Vec3x8,
     ) -> BsdfEvalPacket {
+        let PacketSurfaces {
+            bsdfs,
+            points,
+            n,
+            wo,
+        } = *at;
         if let Some(spectrum) = all_lambert(bsdfs, points, active) {
             return Self::eval_lambert_packet(&spectrum, n, wi);
         }

@@ -4,7 +4,9 @@
 use super::MaterialTables;
 use super::coated::CoatLobes;
 use super::frame::{Frame, sample_cosine};
-use super::interface::{eval_rough_dielectric, reflect_probability, sample_smooth_interface};
+use super::interface::{
+    SmoothInterface, eval_rough_dielectric, reflect_probability, sample_smooth_interface,
+};
 use super::lane_spectrum::LaneSpectrum;
 use super::{Bsdf, BsdfEval, BsdfSample, ShadingPoint, angular_ref, direction_ior};
 use crate::shading::microfacet::{self, SMOOTH_ALPHA};
@@ -79,8 +81,15 @@ impl Bsdf {
                     (*inside, 1.0 / ior_value)
                 };
                 if *roughness < SMOOTH_ALPHA {
+                    let interface = SmoothInterface {
+                        r: table,
+                        t: None,
+                        eta,
+                        dispersed,
+                        thickness: 0.0,
+                    };
                     return sample_smooth_interface(
-                        tables, p.n, wo, wo_local.z, u_lobe, table, None, eta, dispersed, 0.0,
+                        tables, p.n, wo, wo_local.z, u_lobe, &interface,
                     );
                 }
                 let alpha = *roughness;
@@ -148,9 +157,16 @@ impl Bsdf {
                     _ => (*front_reflectance, *front_transmittance, *substrate_ior),
                 };
                 match tr {
-                    Some(_) => sample_smooth_interface(
-                        tables, p.n, wo, wo_local.z, u_lobe, r, tr, eta, false, t,
-                    ),
+                    Some(_) => {
+                        let interface = SmoothInterface {
+                            r,
+                            t: tr,
+                            eta,
+                            dispersed: false,
+                            thickness: t,
+                        };
+                        sample_smooth_interface(tables, p.n, wo, wo_local.z, u_lobe, &interface)
+                    }
                     // Opaque base: everything not reflected is absorbed.
                     None => Some(BsdfSample {
                         wi: microfacet::reflect(wo, p.n),
