@@ -18,12 +18,13 @@ use crate::scene_source::{SceneDefaults, resolve_scene};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use simd_tracer::film::filter::Filter;
+use simd_tracer::film::{AlphaMode, Buffer};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{Progress, RenderResult, RenderSettings, render};
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::SceneOptions;
 use simd_tracer::transport::{
-    AlphaMode, Buffer, ControlVariateTransport, FourierTransport, SampledTransport, Transport,
+    ControlVariateTransport, FourierTransport, SampledTransport, Transport,
 };
 use spectral_core::SpectralRange;
 use spectral_core::color::Xyz;
@@ -543,7 +544,10 @@ fn run_render<T: Transport>(
     quiet: bool,
     preflight: Preflight,
 ) -> Result<(RenderResult, MemoryPrediction), CliError> {
-    let memory = preflight(size_of::<T::Pixel>() as u64, size_of::<T>() as u64)?;
+    let memory = preflight(
+        size_of::<simd_tracer::transport::FilmPixel<T>>() as u64,
+        size_of::<T>() as u64,
+    )?;
     let reporter = Reporter::new(settings.spp, quiet);
     let result = render(transport, scene, settings, &mut |p| reporter.update(p))
         .map_err(|e| CliError::input(e.to_string()));

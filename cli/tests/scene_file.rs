@@ -8,11 +8,12 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use fspec_cli::scene_file::{LoadedScene, RenderDefaults, load_obj_scene, load_scene_file};
+use simd_tracer::film::Buffer;
 use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderSettings, render};
 use simd_tracer::scene::Scene;
-use simd_tracer::transport::{Buffer, FourierTransport};
+use simd_tracer::transport::FourierTransport;
 use spectral_core::Spectrum;
 use spectral_core::color::Xyz;
 use spectral_core::registry::Builtin;

@@ -7,10 +7,11 @@
 //! printed once per configuration.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use simd_tracer::film::Buffer;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderSettings, render};
 use simd_tracer::scene::Scene;
-use simd_tracer::transport::{Buffer, FourierTransport, SampledTransport, Transport};
+use simd_tracer::transport::{FourierTransport, SampledTransport, Transport};
 use spectral_core::SpectralRange;
 use spectral_core::sampling::WavelengthStrategy;
 use spectral_core::xyz::XyzRoute;

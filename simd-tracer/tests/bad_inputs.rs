@@ -4,6 +4,7 @@
 //! the scene holds.
 
 use glam::Vec3;
+use simd_tracer::film::Buffer;
 use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderError, RenderSettings, render};
@@ -12,7 +13,7 @@ use simd_tracer::scene::{SceneBuilder, SceneError};
 use simd_tracer::shading::material::{Albedo, Bsdf, Material};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::texture::Texture;
-use simd_tracer::transport::{Buffer, FourierTransport};
+use simd_tracer::transport::FourierTransport;
 use spectral_core::SpectralRange;
 use spectral_core::xyz::XyzRoute;
 

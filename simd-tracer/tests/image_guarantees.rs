@@ -6,6 +6,7 @@
 
 use glam::Vec3;
 use simd_tracer::film::filter::Filter;
+use simd_tracer::film::{AlphaMode, Buffer};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderResult, RenderSettings, render};
 use simd_tracer::scene::builtin::{SCENES, SceneOptions, builtin_scene};
@@ -15,7 +16,7 @@ use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::shading::material::{Albedo, Bsdf, Material};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::transport::{
-    AlphaMode, Buffer, ControlVariateTransport, FourierTransport, SampledTransport, Transport,
+    ControlVariateTransport, FourierTransport, SampledTransport, Transport,
 };
 use spectral_core::SpectralRange;
 use spectral_core::color::Xyz;

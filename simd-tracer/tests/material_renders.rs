@@ -5,6 +5,7 @@
 //! agree on the materials scene.
 
 use glam::Vec3;
+use simd_tracer::film::Buffer;
 use simd_tracer::film::filter::Filter;
 use simd_tracer::ids::MaterialId;
 use simd_tracer::integrator::IntegratorSettings;
@@ -16,7 +17,7 @@ use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::shading::material::{Bsdf, Material};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior};
-use simd_tracer::transport::{Buffer, FourierTransport, SampledTransport, Transport};
+use simd_tracer::transport::{FourierTransport, SampledTransport, Transport};
 use spectral_core::color::Xyz;
 use spectral_core::complex::Complex;
 use spectral_core::delta_e::delta_e2000;

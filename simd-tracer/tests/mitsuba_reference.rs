@@ -36,11 +36,12 @@
 //! 10 % too bright (ratios 1.10, block ΔE up to 2.5) or red and green walls
 //! swapped (block ΔE up to 36) fail: the second test renders both.
 
+use simd_tracer::film::Buffer;
 use simd_tracer::render::{RenderSettings, render};
 use simd_tracer::scene::builtin::{CORNELL_MTL, CORNELL_OBJ, cornell_camera};
 use simd_tracer::scene::obj::{ObjSource, load_obj};
 use simd_tracer::scene::{Scene, SceneBuilder};
-use simd_tracer::transport::{Buffer, FourierTransport};
+use simd_tracer::transport::FourierTransport;
 use spectral_core::SpectralRange;
 use spectral_core::color::LinearSrgb;
 use spectral_core::delta_e::delta_e2000;

@@ -4,6 +4,7 @@
 //! error.
 
 use glam::Vec3;
+use simd_tracer::film::Buffer;
 use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderSettings, render};
@@ -14,7 +15,7 @@ use simd_tracer::scene::shapes::add_sphere;
 use simd_tracer::shading::material::{Bsdf, Material};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, AngularSpectrum, FilmLayer, Ior, Network};
-use simd_tracer::transport::{Buffer, FourierTransport};
+use simd_tracer::transport::FourierTransport;
 use spectral_core::complex::Complex;
 use spectral_core::optics::{Layer, multilayer};
 use spectral_core::table::{FilmQuantity, FilmSide};

@@ -6,6 +6,7 @@
 
 use glam::Vec3;
 use simd_tracer::film::filter::Filter;
+use simd_tracer::film::{AlphaMode, Buffer};
 use simd_tracer::integrator::PathContext;
 use simd_tracer::integrator::{GroupState, IntegratorSettings, RayCounts, trace, trace_group};
 use simd_tracer::packet::{Ray, RayPacket};
@@ -18,7 +19,7 @@ use simd_tracer::shading::material::Material;
 use simd_tracer::simd::{LANES, LaneMask};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::transport::{
-    AlphaMode, Buffer, ControlVariateTransport, FourierTransport, SampledTransport, Transport,
+    ControlVariateTransport, FourierTransport, SampledTransport, Transport,
 };
 use spectral_core::SpectralRange;
 use spectral_core::color::Xyz;

@@ -25,12 +25,13 @@
 //! delete the folder after changing the renderer.
 
 use crate::error::CliError;
+use simd_tracer::film::Buffer;
 use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderResult, RenderSettings, render};
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::{SceneOptions, builtin_scene};
-use simd_tracer::transport::{Buffer, FourierTransport, SampledTransport, Transport};
+use simd_tracer::transport::{FourierTransport, SampledTransport, Transport};
 use spectral_core::SpectralRange;
 use spectral_core::color::{Lab, LinearSrgb, Xyz, clamp_unit};
 use spectral_core::delta_e::{delta_e76, delta_e2000};

@@ -21,8 +21,8 @@
 use super::colorchecker::exact_xyz;
 use super::report::{Section, Table, fixed, write_text};
 use crate::error::CliError;
+use simd_tracer::film::{FourierPixel, XyzPixel};
 use simd_tracer::spectra::texture::Texture;
-use simd_tracer::transport::{FourierPixel, XyzPixel};
 use spectral_core::color::Xyz;
 use spectral_core::delta_e::delta_e2000;
 use spectral_core::registry::Builtin;

@@ -185,11 +185,12 @@ mod tests {
     /// directly); zero, negative and unused lanes included.
     #[test]
     fn emission_sums_equal_lane_by_lane_sums() -> Result<(), Box<dyn std::error::Error>> {
+        use crate::film::Buffer;
         use crate::scene::SceneBuilder;
         use crate::scene::camera::Camera;
         use crate::shading::material::Material;
         use crate::spectra::SpectrumSource;
-        use crate::transport::{Buffer, FourierTransport};
+        use crate::transport::FourierTransport;
         use spectral_core::SpectralRange;
         use spectral_core::xyz::XyzRoute;
 

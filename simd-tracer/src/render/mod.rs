@@ -21,6 +21,7 @@
 //! NaN or infinite values never reach the film: they are counted in
 //! [`RenderResult::rejected`].
 
+use crate::film::Film;
 use crate::film::filter::Filter;
 use crate::integrator::{
     GROUP, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
@@ -30,7 +31,7 @@ use crate::sampling::rng::{Purpose, Rng, RngPacket, SampleKey};
 use crate::scene::Scene;
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
-use crate::transport::Transport;
+use crate::transport::{FilmPixel, Transport};
 use rayon::prelude::*;
 use spectral_core::color::Xyz;
 use std::time::{Duration, Instant};
@@ -218,7 +219,7 @@ fn render_tile<T: Transport>(
     settings: &RenderSettings,
     pass: u32,
     state: &mut GroupState<T::Spectra, GROUP>,
-    tile: &mut Tile<T::Pixel>,
+    tile: &mut Tile<FilmPixel<T>>,
 ) {
     // The tile's packets in row-major order, traced GROUP at a time; the
     // last group is padded with packets without pixels.
@@ -283,7 +284,9 @@ fn render_tile<T: Transport>(
                 if let Some((lx, ly)) = *slot {
                     if finite.contains(lane) {
                         let index = (ly * tile.width + lx) as usize;
-                        transport.accumulate(&mut tile.pixels[index], &samples[lane]);
+                        transport
+                            .film()
+                            .accumulate(&mut tile.pixels[index], &samples[lane]);
                     } else {
                         tile.rejected += 1;
                     }
@@ -322,7 +325,7 @@ pub fn render<T: Transport>(
                 y0,
                 width,
                 height,
-                pixels: vec![transport.empty_pixel(); (width * height) as usize],
+                pixels: vec![transport.film().empty_pixel(); (width * height) as usize],
                 rejected: 0,
                 rays: RayCounts::default(),
             });
@@ -345,13 +348,14 @@ pub fn render<T: Transport>(
                 },
             );
         });
-        if transport.passes_interact() {
+        if transport.film().passes_interact() {
             debug_assert_eq!(end, first + 1);
-            let shared =
-                transport.pass_shared(&mut tiles.iter().flat_map(|tile| tile.pixels.iter()));
+            let shared = transport
+                .film()
+                .pass_shared(&mut tiles.iter().flat_map(|tile| tile.pixels.iter()));
             for tile in &mut tiles {
                 for pixel in &mut tile.pixels {
-                    transport.end_pass(pixel, &shared);
+                    transport.film().end_pass(pixel, &shared);
                 }
             }
         }
@@ -366,7 +370,7 @@ pub fn render<T: Transport>(
         if !keep_going || settings.time_limit.is_some_and(|limit| elapsed >= limit) {
             break;
         }
-        if !transport.passes_interact() {
+        if !transport.film().passes_interact() {
             batch = next_batch(batch, batch_start.elapsed(), settings, elapsed);
         }
     }
@@ -381,8 +385,8 @@ pub fn render<T: Transport>(
             for lx in 0..tile.width {
                 let pixel = &tile.pixels[(ly * tile.width + lx) as usize];
                 let index = ((tile.y0 + ly) * settings.width + tile.x0 + lx) as usize;
-                xyz[index] = transport.resolve(pixel);
-                if let Some(c) = transport.coefficients(pixel) {
+                xyz[index] = transport.film().resolve(pixel);
+                if let Some(c) = transport.film().coefficients(pixel) {
                     let (n, data) = planes.get_or_insert_with(|| {
                         (c.len(), vec![0.0; pixel_count as usize * c.len()])
                     });
@@ -432,7 +436,8 @@ mod tests {
 
     #[test]
     fn progress_reports_every_batch_up_to_the_requested_passes() -> Result<(), RenderError> {
-        use crate::transport::{Buffer, FourierTransport};
+        use crate::film::Buffer;
+        use crate::transport::FourierTransport;
         use spectral_core::xyz::XyzRoute;
         let range = spectral_core::SpectralRange::VISIBLE;
         let (Ok(scene), Ok(transport)) = (

@@ -1,15 +1,14 @@
 //! [`ControlVariateTransport<C, N>`]: sampled wavelengths with the path's
 //! Fourier spectrum as a control variate (paper §3).
 
+use super::Transport;
 use super::fourier::{FourierTransport, gather_fourier};
 use super::sampled::{PacketWavelengths, SampledTransport, gather_sampled, sampled_lane};
-use super::{Buffer, Transport, all_finite};
+use crate::film::{AlphaMode, Buffer, ControlVariateFilm, CvSample};
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
 use crate::shading::material::LaneSpectrum;
 use crate::simd::LANES;
-use spectral_core::color::Xyz;
-use spectral_core::control_variate::{AlphaStatistics, ControlVariate};
 use spectral_core::sampling::{SampledSpectrum, WavelengthStrategy};
 use spectral_core::xyz::XyzRoute;
 use spectral_core::{FourierSpectrum, Lane, SpectralError, SpectralRange};
@@ -17,22 +16,13 @@ use wide::f32x8;
 
 // ---------------------------------------------------------------- control variate
 
-/// Where the control-variate coefficient `α` comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AlphaMode {
-    /// Each pixel's own earlier passes (noisy with few samples per pixel).
-    PerPixel,
-    /// The earlier passes of all pixels pooled, one `α` per XYZ channel.
-    Shared,
-}
-
 /// Sampled wavelengths with the Fourier estimate as a control variate.
 #[derive(Debug, Clone)]
 pub struct ControlVariateTransport<const C: usize, const N: usize> {
     pub(super) fourier: FourierTransport<N>,
     pub(super) sampled: SampledTransport<C>,
     pub(super) range: SpectralRange,
-    pub(super) alpha: AlphaMode,
+    pub(super) film: ControlVariateFilm,
 }
 
 impl<const C: usize, const N: usize> ControlVariateTransport<C, N> {
@@ -46,41 +36,22 @@ impl<const C: usize, const N: usize> ControlVariateTransport<C, N> {
             fourier: FourierTransport::new(range, Buffer::Xyz, XyzRoute::Zeroth)?,
             sampled: SampledTransport::new(range, strategy),
             range,
-            alpha,
+            film: ControlVariateFilm { alpha },
         })
     }
-}
-
-/// One control-variate sample: `Y`, `C` and `μ` in XYZ.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CvSample {
-    /// Sampled estimate.
-    pub y: [f32; 3],
-    /// Fourier spectrum through the same estimator.
-    pub c: [f32; 3],
-    /// Exact XYZ of the Fourier spectrum.
-    pub mu: [f32; 3],
-}
-
-/// A control-variate pixel.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct CvPixel {
-    pub(super) channels: [ControlVariate; 3],
 }
 
 impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N> {
     type Wavelengths = PacketWavelengths<C>;
     type Spectra = (FourierSpectrum<f32x8, N>, [f32x8; C]);
-    type Sample = CvSample;
-    type Pixel = CvPixel;
-    type PassShared = Option<[f64; 3]>;
+    type Film = ControlVariateFilm;
 
     fn describe(&self) -> String {
         format!("control variate C={C} N={N} {:?}", self.sampled.strategy)
     }
 
-    fn empty_pixel(&self) -> Self::Pixel {
-        CvPixel::default()
+    fn film(&self) -> &ControlVariateFilm {
+        &self.film
     }
 
     fn sample_wavelengths(&self, stream: impl Fn(usize) -> Rng) -> Self::Wavelengths {
@@ -138,8 +109,8 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
         &self,
         radiance: &Self::Spectra,
         wavelengths: &Self::Wavelengths,
-    ) -> [Self::Sample; LANES] {
-        let mu = self.fourier.converter.zeroth(&radiance.0);
+    ) -> [CvSample; LANES] {
+        let mu = self.fourier.film.converter.zeroth(&radiance.0);
         core::array::from_fn(|lane| {
             let w = wavelengths.lane(lane);
             let y = sampled_lane(&radiance.1, lane).to_xyz(w);
@@ -154,54 +125,5 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
                 mu: core::array::from_fn(|r| mu[r].lane(lane) as f32),
             }
         })
-    }
-
-    fn sample_is_finite(sample: &Self::Sample) -> bool {
-        all_finite(&sample.y) && all_finite(&sample.c) && all_finite(&sample.mu)
-    }
-
-    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
-        for (r, channel) in pixel.channels.iter_mut().enumerate() {
-            channel.add(
-                f64::from(sample.y[r]),
-                f64::from(sample.c[r]),
-                f64::from(sample.mu[r]),
-            );
-        }
-    }
-
-    fn pass_shared<'a>(&self, pixels: &mut dyn Iterator<Item = &'a Self::Pixel>) -> Self::PassShared
-    where
-        Self::Pixel: 'a,
-    {
-        match self.alpha {
-            AlphaMode::PerPixel => None,
-            AlphaMode::Shared => {
-                let mut pooled = [AlphaStatistics::default(); 3];
-                for pixel in pixels {
-                    for (p, channel) in pooled.iter_mut().zip(&pixel.channels) {
-                        p.merge(channel.statistics());
-                    }
-                }
-                Some(pooled.map(|p| p.alpha()))
-            }
-        }
-    }
-
-    fn passes_interact(&self) -> bool {
-        true
-    }
-
-    fn end_pass(&self, pixel: &mut Self::Pixel, shared: &Self::PassShared) {
-        for (r, channel) in pixel.channels.iter_mut().enumerate() {
-            match shared {
-                Some(alpha) => channel.end_batch_with_alpha(alpha[r]),
-                None => channel.end_batch(),
-            }
-        }
-    }
-
-    fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
-        Xyz::from_array(core::array::from_fn(|r| pixel.channels[r].estimate()))
     }
 }

@@ -1,14 +1,14 @@
 //! [`FourierTransport<N>`]: `N` Fourier coefficients per lane, one truncated
 //! product per bounce; the film keeps coefficient sums or XYZ per sample.
 
-use super::{Buffer, Transport, all_finite, id_spectra};
+use super::{Transport, id_spectra};
+use crate::film::{Buffer, FourierFilm, FourierSample, all_finite};
 use crate::ids::SpectrumId;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
 use crate::shading::material::{LaneSpectrum, SpectralRef};
 use crate::simd::{LANES, LaneMask};
 use crate::spectra::MAX_COEFFS;
-use spectral_core::color::Xyz;
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, Lane, SpectralError, SpectralRange};
 use wide::bytemuck::cast;
@@ -19,9 +19,7 @@ use wide::{f32x8, u32x8};
 /// Light as `N` Fourier coefficients per ray lane.
 #[derive(Debug, Clone)]
 pub struct FourierTransport<const N: usize> {
-    pub(super) converter: Box<XyzConverter<N>>,
-    pub(super) buffer: Buffer,
-    pub(super) route: XyzRoute,
+    pub(super) film: FourierFilm<N>,
 }
 
 impl<const N: usize> FourierTransport<N> {
@@ -32,33 +30,14 @@ impl<const N: usize> FourierTransport<N> {
         route: XyzRoute,
     ) -> Result<Self, SpectralError> {
         Ok(Self {
-            converter: Box::new(XyzConverter::new(range)?),
-            buffer,
-            route,
+            film: FourierFilm::new(range, buffer, route)?,
         })
     }
 
     /// The XYZ converter (and its kernel).
     pub fn converter(&self) -> &XyzConverter<N> {
-        &self.converter
+        self.film.converter()
     }
-}
-
-/// A finished Fourier sample.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FourierSample<const N: usize> {
-    /// Coefficients (spectral buffer).
-    pub coeffs: [f32; N],
-    /// XYZ (XYZ buffer).
-    pub xyz: [f32; 3],
-}
-
-/// A Fourier pixel: coefficient sums, XYZ sums and the sample count.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FourierPixel<const N: usize> {
-    pub(super) coeffs: [f64; N],
-    pub(super) xyz: [f64; 3],
-    pub(super) count: f64,
 }
 
 /// Coefficient chunks of [`LANES`] each in a scene spectrum's
@@ -187,20 +166,14 @@ pub(super) fn gather_from_registers<const N: usize>(
 impl<const N: usize> Transport for FourierTransport<N> {
     type Wavelengths = ();
     type Spectra = FourierSpectrum<f32x8, N>;
-    type Sample = FourierSample<N>;
-    type Pixel = FourierPixel<N>;
-    type PassShared = ();
+    type Film = FourierFilm<N>;
 
     fn describe(&self) -> String {
         format!("fourier N={N}")
     }
 
-    fn empty_pixel(&self) -> Self::Pixel {
-        FourierPixel {
-            coeffs: [0.0; N],
-            xyz: [0.0; 3],
-            count: 0.0,
-        }
+    fn film(&self) -> &FourierFilm<N> {
+        &self.film
     }
 
     fn sample_wavelengths(&self, _stream: impl Fn(usize) -> Rng) {}
@@ -267,7 +240,7 @@ impl<const N: usize> Transport for FourierTransport<N> {
         a.mean()
     }
 
-    fn samples(&self, radiance: &Self::Spectra, _wavelengths: &()) -> [Self::Sample; LANES] {
+    fn samples(&self, radiance: &Self::Spectra, _wavelengths: &()) -> [FourierSample<N>; LANES] {
         // Coefficients-by-lanes to lanes-by-coefficients, one 8 × 8
         // transpose per chunk of 8 coefficients.
         let mut coeffs = [[0.0f32; N]; LANES];
@@ -281,17 +254,17 @@ impl<const N: usize> Transport for FourierTransport<N> {
                 }
             }
         }
-        let xyz: [[f32; 3]; LANES] = match (self.buffer, self.route) {
+        let xyz: [[f32; 3]; LANES] = match (self.film.buffer, self.film.route) {
             (Buffer::Spectral, _) => [[0.0; 3]; LANES],
             (Buffer::Xyz, XyzRoute::Mese) => core::array::from_fn(|lane| {
                 let c = radiance.lane(lane);
-                self.converter.mese(&c).map(|v| v as f32)
+                self.film.converter.mese(&c).map(|v| v as f32)
             }),
             (Buffer::Xyz, route) => {
                 let xyz = match route {
-                    XyzRoute::Series => self.converter.series(radiance),
-                    XyzRoute::Lut => self.converter.lut(radiance),
-                    _ => self.converter.zeroth(radiance),
+                    XyzRoute::Series => self.film.converter.series(radiance),
+                    XyzRoute::Lut => self.film.converter.lut(radiance),
+                    _ => self.film.converter.zeroth(radiance),
                 };
                 core::array::from_fn(|lane| core::array::from_fn(|r| xyz[r].lane(lane) as f32))
             }
@@ -302,76 +275,26 @@ impl<const N: usize> Transport for FourierTransport<N> {
         })
     }
 
-    fn sample_is_finite(sample: &Self::Sample) -> bool {
-        all_finite(&sample.coeffs) && all_finite(&sample.xyz)
-    }
-
     /// The coefficients checked 8 lanes at a time on the radiance (a
     /// sample's coefficients are its lane's, moved unchanged); the XYZ per
     /// lane only where the buffer holds XYZ (else it is 0).
-    fn finite_lanes(&self, radiance: &Self::Spectra, samples: &[Self::Sample; LANES]) -> LaneMask {
+    fn finite_lanes(
+        &self,
+        radiance: &Self::Spectra,
+        samples: &[FourierSample<N>; LANES],
+    ) -> LaneMask {
         let all = f32x8::ZERO.is_finite();
         let coeffs = radiance
             .coeffs
             .iter()
             .fold(all, |finite, c| finite & c.is_finite());
         let lanes = LaneMask::from_simd(coeffs);
-        match self.buffer {
+        match self.film.buffer {
             Buffer::Spectral => lanes,
             Buffer::Xyz => (0..LANES)
                 .filter(|&lane| all_finite(&samples[lane].xyz))
                 .fold(LaneMask::NONE, LaneMask::with)
                 .and(lanes),
-        }
-    }
-
-    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
-        match self.buffer {
-            Buffer::Spectral => {
-                for (acc, &c) in pixel.coeffs.iter_mut().zip(&sample.coeffs) {
-                    *acc += f64::from(c);
-                }
-            }
-            Buffer::Xyz => {
-                for (acc, &c) in pixel.xyz.iter_mut().zip(&sample.xyz) {
-                    *acc += f64::from(c);
-                }
-            }
-        }
-        pixel.count += 1.0;
-    }
-
-    fn pass_shared<'a>(
-        &self,
-        _pixels: &mut dyn Iterator<Item = &'a Self::Pixel>,
-    ) -> Self::PassShared
-    where
-        Self::Pixel: 'a,
-    {
-    }
-
-    fn end_pass(&self, _pixel: &mut Self::Pixel, _shared: &()) {}
-
-    fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
-        if pixel.count == 0.0 {
-            return Xyz::default();
-        }
-        match self.buffer {
-            Buffer::Spectral => {
-                let mean = FourierSpectrum::from_coeffs(pixel.coeffs.map(|c| c / pixel.count));
-                self.converter.convert(self.route, &mean)
-            }
-            Buffer::Xyz => Xyz::from_array(pixel.xyz.map(|v| v / pixel.count)),
-        }
-    }
-
-    fn coefficients(&self, pixel: &Self::Pixel) -> Option<Vec<f64>> {
-        match self.buffer {
-            Buffer::Spectral if pixel.count > 0.0 => {
-                Some(pixel.coeffs.iter().map(|c| c / pixel.count).collect())
-            }
-            Buffer::Spectral => Some(vec![0.0; N]),
-            Buffer::Xyz => None,
         }
     }
 }

@@ -18,46 +18,33 @@
 //!   the default: a single pixel's tens of samples give a noisy `α`) or per
 //!   pixel ([`AlphaMode::PerPixel`]).
 
+use crate::film::Film;
 use crate::ids::SpectrumId;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
 use crate::shading::material::LaneSpectrum;
 use crate::simd::{LANES, LaneMask};
-use spectral_core::color::Xyz;
 use wide::f32x8;
 
 mod fourier;
-pub use fourier::{FourierPixel, FourierSample, FourierTransport};
+pub use fourier::FourierTransport;
 mod sampled;
-pub use sampled::{PacketWavelengths, SampledTransport, XyzPixel};
+pub use sampled::{PacketWavelengths, SampledTransport};
 mod control_variate;
-pub use control_variate::{AlphaMode, ControlVariateTransport, CvPixel, CvSample};
-/// Where Fourier samples are converted to colour.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Buffer {
-    /// Per-pixel coefficient sums, converted once at the end.
-    Spectral,
-    /// Per-sample conversion to XYZ (the conversion cost is paid per sample).
-    Xyz,
-}
-
+pub use control_variate::ControlVariateTransport;
 /// A spectral representation of light paths (module docs).
 pub trait Transport: Sync {
     /// Per-packet wavelengths (unit for Fourier).
     type Wavelengths: Copy + Send;
     /// Packet-wide spectral values, 8 lanes.
     type Spectra: Copy;
-    /// One finished sample as the film consumes it.
-    type Sample: Copy;
-    /// Per-pixel accumulator.
-    type Pixel: Clone + Send + Sync;
-    /// What all pixels share when a pass ends (the pooled `α` of control variates).
-    type PassShared: Send + Sync;
+    /// Where the finished samples go.
+    type Film: Film;
 
     /// A short description, e.g. `fourier N=12`.
     fn describe(&self) -> String;
-    /// An empty pixel.
-    fn empty_pixel(&self) -> Self::Pixel;
+    /// The film this transport's samples go to.
+    fn film(&self) -> &Self::Film;
     /// Draws the wavelengths of a packet; `stream(lane)` makes a lane's
     /// wavelength random stream on demand (hashing its key costs about as
     /// much as the camera ray, so transports that draw no wavelengths,
@@ -104,42 +91,24 @@ pub trait Transport: Sync {
         &self,
         radiance: &Self::Spectra,
         wavelengths: &Self::Wavelengths,
-    ) -> [Self::Sample; LANES];
-    /// Whether a sample is free of NaN and infinity (else it is rejected).
-    fn sample_is_finite(sample: &Self::Sample) -> bool;
+    ) -> [FilmSample<Self>; LANES];
     /// The lanes whose samples (made from `radiance`) are free of NaN and
-    /// infinity: [`Transport::sample_is_finite`] lane by lane.
-    fn finite_lanes(&self, _radiance: &Self::Spectra, samples: &[Self::Sample; LANES]) -> LaneMask {
+    /// infinity: [`Film::sample_is_finite`] lane by lane.
+    fn finite_lanes(
+        &self,
+        _radiance: &Self::Spectra,
+        samples: &[FilmSample<Self>; LANES],
+    ) -> LaneMask {
         (0..LANES)
-            .filter(|&lane| Self::sample_is_finite(&samples[lane]))
+            .filter(|&lane| <Self::Film as Film>::sample_is_finite(&samples[lane]))
             .fold(LaneMask::NONE, LaneMask::with)
     }
-    /// Adds a sample to a pixel.
-    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample);
-    /// The shared state for ending the current pass, from every pixel
-    /// before any of them ends it.
-    fn pass_shared<'a>(
-        &self,
-        pixels: &mut dyn Iterator<Item = &'a Self::Pixel>,
-    ) -> Self::PassShared
-    where
-        Self::Pixel: 'a;
-    /// Ends a pass (a control-variate batch).
-    fn end_pass(&self, pixel: &mut Self::Pixel, shared: &Self::PassShared);
-    /// Whether ending a pass does anything ([`Transport::end_pass`] reads
-    /// state shared by all pixels). When it does not, the renderer may run
-    /// several passes per tile in a row (same image, fewer trips of the
-    /// film through the caches).
-    fn passes_interact(&self) -> bool {
-        false
-    }
-    /// The pixel's XYZ.
-    fn resolve(&self, pixel: &Self::Pixel) -> Xyz;
-    /// The pixel's mean Fourier coefficients, if the transport keeps them.
-    fn coefficients(&self, _pixel: &Self::Pixel) -> Option<Vec<f64>> {
-        None
-    }
 }
+
+/// The samples a transport's film consumes.
+pub type FilmSample<T> = <<T as Transport>::Film as Film>::Sample;
+/// The pixels of a transport's film.
+pub type FilmPixel<T> = <<T as Transport>::Film as Film>::Pixel;
 
 /// The lane spectra of [`Transport::gather_ids`]: scene spectrum
 /// `ids[lane]` in the lanes of `lanes`, zero elsewhere.
@@ -153,17 +122,13 @@ fn id_spectra(ids: &[SpectrumId; LANES], lanes: LaneMask) -> [LaneSpectrum; LANE
     })
 }
 
-/// Whether every value is finite (without early exit: the check is a
-/// branch-free pass over a few values).
-fn all_finite(values: &[f32]) -> bool {
-    values.iter().fold(true, |finite, v| finite & v.is_finite())
-}
 #[cfg(test)]
 mod tests {
     use super::fourier::{
         gather_fourier, gather_from_registers, reference_value, with_reference_fourier,
     };
     use super::*;
+    use crate::film::{Buffer, FourierFilm};
     use crate::shading::material::SpectralRef;
     use spectral_core::FourierSpectrum;
     use spectral_core::SpectralRange;
@@ -396,7 +361,7 @@ mod tests {
                 let radiance = FourierSpectrum::<f32x8, 12>::from_coeffs(coeffs.map(f32x8::new));
                 let samples = transport.samples(&radiance, &());
                 let per_lane = (0..LANES)
-                    .filter(|&lane| FourierTransport::<12>::sample_is_finite(&samples[lane]))
+                    .filter(|&lane| <FourierFilm<12> as Film>::sample_is_finite(&samples[lane]))
                     .fold(LaneMask::NONE, LaneMask::with);
                 assert_eq!(transport.finite_lanes(&radiance, &samples), per_lane);
             }
@@ -423,32 +388,17 @@ mod tests {
                     "N = {N}, lane {lane}, coefficient {j}"
                 );
             }
-            assert!(FourierTransport::<N>::sample_is_finite(sample));
+            assert!(<FourierFilm<N> as Film>::sample_is_finite(sample));
         }
         let mut broken = radiance;
         broken.coeffs[N - 1] = f32x8::new([0.0, f32::NAN, 0.0, f32::INFINITY, 0.0, 0.0, 0.0, 0.0]);
         let samples = transport.samples(&broken, &());
-        let finite = samples.map(|s| FourierTransport::<N>::sample_is_finite(&s));
+        let finite = samples.map(|s| <FourierFilm<N> as Film>::sample_is_finite(&s));
         assert_eq!(finite, [true, false, true, false, true, true, true, true]);
     }
 
     /// The check finds a NaN or an infinity at every position of every
     /// length.
-    #[test]
-    fn all_finite_finds_every_non_finite_value() {
-        for length in 0..=20 {
-            let values: Vec<f32> = (0..length).map(|i| i as f32 - 3.5).collect();
-            assert!(all_finite(&values), "{length}");
-            for position in 0..length {
-                for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
-                    let mut broken = values.clone();
-                    broken[position] = bad;
-                    assert!(!all_finite(&broken), "{length} {position} {bad}");
-                }
-            }
-        }
-    }
-
     #[test]
     fn fourier_samples_match_the_lanes() {
         check_samples::<4>();

@@ -1,15 +1,15 @@
 //! [`SampledTransport<C>`]: `C` wavelengths per path in structure-of-arrays
 //! form, element-wise products, each sample an XYZ estimate.
 
+use super::Transport;
 use super::fourier::reference_value;
-use super::{Transport, all_finite};
+use crate::film::XyzFilm;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
 use crate::shading::material::{LaneSpectrum, SpectralRef};
 use crate::simd::LANES;
 use crate::spectra::DensePoint;
 use spectral_core::SpectralRange;
-use spectral_core::color::Xyz;
 use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy};
 use wide::f32x8;
 
@@ -27,13 +27,6 @@ impl<const C: usize> SampledTransport<C> {
     pub fn new(range: SpectralRange, strategy: WavelengthStrategy) -> Self {
         Self { strategy, range }
     }
-}
-
-/// A sampled pixel: XYZ sums and the sample count.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct XyzPixel {
-    pub(super) xyz: [f64; 3],
-    pub(super) count: f64,
 }
 
 /// The wavelengths of a packet's paths in the sampled transports: each
@@ -114,16 +107,14 @@ pub(super) fn sampled_lane<const C: usize>(values: &[f32x8; C], lane: usize) -> 
 impl<const C: usize> Transport for SampledTransport<C> {
     type Wavelengths = PacketWavelengths<C>;
     type Spectra = [f32x8; C];
-    type Sample = [f32; 3];
-    type Pixel = XyzPixel;
-    type PassShared = ();
+    type Film = XyzFilm;
 
     fn describe(&self) -> String {
         format!("sampled C={C} {:?}", self.strategy)
     }
 
-    fn empty_pixel(&self) -> Self::Pixel {
-        XyzPixel::default()
+    fn film(&self) -> &XyzFilm {
+        &XyzFilm
     }
 
     fn sample_wavelengths(&self, stream: impl Fn(usize) -> Rng) -> Self::Wavelengths {
@@ -182,41 +173,12 @@ impl<const C: usize> Transport for SampledTransport<C> {
         &self,
         radiance: &Self::Spectra,
         wavelengths: &Self::Wavelengths,
-    ) -> [Self::Sample; LANES] {
+    ) -> [[f32; 3]; LANES] {
         core::array::from_fn(|lane| {
             sampled_lane(radiance, lane)
                 .to_xyz(wavelengths.lane(lane))
                 .to_array()
                 .map(|v| v as f32)
         })
-    }
-
-    fn sample_is_finite(sample: &Self::Sample) -> bool {
-        all_finite(sample)
-    }
-
-    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
-        for (acc, &v) in pixel.xyz.iter_mut().zip(sample) {
-            *acc += f64::from(v);
-        }
-        pixel.count += 1.0;
-    }
-
-    fn pass_shared<'a>(
-        &self,
-        _pixels: &mut dyn Iterator<Item = &'a Self::Pixel>,
-    ) -> Self::PassShared
-    where
-        Self::Pixel: 'a,
-    {
-    }
-
-    fn end_pass(&self, _pixel: &mut Self::Pixel, _shared: &()) {}
-
-    fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
-        if pixel.count == 0.0 {
-            return Xyz::default();
-        }
-        Xyz::from_array(pixel.xyz.map(|v| v / pixel.count))
     }
 }

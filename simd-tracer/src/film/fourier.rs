@@ -1,0 +1,120 @@
+//! [`FourierFilm<N>`]: per-pixel coefficient sums converted to XYZ once by
+//! the chosen route (spectral buffer), or XYZ converted per sample.
+
+use super::{Buffer, Film, all_finite};
+use spectral_core::color::Xyz;
+use spectral_core::xyz::{XyzConverter, XyzRoute};
+use spectral_core::{FourierSpectrum, SpectralError, SpectralRange};
+
+/// The film of the Fourier transport: its buffer, its route to XYZ and the
+/// converter (whose kernel the transport also uses for per-sample XYZ).
+#[derive(Debug, Clone)]
+pub struct FourierFilm<const N: usize> {
+    pub(crate) converter: Box<XyzConverter<N>>,
+    pub(crate) buffer: Buffer,
+    pub(crate) route: XyzRoute,
+}
+
+impl<const N: usize> FourierFilm<N> {
+    /// A film over `range` converting by `route` in `buffer`.
+    pub fn new(
+        range: SpectralRange,
+        buffer: Buffer,
+        route: XyzRoute,
+    ) -> Result<Self, SpectralError> {
+        Ok(Self {
+            converter: Box::new(XyzConverter::new(range)?),
+            buffer,
+            route,
+        })
+    }
+
+    /// The XYZ converter (and its kernel).
+    pub fn converter(&self) -> &XyzConverter<N> {
+        &self.converter
+    }
+
+    /// Where samples are converted to colour.
+    pub fn buffer(&self) -> Buffer {
+        self.buffer
+    }
+
+    /// How coefficients become XYZ.
+    pub fn route(&self) -> XyzRoute {
+        self.route
+    }
+}
+
+/// A finished Fourier sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FourierSample<const N: usize> {
+    /// Coefficients (spectral buffer).
+    pub coeffs: [f32; N],
+    /// XYZ (XYZ buffer).
+    pub xyz: [f32; 3],
+}
+
+/// A Fourier pixel: coefficient sums, XYZ sums and the sample count.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FourierPixel<const N: usize> {
+    pub(super) coeffs: [f64; N],
+    pub(super) xyz: [f64; 3],
+    pub(super) count: f64,
+}
+
+impl<const N: usize> Film for FourierFilm<N> {
+    type Sample = FourierSample<N>;
+    type Pixel = FourierPixel<N>;
+    type PassShared = ();
+
+    fn empty_pixel(&self) -> Self::Pixel {
+        FourierPixel {
+            coeffs: [0.0; N],
+            xyz: [0.0; 3],
+            count: 0.0,
+        }
+    }
+
+    fn sample_is_finite(sample: &Self::Sample) -> bool {
+        all_finite(&sample.coeffs) && all_finite(&sample.xyz)
+    }
+
+    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
+        match self.buffer {
+            Buffer::Spectral => {
+                for (acc, &c) in pixel.coeffs.iter_mut().zip(&sample.coeffs) {
+                    *acc += f64::from(c);
+                }
+            }
+            Buffer::Xyz => {
+                for (acc, &c) in pixel.xyz.iter_mut().zip(&sample.xyz) {
+                    *acc += f64::from(c);
+                }
+            }
+        }
+        pixel.count += 1.0;
+    }
+
+    fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
+        if pixel.count == 0.0 {
+            return Xyz::default();
+        }
+        match self.buffer {
+            Buffer::Spectral => {
+                let mean = FourierSpectrum::from_coeffs(pixel.coeffs.map(|c| c / pixel.count));
+                self.converter.convert(self.route, &mean)
+            }
+            Buffer::Xyz => Xyz::from_array(pixel.xyz.map(|v| v / pixel.count)),
+        }
+    }
+
+    fn coefficients(&self, pixel: &Self::Pixel) -> Option<Vec<f64>> {
+        match self.buffer {
+            Buffer::Spectral if pixel.count > 0.0 => {
+                Some(pixel.coeffs.iter().map(|c| c / pixel.count).collect())
+            }
+            Buffer::Spectral => Some(vec![0.0; N]),
+            Buffer::Xyz => None,
+        }
+    }
+}

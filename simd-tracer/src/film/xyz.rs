@@ -1,0 +1,44 @@
+//! [`XyzFilm`]: the sampled transports' per-sample XYZ estimates, averaged.
+
+use super::{Film, all_finite};
+use spectral_core::color::Xyz;
+
+/// The film of the sampled transports: each sample is already an XYZ
+/// estimate `(1/C) Σ L x̄/p / ∫ȳ`; a pixel is their mean.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct XyzFilm;
+
+/// A sampled pixel: XYZ sums and the sample count.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct XyzPixel {
+    pub(super) xyz: [f64; 3],
+    pub(super) count: f64,
+}
+
+impl Film for XyzFilm {
+    type Sample = [f32; 3];
+    type Pixel = XyzPixel;
+    type PassShared = ();
+
+    fn empty_pixel(&self) -> Self::Pixel {
+        XyzPixel::default()
+    }
+
+    fn sample_is_finite(sample: &Self::Sample) -> bool {
+        all_finite(sample)
+    }
+
+    fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
+        for (acc, &v) in pixel.xyz.iter_mut().zip(sample) {
+            *acc += f64::from(v);
+        }
+        pixel.count += 1.0;
+    }
+
+    fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
+        if pixel.count == 0.0 {
+            return Xyz::default();
+        }
+        Xyz::from_array(pixel.xyz.map(|v| v / pixel.count))
+    }
+}
