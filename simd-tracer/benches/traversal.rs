@@ -106,72 +106,13 @@ fn sphere_plane_scene() -> Vec<[Vec3; 3]> {
     tris
 }
 
-/// The Cornell box of `scenes/cornell` (Mitsuba 3's): 18 quads.
+/// The Cornell box of `scenes/cornell` (Mitsuba 3's) as the renderer loads
+/// it: 18 quads, 36 triangles.
 fn cornell_box() -> Vec<[Vec3; 3]> {
-    let q = |p: [[f32; 3]; 4]| {
-        let [a, b, c, d] = p.map(Vec3::from_array);
-        quad(a, b, c, d)
-    };
-    let short = [
-        [-0.04, 0.579],
-        [0.136, 0.005],
-        [0.71, 0.181],
-        [0.534, 0.755],
-    ];
-    let tall = [
-        [-0.521, 0.099],
-        [-0.709, -0.471],
-        [-0.139, -0.659],
-        [0.049, -0.089],
-    ];
-    let mut quads = vec![
-        q([
-            [-1.0, -1.0, 1.0],
-            [1.0, -1.0, 1.0],
-            [1.0, -1.0, -1.0],
-            [-1.0, -1.0, -1.0],
-        ]),
-        q([
-            [-1.0, 1.0, -1.0],
-            [1.0, 1.0, -1.0],
-            [1.0, 1.0, 1.0],
-            [-1.0, 1.0, 1.0],
-        ]),
-        q([
-            [-1.0, -1.0, -1.0],
-            [1.0, -1.0, -1.0],
-            [1.0, 1.0, -1.0],
-            [-1.0, 1.0, -1.0],
-        ]),
-        q([
-            [1.0, -1.0, -1.0],
-            [1.0, -1.0, 1.0],
-            [1.0, 1.0, 1.0],
-            [1.0, 1.0, -1.0],
-        ]),
-        q([
-            [-1.0, -1.0, 1.0],
-            [-1.0, -1.0, -1.0],
-            [-1.0, 1.0, -1.0],
-            [-1.0, 1.0, 1.0],
-        ]),
-        q([
-            [-0.23, 0.99, -0.18],
-            [0.23, 0.99, -0.18],
-            [0.23, 0.99, 0.2],
-            [-0.23, 0.99, 0.2],
-        ]),
-    ];
-    for (footprint, y0, y1) in [(short, -1.0, -0.4), (tall, -1.01, 0.21)] {
-        for k in 0..4 {
-            let ([ax, az], [bx, bz]) = (footprint[k], footprint[(k + 1) % 4]);
-            quads.push(q([[ax, y0, az], [bx, y0, bz], [bx, y1, bz], [ax, y1, az]]));
-        }
-        let cap = |y: f32| footprint.map(|[x, z]| [x, y, z]);
-        quads.push(q(cap(y0)));
-        quads.push(q(cap(y1)));
+    match simd_tracer::scene::builtin::cornell_box(spectral_core::SpectralRange::VISIBLE) {
+        Ok(scene) => scene.triangles().to_vec(),
+        Err(e) => panic!("the built-in Cornell box: {e}"),
     }
-    quads.into_iter().flatten().collect()
 }
 
 /// Pinhole camera rays (normalised directions), `size × size` pixels,

@@ -88,83 +88,13 @@ fn closed_box(min: Vec3, max: Vec3) -> Vec<[Vec3; 3]> {
     .collect()
 }
 
-/// The Cornell box of `scenes/cornell` (Mitsuba 3's), 18 quads inlined.
+/// The Cornell box of `scenes/cornell` (Mitsuba 3's) as the renderer loads
+/// it: 18 quads, 36 triangles.
 fn cornell_box() -> Vec<[Vec3; 3]> {
-    let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-    let q = |p: [[f32; 3]; 4]| {
-        let [a, b, c, d] = p.map(|[x, y, z]| v(x, y, z));
-        quad(a, b, c, d)
-    };
-    let (s0, s1, s2, s3) = (
-        [-0.039_603, 0.579_18],
-        [0.135_820_1, 0.005_397],
-        [0.709_603, 0.180_82],
-        [0.534_18, 0.754_603],
-    );
-    let (l0, l1, l2, l3) = (
-        [-0.520_960_6, 0.098_858_9],
-        [-0.708_858_9, -0.470_960_6],
-        [-0.139_039_4, -0.658_858_9],
-        [0.048_858_9, -0.089_039_4],
-    );
-    let side = |a: [f32; 2], b: [f32; 2], y0: f32, y1: f32| {
-        q([
-            [a[0], y0, a[1]],
-            [b[0], y0, b[1]],
-            [b[0], y1, b[1]],
-            [a[0], y1, a[1]],
-        ])
-    };
-    let cap = |p: [[f32; 2]; 4], y: f32| q(p.map(|[x, z]| [x, y, z]));
-    let mut quads = vec![
-        q([
-            [-1.0, -1.0, 1.0],
-            [1.0, -1.0, 1.0],
-            [1.0, -1.0, -1.0],
-            [-1.0, -1.0, -1.0],
-        ]),
-        q([
-            [-1.0, 1.0, -1.0],
-            [1.0, 1.0, -1.0],
-            [1.0, 1.0, 1.0],
-            [-1.0, 1.0, 1.0],
-        ]),
-        q([
-            [-1.0, -1.0, -1.0],
-            [1.0, -1.0, -1.0],
-            [1.0, 1.0, -1.0],
-            [-1.0, 1.0, -1.0],
-        ]),
-        q([
-            [1.0, -1.0, -1.0],
-            [1.0, -1.0, 1.0],
-            [1.0, 1.0, 1.0],
-            [1.0, 1.0, -1.0],
-        ]),
-        q([
-            [-1.0, -1.0, 1.0],
-            [-1.0, -1.0, -1.0],
-            [-1.0, 1.0, -1.0],
-            [-1.0, 1.0, 1.0],
-        ]),
-        q([
-            [-0.23, 0.99, -0.18],
-            [0.23, 0.99, -0.18],
-            [0.23, 0.99, 0.2],
-            [-0.23, 0.99, 0.2],
-        ]),
-    ];
-    for (a, b) in [(s0, s1), (s1, s2), (s2, s3), (s3, s0)] {
-        quads.push(side(a, b, -1.0, -0.4));
+    match simd_tracer::scene::builtin::cornell_box(spectral_core::SpectralRange::VISIBLE) {
+        Ok(scene) => scene.triangles().to_vec(),
+        Err(e) => panic!("the built-in Cornell box: {e}"),
     }
-    quads.push(cap([s1, s2, s3, s0], -1.0));
-    quads.push(cap([s0, s3, s2, s1], -0.4));
-    for (a, b) in [(l0, l1), (l1, l2), (l2, l3), (l3, l0)] {
-        quads.push(side(a, b, -1.01, 0.21));
-    }
-    quads.push(cap([l1, l2, l3, l0], -1.01));
-    quads.push(cap([l0, l3, l2, l1], 0.21));
-    quads.into_iter().flatten().collect()
 }
 
 struct Scene {
@@ -627,16 +557,18 @@ fn cornell_camera_rays_hit_the_expected_surfaces() {
         .unwrap();
     assert!(relative_close(hit.t, 1.0, 1e-6), "{hit:?}");
     assert!(hit.triangle == 4 || hit.triangle == 5, "{hit:?}");
-    // Straight ahead: the front of the tall box (quads 12..=15).
+    // Straight ahead: the tall box (quads 12..=17 of the OBJ; at y = 0 the
+    // ray can reach only its sides, its top is at y = 0.21).
     let hit = scene.bvh.intersect(&ray(Vec3::NEG_Z)).unwrap();
-    assert!((24..32).contains(&hit.triangle), "{hit:?}");
-    // Down onto the short box's top face (quad 11 = triangles 22, 23).
+    assert!((24..36).contains(&hit.triangle), "{hit:?}");
+    // Down onto the short box's top face (quad 9 of the OBJ, its vertices
+    // 37..=40 at y = -0.4: triangles 18, 19).
     let target = Vec3::new(0.335, -0.4, 0.38);
     let hit = scene
         .bvh
         .intersect(&ray(target - Vec3::new(0.0, 0.0, 3.9)))
         .unwrap();
-    assert!(hit.triangle == 22 || hit.triangle == 23, "{hit:?}");
+    assert!(hit.triangle == 18 || hit.triangle == 19, "{hit:?}");
     assert!(relative_close(hit.t, 1.0, 1e-5), "{hit:?}");
 }
 
