@@ -3,14 +3,16 @@
 //! An 8-wide packet path tracer built on `spectral-core`: a scene (triangle
 //! meshes, materials, lights, camera) in, a per-pixel image buffer out, with
 //! light carried as Fourier coefficients, sampled wavelengths, or both as
-//! control variates. See `ARCHITECTURE.md` for the data flow.
+//! control variates. See `ARCHITECTURE.md` for the layout (one module per
+//! stage) and the data flow.
 //!
 //! ```text
-//! Scene -> Bvh -> RayPacket (8 rays, f32x8) -> PacketHit
-//!   -> Surface records (normal, emission, light pdf, albedo; 8-wide)
-//!   -> BSDF eval/sample (8-wide for Lambert packets, else per lane)
-//!   -> Transport (FourierSpectrum<f32x8, N> products)
-//!   -> NEE + MIS -> Film (coefficients or XYZ per pixel) -> XYZ image
+//! scene::Scene -> render (tiles) -> packet::RayPacket (8 rays, f32x8)
+//!   -> integrator (groups of packets) -> accel::Bvh -> PacketHit
+//!   -> shading::surface records (normal, emission, light pdf, albedo; 8-wide)
+//!   -> shading::material BSDF eval/sample (8-wide for Lambert packets, else per lane)
+//!   -> transport (FourierSpectrum<f32x8, N> products)
+//!   -> NEE + MIS -> film (coefficients or XYZ per pixel) -> XYZ image
 //! ```
 
 pub mod accel;

@@ -1,7 +1,9 @@
 //! Every BSDF: sampling matches evaluation (χ² of sampled directions against
 //! the pdf, and per-sample weights against f cos/p), the pdf integrates to at
 //! most 1, reciprocity where it holds, energy ≤ 1 (= 1 for a lossless smooth
-//! dielectric), and the spectral factors against the core's optics.
+//! dielectric; for the rough dielectric, the albedo of an independent
+//! quadrature of the textbook single-scattering BSDF), and the spectral
+//! factors against the core's optics.
 
 use glam::{Vec2, Vec3};
 use simd_tracer::scene::camera::Camera;
@@ -13,7 +15,7 @@ use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior};
 use spectral_core::SpectralRange;
 use spectral_core::complex::Complex;
-use spectral_core::optics::{Layer, airy_film, fresnel_conductor};
+use spectral_core::optics::{Layer, airy_film, fresnel_conductor, fresnel_dielectric};
 use spectral_core::registry::Builtin;
 use spectral_core::table::{FilmQuantity, FilmSide};
 use std::f64::consts::PI;
@@ -425,5 +427,156 @@ fn spectral_factors_equal_the_core_optics() -> TestResult {
         let got = f64::from(f.scene.angular()[id as usize].eval(cos, lambda as f32, 0.0));
         assert!((got - airy).abs() < 1e-5, "{lambda}: {got} vs {airy}");
     }
+    Ok(())
+}
+
+/// GGX `D(m)` for `cos θm` (Walter et al. 2007, eq. 33).
+fn ggx_d(cos_m: f64, alpha: f64) -> f64 {
+    if cos_m <= 0.0 {
+        return 0.0;
+    }
+    let a2 = alpha * alpha;
+    let t = cos_m * cos_m * (a2 - 1.0) + 1.0;
+    a2 / (PI * t * t)
+}
+
+/// Smith `Λ` of GGX for a direction at `|cos θ|` (Heitz 2014, eq. 72).
+fn ggx_lambda(cos: f64, alpha: f64) -> f64 {
+    let tan2 = (1.0 - cos * cos).max(0.0) / (cos * cos);
+    0.5 * (-1.0 + (1.0 + alpha * alpha * tan2).sqrt())
+}
+
+/// The albedo `∫ f(wo, wi) |cos θi| dωi` of a single-scattering GGX
+/// dielectric interface (reflection, transmission), `wo = (sin θo, 0,
+/// cos θo)`, relative index `eta = η_wi side/η_wo side`, by a midpoint rule
+/// over `(cos θi, φi)` (φ ∈ [0, π], doubled by symmetry). The BSDF is the
+/// textbook one of Walter, Marschner, Li and Torrance, "Microfacet Models
+/// for Refraction through Rough Surfaces" (EGSR 2007), eqs. 20–21, with
+/// the half vectors of their eqs. 13 and 16 and the height-correlated
+/// `G = 1/(1 + Λ(wo) + Λ(wi))`:
+///
+/// * `f_r = F(wo·m) D G/(4 |cos θo| |cos θi|)`, `m ∝ wo + wi`;
+/// * `f_t = |wi·m| |wo·m| η² (1 − F(wo·m)) D G / (|cos θo| |cos θi|
+///   (wo·m + η wi·m)²)`, `m ∝ −(wo + η wi)` turned to the upper side:
+///   the flux form (no `1/η²` radiance scaling), whose integral is the
+///   fraction of the energy kept.
+///
+/// 1000 × 180 points: within 3·10⁻⁴ of a 8000 × 1440 grid at α = 0.3.
+fn rough_dielectric_albedo(cos_o: f64, alpha: f64, eta: f64) -> (f64, f64) {
+    let wo = [(1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let unit = |a: [f64; 3]| {
+        let l = dot(a, a).sqrt();
+        [a[0] / l, a[1] / l, a[2] / l]
+    };
+    let (steps_z, steps_phi) = (1000, 180);
+    let d_omega = 2.0 / f64::from(steps_z) * PI / f64::from(steps_phi) * 2.0;
+    let (mut reflected, mut transmitted) = (0.0, 0.0);
+    for i in 0..steps_z {
+        let z = -1.0 + 2.0 * (f64::from(i) + 0.5) / f64::from(steps_z);
+        let r = (1.0 - z * z).sqrt();
+        for j in 0..steps_phi {
+            let phi = PI * (f64::from(j) + 0.5) / f64::from(steps_phi);
+            let wi = [r * phi.cos(), r * phi.sin(), z];
+            let g = 1.0 / (1.0 + ggx_lambda(cos_o, alpha) + ggx_lambda(z.abs(), alpha));
+            if z > 0.0 {
+                let m = unit([wo[0] + wi[0], wo[1] + wi[1], wo[2] + wi[2]]);
+                let cos_om = dot(wo, m);
+                if cos_om > 0.0 {
+                    let f = fresnel_dielectric(cos_om, eta) * ggx_d(m[2], alpha) * g
+                        / (4.0 * cos_o * z);
+                    reflected += f * z * d_omega;
+                }
+            } else {
+                let m = unit([
+                    -(wo[0] + eta * wi[0]),
+                    -(wo[1] + eta * wi[1]),
+                    -(wo[2] + eta * wi[2]),
+                ]);
+                let m = if m[2] < 0.0 { [-m[0], -m[1], -m[2]] } else { m };
+                let (cos_om, cos_im) = (dot(wo, m), dot(wi, m));
+                if cos_om > 0.0 && cos_im < 0.0 {
+                    let f = cos_im.abs()
+                        * cos_om
+                        * eta
+                        * eta
+                        * (1.0 - fresnel_dielectric(cos_om, eta))
+                        * ggx_d(m[2], alpha)
+                        * g
+                        / (cos_o * z.abs() * (cos_om + eta * cos_im).powi(2));
+                    transmitted += f * z.abs() * d_omega;
+                }
+            }
+        }
+    }
+    (reflected, transmitted)
+}
+
+/// The rough dielectric's albedo, estimated through its sampling routine
+/// (`E[weight · F or 1 − F]`, transmitted weights times `η²` to undo the
+/// radiance scaling), equals the quadrature of the textbook BSDF from
+/// both sides at five angles. Negative controls: the same BSDF with the
+/// directions refracted by a wrong index (1.6 with the tables of 1.5),
+/// and with the Fresnel table of the other side, fail the comparison.
+#[test]
+fn rough_dielectric_albedo_equals_the_textbook_quadrature() -> TestResult {
+    let f = fixture()?;
+    let Some((
+        _,
+        rough @ Bsdf::Dielectric {
+            outside, inside, ..
+        },
+    )) = f.bsdfs.iter().find(|(n, _)| *n == "rough glass")
+    else {
+        return Err("rough glass".into());
+    };
+    let wrong_ior = Bsdf::Dielectric {
+        outside: *outside,
+        inside: *inside,
+        ior: Ior::Constant(1.6),
+        roughness: 0.3,
+    };
+    let swapped_tables = Bsdf::Dielectric {
+        outside: *inside,
+        inside: *outside,
+        ior: Ior::Constant(1.5),
+        roughness: 0.3,
+    };
+    let draws = 100_000;
+    let mut worst = [0.0f64; 3];
+    for front in [true, false] {
+        let eta: f64 = if front { 1.5 } else { 1.0 / 1.5 };
+        for cos_o in [0.95, 0.8, 0.6, 0.4, 0.2] {
+            let (r, t) = rough_dielectric_albedo(cos_o, 0.3, eta);
+            let wo = Vec3::new((1.0 - cos_o * cos_o).sqrt() as f32, 0.0, cos_o as f32);
+            for (k, bsdf) in [rough, &wrong_ior, &swapped_tables].into_iter().enumerate() {
+                let mut rng = Rng(17);
+                let mut albedo = 0.0;
+                for _ in 0..draws {
+                    let (ul, u, v) = (rng.f(), rng.f(), rng.f());
+                    if let Some(s) = bsdf.sample(&f.scene, &point(front), wo, ul, u, v) {
+                        let mut w = f64::from(s.weight) * spectral_value(&f.scene, &s.spectrum);
+                        if s.wi.z < 0.0 {
+                            w *= eta * eta;
+                        }
+                        albedo += w / f64::from(draws);
+                    }
+                }
+                if k == 0 {
+                    println!(
+                        "front {front}, cos θo {cos_o}: sampled {albedo:.4}, \
+                         quadrature {:.4} (R {r:.4}, T {t:.4})",
+                        r + t
+                    );
+                }
+                worst[k] = worst[k].max((albedo - (r + t)).abs());
+            }
+        }
+    }
+    println!("largest |sampled − quadrature|: {worst:?} (BSDF, wrong index, swapped tables)");
+    // The estimate's standard error is below 10⁻³ (weights in [0, 1]).
+    assert!(worst[0] < 4e-3, "rough glass: {}", worst[0]);
+    assert!(worst[1] > 2e-2, "wrong index not detected: {}", worst[1]);
+    assert!(worst[2] > 2e-2, "swapped tables not detected: {}", worst[2]);
     Ok(())
 }

@@ -225,11 +225,12 @@ impl<const N: usize> FourierSpectrum<f64, N> {
 /// uses. `macro_rules` expands every `(k, p)` term with literal indices, so
 /// the code has no loop, no index arithmetic at run time and no bounds check,
 /// and LLVM schedules the `N²` FMAs and the term-pair additions freely.
-/// Measured on the 2-core AMD EPYC (Zen 3) of this project: 1.7× (N = 12)
-/// to 3.4× (N = 4) faster than the loops, whose inner trip counts LLVM does
-/// not fully unroll. (Blocking the rows of `k` to relieve the 16 AVX
-/// registers made no difference: LLVM reorders the straight-line code
-/// anyway.)
+/// Several times faster than the loops, whose inner trip counts LLVM does
+/// not fully unroll, so their accumulators stay in memory. (Blocking the
+/// rows of `k` to relieve the 16 AVX registers gains nothing: LLVM
+/// reorders the straight-line code anyway.) Measured with
+/// `cargo bench -p spectral-core`; figures in the workspace's
+/// `docs/performance.md`.
 mod unrolled {
     use crate::lane::Lane;
 

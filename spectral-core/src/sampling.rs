@@ -89,8 +89,9 @@ impl VisibleDensity {
 /// offsets (`u + i/C < 2`) lie in `[0, 2)`, where `⌊x⌋` is 0 or 1, so the
 /// result is `x + 0` (which turns `−0` into `+0`, as `−0 − ⌊−0⌋` does) or
 /// `x − 1` with the same rounding; only other values call
-/// `libm::floor`, an out-of-line software routine that took 6 % of a
-/// 4-hero-wavelength render when every draw called it.
+/// `libm::floor`, an out-of-line software routine that showed in the
+/// profile of hero-wavelength renders when every draw called it (figures
+/// in the workspace's `docs/performance.md`).
 #[inline]
 fn wrap_unit(x: f64) -> f64 {
     if (0.0..1.0).contains(&x) {

@@ -20,11 +20,10 @@ pub(super) const THOROUGH_BUILD_MAX_TRIANGLES: usize = 1 << 17;
 /// pass of its `slow_build` preset (a fifth of the nodes reinserted where
 /// the surface area heuristic gains, not a twentieth) and leaves of up to
 /// 16 triangles where the heuristic's collapse prefers them (not 8). On
-/// the Cornell box that tree costs 4 % fewer instructions per sample (the
+/// the Cornell box that tree costs fewer instructions per sample (the
 /// packet traversals of camera and shadow rays visit fewer nodes); on
-/// larger scenes it measured the same within noise, but the build takes
-/// 1.3–1.6× as long (50 k triangles: 0.07 → 0.12 s; 500 k: 1.06 → 1.34 s,
-/// this machine), so they keep the preset.
+/// larger scenes it renders no faster, but the build takes markedly
+/// longer, so they keep the preset. Figures in `docs/performance.md`.
 pub(super) fn build_params(triangles: usize) -> BvhBuildParams {
     let medium = BvhBuildParams::medium_build();
     if triangles <= THOROUGH_BUILD_MAX_TRIANGLES {

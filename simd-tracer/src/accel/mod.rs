@@ -4,8 +4,8 @@
 //! # Construction
 //!
 //! The tree is an `obvhs` [`Bvh2`] (binary BVH, PLOC build with reinsertion
-//! and leaf collapsing, preset [`BvhBuildParams::medium_build`] with more
-//! reinsertion and larger leaves allowed for scenes up to 2¹⁷ triangles,
+//! and leaf collapsing, preset [`obvhs::BvhBuildParams::medium_build`] with
+//! more reinsertion and larger leaves allowed for scenes up to 2¹⁷ triangles,
 //! see `build_params`; no spatial splits, so every triangle sits in
 //! exactly one leaf). Degenerate triangles
 //! (a non-finite vertex, or zero area: `|e1 × e2| ≤ 1e-7 |e1| |e2|` evaluated
@@ -129,9 +129,8 @@
 //! triangle (that negation may differ from the second triangle's own
 //! evaluation in the sign of an exact zero, which changes no comparison;
 //! barycentric weights are formed as `w / Σw + 0`, which makes them
-//! bit-identical anyway). Measured on the Cornell box (18 planar quads): the
-//! flat test per pair cost 185 instructions against 2 × 120 for its two
-//! triangles (before fused multiply-adds), −6 % instructions per sample.
+//! bit-identical anyway). The pair costs clearly fewer instructions than
+//! its two triangles (instruction counts in `docs/performance.md`).
 //!
 //! The renderer sends camera rays through packets and incoherent rays
 //! through [`Bvh::intersect_incoherent`] (bounces) and
@@ -192,17 +191,15 @@ pub enum Traversal {
 /// rays as packets against every triangle (flat) and shadow rays as packets
 /// through the binary tree; camera rays always go as packets through the
 /// binary tree. The bound is one full wide node of full leaf blocks.
-/// Measured (`benches/traversal.rs`, one thread, per 8 incoherent rays,
-/// closest / shadow): 36 triangles (Cornell box) flat 0.48 / 0.39 µs, wide
-/// 1.02 / 0.68 µs, packet 1.00 / 0.51 µs; 146 triangles flat 2.05 / 1.52,
-/// wide 1.31 / 0.84, packet 1.50 / 0.97; 2 912 triangles wide 1.85 / 1.14
-/// vs packet 4.60 / 2.75; 48 896 triangles wide 3.85 / 2.98 vs packet
-/// 7.89 / 6.77. Flat costs about 14 ns per triangle and packet, so it
-/// crosses the wide tree near this bound. In the Cornell render the shadow
-/// rays, all aimed at the ceiling light, are cheaper as packets than flat
-/// (the tree culls most boxes; flat tests every triangle of an unblocked
-/// packet): flat shadows were slower there than the bench's random
-/// occlusion rays suggest.
+/// Flat costs the same per triangle whatever the rays do, so it beats the
+/// wide tree below about this bound and loses above it; the wide tree
+/// beats packets for incoherent rays in all but the smallest scenes. In
+/// the Cornell render the shadow rays, all aimed at the ceiling light, are
+/// cheaper as packets than flat (the tree culls most boxes; flat tests
+/// every triangle of an unblocked packet): flat shadows were slower there
+/// than the bench's random occlusion rays suggest. Measured in
+/// `benches/traversal.rs` and by alternated renders; figures in
+/// `docs/performance.md`.
 pub const WIDE_MIN_TRIANGLES: usize = WIDE_WIDTH * WIDE_WIDTH;
 
 /// Bytes the BVH keeps per non-degenerate triangle: the prepared edge-test
@@ -321,8 +318,9 @@ impl<T: Copy> InlineStack<T> {
 
 /// The packet traversal's stack of (node index, per-lane entry distance).
 /// One per thread is reused by every packet traversal
-/// ([`with_node_stack`]): a fresh one costs a memset of a few KiB, which
-/// profiling showed at about 5 % of a Cornell-box render.
+/// ([`with_node_stack`]): a fresh one costs a memset of a few KiB per
+/// traversal, a visible share of a Cornell-box profile (figures in
+/// `docs/performance.md`).
 type NodeStack = InlineStack<(u32, f32x8)>;
 
 fn new_node_stack() -> NodeStack {

@@ -17,14 +17,14 @@ use wide::f32x8;
 /// Packets traced together by [`trace_group`] in the renderer: their
 /// bounce and shadow rays are compacted across the group
 /// ([`crate::integrator::compaction`]), a whole 16 × 16 tile. More packets leave fewer
-/// partly filled queries: on the Cornell box 16 packets cost 1.2 % fewer
-/// instructions per sample than 8 (12, which does not divide a tile's 32
-/// packets, 1.9 % more) and 2.5 % less time on a Zen 5 core, 32 another
-/// 1.6 % (Fourier N = 12; 1–2 % for the sampled transports; alternated
-/// renders), although the group's path states (emission sums, throughput,
+/// partly filled queries: on the Cornell box 16 packets beat 8, and 32
+/// beat 16 (a count that does not divide a tile's 32 packets, such as 12,
+/// loses), although the group's path states (emission sums, throughput,
 /// light sample: about 3 KiB per packet at N = 12) then spill from the L1
-/// into the L2 cache. They live on the render threads' stacks, which the
-/// renderer sizes for them (`render::RENDER_THREAD_STACK_BYTES`).
+/// into the L2 cache. Measured by alternated renders and instruction counts;
+/// figures in `docs/performance.md`. They live on the render threads'
+/// stacks, which the renderer sizes for them
+/// (`render::RENDER_THREAD_STACK_BYTES`).
 pub const GROUP: usize = 32;
 
 /// The per-packet path state of a group of `G` packets, kept from group to

@@ -10,7 +10,7 @@ use crate::scene::Scene;
 /// Scenes with at most this many emissive triangles find the hits of a
 /// path's last segment among the emitters (see [`last_segment_hits`]).
 /// The bound is where a flat test of the emitters costs about as much as a
-/// closest-hit query (the flat test's triangle count in the bvh module).
+/// closest-hit query (the flat test's triangle count in the accel module).
 pub(super) const LAST_SEGMENT_EMITTERS: usize = crate::accel::WIDE_MIN_TRIANGLES;
 
 /// The hits of a path's last segment (`depth == max_depth`, no

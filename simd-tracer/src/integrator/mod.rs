@@ -9,8 +9,9 @@
 //!
 //! Per bounce, geometry and sampling decisions are scalar per ray lane (each
 //! lane has its own triangle, material and random numbers); the spectral
-//! work is packet-wide through the [`Transport`]: with Fourier light, every
-//! product below is a truncated product of `FourierSpectrum<f32x8, N>`.
+//! work is packet-wide through the transport
+//! ([`crate::transport::Transport`]): with Fourier light, every product
+//! below is a truncated product of `FourierSpectrum<f32x8, N>`.
 //!
 //! ```text
 //! L  += T ⊛ Le(hit) · w_mis                 (emitter hit; w = 1 on camera rays)

@@ -6,8 +6,9 @@
 //! RXS-M-XS output permutation; period 2³² per stream, 2³¹ streams). A
 //! path draws a few dozen numbers from its stream, far from the period,
 //! and every operation is a native 32-bit one, so 8 lanes step together
-//! as `u32x8` arithmetic (AVX2 has no 64-bit multiply: the 64-bit PCG32
-//! this replaced took three times the instructions per number).
+//! as `u32x8` arithmetic (AVX2 has no 64-bit multiply, so the 64-bit PCG32
+//! this replaced had to be emulated in 32-bit halves, at several times the
+//! instructions per number; figures in `docs/performance.md`).
 //!
 //! Streams are keyed, not sequenced: the (seed, sample, purpose) part of a
 //! key is hashed once per pass with SplitMix64 (Steele et al. 2014,

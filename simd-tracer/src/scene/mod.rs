@@ -206,7 +206,9 @@ impl Scene {
     }
 
     /// Checks [`Scene::surfaces`] against the triangles, materials and
-    /// lights they were derived from ([`crate::shading::surface::validate`]).
+    /// lights they were derived from (one record per triangle, each equal
+    /// to [`Surface::new`] of its triangle with the light set's selection
+    /// probability).
     /// Also checks [`Scene::emitters`] against the records, the light
     /// set's own invariants ([`LightSet::validate`]), the packed records
     /// against the records and the spectrum registers against

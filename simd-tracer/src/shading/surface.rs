@@ -58,7 +58,8 @@ impl Surface {
     };
 
     /// The record of a triangle with this normal, area and material; its
-    /// light-selection probability is 0 until [`LightSet::new`] fills it in.
+    /// light-selection probability is 0 until
+    /// [`LightSet::new`](crate::shading::light::LightSet::new) fills it in.
     pub fn new(normal: Vec3, area: f32, material_id: MaterialId, material: &Material) -> Self {
         Self {
             normal,

@@ -13,10 +13,10 @@
 //! * [`ControlVariateTransport<C, N>`]: both at once (paper §3): `Y` the
 //!   sampled estimate, `C` the path's Fourier spectrum evaluated at the same
 //!   wavelengths through the same estimator, `μ` its exact XYZ (3×N kernel);
-//!   per pixel and channel a [`ControlVariate`] weighted by `α` from the
-//!   earlier passes only — pooled over all pixels ([`AlphaMode::Shared`],
+//!   per pixel and channel a [`ControlVariate`](spectral_core::control_variate::ControlVariate) weighted by `α` from the
+//!   earlier passes only — pooled over all pixels ([`AlphaMode::Shared`](crate::film::AlphaMode::Shared),
 //!   the default: a single pixel's tens of samples give a noisy `α`) or per
-//!   pixel ([`AlphaMode::PerPixel`]).
+//!   pixel ([`AlphaMode::PerPixel`](crate::film::AlphaMode::PerPixel)).
 
 use crate::film::Film;
 use crate::ids::SpectrumId;
