@@ -554,7 +554,9 @@ fn rough_dielectric_albedo_equals_the_textbook_quadrature() -> TestResult {
                 let mut albedo = 0.0;
                 for _ in 0..draws {
                     let (ul, u, v) = (rng.f(), rng.f(), rng.f());
-                    if let Some(s) = bsdf.sample(&f.scene, &point(front), wo, ul, u, v) {
+                    if let Some(s) =
+                        bsdf.sample(&f.scene.material_tables(), &point(front), wo, ul, u, v)
+                    {
                         let mut w = f64::from(s.weight) * spectral_value(&f.scene, &s.spectrum);
                         if s.wi.z < 0.0 {
                             w *= eta * eta;

@@ -183,9 +183,18 @@ impl<S: Copy> PathState<S> {
             f32x8::ZERO,
         );
         (nee.light, nee.lanes) = (light.surface.emission, nee_lanes);
+        // A light below the surface is seen through a transmitting BSDF
+        // (e.g. from inside rough glass): its shadow ray starts below the
+        // surface, as a sampled transmission does. From `origin`, above, it
+        // would hit its own triangle, and the light samples' MIS share of
+        // the transmitted direct light would be lost. Only the shadow ray
+        // moves: `wi`, `eval` and the weights above are those of `origin`
+        // (they differ by `O(RAY_EPSILON)`).
+        let light_below = wi.dot(normal).simd_lt(f32x8::ZERO);
+        let shadow_origin = Vec3x8::select(light_below, offset_x8(position, -normal), origin);
         *shadow = RayPacket {
-            origin: origin.to_array(),
-            direction: to_light.to_array(),
+            origin: shadow_origin.to_array(),
+            direction: (light.point - shadow_origin).to_array(),
             t_max: f32x8::splat(1.0 - SHADOW_EPSILON),
             active: nee_lanes,
         };
