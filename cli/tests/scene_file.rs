@@ -193,7 +193,7 @@ fn bare_obj_is_framed_and_lit_by_a_white_environment() -> TestResult {
     let scene = assert_renders("bare OBJ", loaded)?;
     let environment = scene.environment().ok_or("no environment")?;
     // D65 with luminance Y = 1.
-    let white = &scene.spectra()[environment as usize];
+    let white = &scene.spectra()[environment.index()];
     let y_bar = Builtin::lookup("cie-y")?;
     let (mut num, mut den) = (0.0, 0.0);
     for l in 360..=830 {
@@ -311,7 +311,7 @@ fn scale_multiplies_every_source() -> TestResult {
             let path = write(&dir, "scene.toml", &text)?;
             let scene = load_scene_file(&path)?.builder.build()?;
             let id = scene.environment().ok_or("no environment")?;
-            means.push(scene.spectra()[id as usize].mean());
+            means.push(scene.spectra()[id.index()].mean());
         }
         let ratio = means[1] / means[0];
         assert!((ratio - 2.5).abs() < 1e-3, "{source}: ratio {ratio}");
@@ -326,14 +326,14 @@ fn scale_multiplies_every_source() -> TestResult {
         .builder
         .build()?;
     let env = scene.environment().ok_or("no environment")?;
-    assert!((scene.spectra()[env as usize].mean() - 2.0).abs() < 1e-9);
+    assert!((scene.spectra()[env.index()].mean() - 2.0).abs() < 1e-9);
     let w2 = scene
         .materials()
         .iter()
         .find(|m| m.name == "w2")
         .ok_or("no w2")?;
     let emission = w2.emission.ok_or("no emission")?;
-    assert!((scene.spectra()[emission as usize].mean() - 1.5).abs() < 1e-9);
+    assert!((scene.spectra()[emission.index()].mean() - 1.5).abs() < 1e-9);
     Ok(())
 }
 

@@ -6,6 +6,7 @@
 use glam::Vec3;
 use simd_tracer::film::Buffer;
 use simd_tracer::film::filter::Filter;
+use simd_tracer::ids::{MaterialId, SpectrumId};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderError, RenderSettings, render};
 use simd_tracer::scene::camera::Camera;
@@ -34,7 +35,7 @@ fn camera() -> TestResult<Camera> {
     )?)
 }
 
-fn lambert(name: &str, spectrum: u32) -> Material {
+fn lambert(name: &str, spectrum: SpectrumId) -> Material {
     Material {
         name: name.into(),
         bsdf: Bsdf::Lambert {
@@ -46,7 +47,7 @@ fn lambert(name: &str, spectrum: u32) -> Material {
 }
 
 /// A builder with one grey spectrum (id 0) and one material using it.
-fn builder() -> TestResult<(SceneBuilder, u32)> {
+fn builder() -> TestResult<(SceneBuilder, MaterialId)> {
     let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
     let grey = b.add_spectrum("grey", SpectrumSource::Constant(0.5))?;
     let material = b.add_material(lambert("grey", grey));
@@ -72,13 +73,16 @@ fn scene_builder_errors_name_the_culprit() -> TestResult {
     // A triangle with a material that does not exist.
     let (mut b, _) = builder()?;
     b.set_camera(camera()?);
-    b.add_triangle(TRIANGLE, 7);
-    assert_eq!(b.build().err(), Some(SceneError::UnknownMaterial(7)));
+    b.add_triangle(TRIANGLE, MaterialId(7));
+    assert_eq!(
+        b.build().err(),
+        Some(SceneError::UnknownMaterial(MaterialId(7)))
+    );
 
     // A material that refers to a missing spectrum.
     let (mut b, _) = builder()?;
     b.set_camera(camera()?);
-    let dangling = b.add_material(lambert("dangling", 9));
+    let dangling = b.add_material(lambert("dangling", SpectrumId(9)));
     b.add_triangle(TRIANGLE, dangling);
     let error = b.build().err().ok_or("built")?;
     assert_eq!(

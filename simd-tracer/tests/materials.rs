@@ -180,9 +180,9 @@ fn point(front: bool) -> ShadingPoint {
 fn spectral_value(scene: &Scene, s: &LaneSpectrum) -> f64 {
     let x = match s.of {
         None => 0.0,
-        Some(SpectralRef::Scene(id)) => f64::from(scene.spectra()[id as usize].value(550.0)),
+        Some(SpectralRef::Scene(id)) => f64::from(scene.spectra()[id.index()].value(550.0)),
         Some(SpectralRef::Angular { id, cos, thickness }) => {
-            f64::from(scene.angular()[id as usize].eval(cos, 550.0, thickness))
+            f64::from(scene.angular()[id.index()].eval(cos, 550.0, thickness))
         }
         Some(SpectralRef::Texture { .. }) => 0.0,
     };
@@ -397,7 +397,7 @@ fn spectral_factors_equal_the_core_optics() -> TestResult {
     };
     use spectral_core::Spectrum;
     let exact = fresnel_conductor(1.0, Complex::new(gold_n.value(551.0), gold_k.value(551.0)));
-    let got = f64::from(f.scene.angular()[id as usize].eval(cos, 551.0, 0.0));
+    let got = f64::from(f.scene.angular()[id.index()].eval(cos, 551.0, 0.0));
     // The scene's n, k come from a 0.25 nm dense table of the same data.
     assert!((got - exact).abs() < 1e-5, "{got} vs {exact}");
     let (_, film) = f
@@ -424,7 +424,7 @@ fn spectral_factors_equal_the_core_optics() -> TestResult {
             thickness_nm: 400.0,
         };
         let airy = airy_film(lambda, 1.0, layer, Complex::real(1.5), 1.0).reflectance();
-        let got = f64::from(f.scene.angular()[id as usize].eval(cos, lambda as f32, 0.0));
+        let got = f64::from(f.scene.angular()[id.index()].eval(cos, lambda as f32, 0.0));
         assert!((got - airy).abs() < 1e-5, "{lambda}: {got} vs {airy}");
     }
     Ok(())

@@ -366,7 +366,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
     let lamp = b.add_material(lamp);
     let scene_template = simd_tracer::scene::builtin::cornell_box(range)?;
     for (i, tri) in scene_template.triangles().iter().enumerate() {
-        let is_light = scene_template.materials()[scene_template.triangle_material()[i] as usize]
+        let is_light = scene_template.materials()[scene_template.triangle_material()[i].index()]
             .emission
             .is_some();
         let m = if is_light {

@@ -74,7 +74,7 @@ impl<S: Copy> EmissionSums<S> {
         // The common case, one emission among the lanes: one scaled sum,
         // the same as the loop below forms for it.
         let id = ids[first];
-        let same: f32x8 = cast(u32x8::new(*ids).simd_eq(u32x8::splat(id)));
+        let same: f32x8 = cast(u32x8::new(SpectrumId::words(*ids)).simd_eq(u32x8::splat(id.0)));
         if (same | !live).all() {
             if weighted.any() {
                 self.add_scaled(transport, scene, wavelengths, value, id, weight);
@@ -88,7 +88,8 @@ impl<S: Copy> EmissionSums<S> {
                 continue;
             }
             let id = ids[lane];
-            let of_id: f32x8 = cast(u32x8::new(*ids).simd_eq(u32x8::splat(id)));
+            let of_id: f32x8 =
+                cast(u32x8::new(SpectrumId::words(*ids)).simd_eq(u32x8::splat(id.0)));
             let of_id = LaneMask::from_simd(of_id).and(lanes);
             done = done.or(of_id);
             let lane_weights = of_id.to_simd().select(weight, f32x8::ZERO);

@@ -6,7 +6,7 @@ use super::compaction;
 use super::last_segment::{LAST_SEGMENT_EMITTERS, last_segment_hits};
 use super::path::{BounceLanes, NeeSample, PathState};
 use super::{PathContext, RayCounts};
-use crate::ids::NO_ID;
+use crate::ids::SpectrumId;
 use crate::packet::PacketHit;
 use crate::packet::RayPacket;
 use crate::sampling::rng::RngPacket;
@@ -42,7 +42,7 @@ impl<S: Copy, const G: usize> GroupState<S, G> {
             paths: core::array::from_fn(|_| PathState::new(transport, LaneMask::NONE)),
             nee: core::array::from_fn(|_| NeeSample {
                 weight: f32x8::ZERO,
-                light: [NO_ID; LANES],
+                light: [SpectrumId::NONE; LANES],
                 lanes: LaneMask::NONE,
                 through_bsdf: transport.zero(),
             }),

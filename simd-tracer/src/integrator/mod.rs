@@ -108,7 +108,6 @@ mod tests {
     use super::last_segment::last_segment_hits;
     use super::packet_shading::{offset_x8, power_heuristic_x8};
     use super::*;
-    use crate::ids::NO_ID;
     use crate::ids::SpectrumId;
     use crate::packet::{PacketHit, RayPacket};
     use crate::sampling::rng::Rng;
@@ -154,7 +153,8 @@ mod tests {
                 let closest = scene.bvh().intersect_incoherent(packet);
                 for lane in 0..LANES {
                     let emissive = closest.hit.contains(lane)
-                        && scene.surfaces()[closest.triangle[lane] as usize].emission != NO_ID;
+                        && scene.surfaces()[closest.triangle[lane] as usize].emission
+                            != SpectrumId::NONE;
                     let lane_bits = |h: &PacketHit| {
                         (
                             h.hit.contains(lane),

@@ -80,7 +80,7 @@ impl<'a> Shading<'a> {
                 scene
                     .triangle_material()
                     .get(hit.triangle[lane] as usize)
-                    .and_then(|&m| scene.materials().get(m as usize))
+                    .and_then(|&m| scene.materials().get(m.index()))
                     .map(|m| &m.bsdf)
             } else {
                 None

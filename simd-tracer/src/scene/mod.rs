@@ -7,7 +7,6 @@
 //! dropped at build time and counted in [`Scene::skipped_triangles`].
 
 use crate::accel::{Bvh, TriangleSubset};
-use crate::ids::NO_ID;
 use crate::ids::{AngularId, MaterialId, SpectrumId, TextureId};
 use crate::scene::camera::Camera;
 use crate::shading::light::{Light, LightSet};
@@ -109,7 +108,7 @@ pub struct Scene {
 /// The triangles whose records emit, as a subset of `bvh`.
 fn emitters(bvh: &Bvh, surfaces: &[Surface]) -> TriangleSubset {
     let emissive: Vec<u32> = (0..surfaces.len())
-        .filter(|&k| surfaces[k].emission != NO_ID)
+        .filter(|&k| !surfaces[k].emission.is_none())
         .filter_map(|k| u32::try_from(k).ok())
         .collect();
     bvh.subset(&emissive)
@@ -328,7 +327,7 @@ pub(crate) fn validate_surface_records(
             triangle_material.get(index),
         ) {
             (Some(&normal), Some(vertices), Some(&id)) => {
-                materials.get(id as usize).map(|m| Surface {
+                materials.get(id.index()).map(|m| Surface {
                     light_pmf: lights.pmf_of_triangle(index as u32),
                     ..Surface::new(normal, triangle_area(vertices), id, m)
                 })
@@ -371,6 +370,11 @@ pub struct SceneBuilder {
     skipped: usize,
 }
 
+/// The raw words of a list of ids (for the reference check's messages).
+fn words<I: Copy + Into<u32>>(ids: &[I]) -> Vec<u32> {
+    ids.iter().map(|&id| id.into()).collect()
+}
+
 impl SceneBuilder {
     /// An empty scene over `range`.
     pub fn new(range: SpectralRange) -> Self {
@@ -405,12 +409,12 @@ impl SceneBuilder {
         source: SpectrumSource,
     ) -> Result<SpectrumId, SceneError> {
         if let Some(index) = self.spectra.iter().position(|s| s.source() == &source) {
-            return Ok(index as SpectrumId);
+            return Ok(SpectrumId(index as u32));
         }
         let spectrum = SceneSpectrum::new(source, self.range)
             .map_err(|e| SceneError::Spectrum(name.to_string(), e))?;
         self.spectra.push(spectrum);
-        Ok((self.spectra.len() - 1) as SpectrumId)
+        Ok(SpectrumId((self.spectra.len() - 1) as u32))
     }
 
     /// Adds an angle-dependent spectrum (builds its Fourier tables).
@@ -422,24 +426,24 @@ impl SceneBuilder {
         let angular = AngularSpectrum::new(function, &self.range)
             .map_err(|e| SceneError::Spectrum(name.to_string(), e))?;
         self.angular.push(angular);
-        Ok((self.angular.len() - 1) as AngularId)
+        Ok(AngularId((self.angular.len() - 1) as u32))
     }
 
     /// A prepared spectrum added so far (e.g. to build an angular function).
     pub fn spectrum(&self, id: SpectrumId) -> Option<&SceneSpectrum> {
-        self.spectra.get(id as usize)
+        self.spectra.get(id.index())
     }
 
     /// Adds a texture.
     pub fn add_texture(&mut self, texture: Texture) -> TextureId {
         self.textures.push(texture);
-        (self.textures.len() - 1) as TextureId
+        TextureId((self.textures.len() - 1) as u32)
     }
 
     /// Adds a material.
     pub fn add_material(&mut self, material: Material) -> MaterialId {
         self.materials.push(material);
-        (self.materials.len() - 1) as MaterialId
+        MaterialId((self.materials.len() - 1) as u32)
     }
 
     /// Adds one triangle (counter-clockwise seen from its front).
@@ -508,16 +512,20 @@ impl SceneBuilder {
         if let Some(&bad) = self
             .triangle_material
             .iter()
-            .find(|&&m| m as usize >= self.materials.len())
+            .find(|&&m| m.index() >= self.materials.len())
         {
             return Err(SceneError::UnknownMaterial(bad));
         }
         for material in &self.materials {
             let references = material.references();
             let checks = [
-                ("spectrum", &references.spectra, self.spectra.len()),
-                ("angular spectrum", &references.angular, self.angular.len()),
-                ("texture", &references.textures, self.textures.len()),
+                ("spectrum", words(&references.spectra), self.spectra.len()),
+                (
+                    "angular spectrum",
+                    words(&references.angular),
+                    self.angular.len(),
+                ),
+                ("texture", words(&references.textures), self.textures.len()),
             ];
             for (kind, ids, available) in checks {
                 if let Some(&id) = ids.iter().find(|&&id| id as usize >= available) {
@@ -527,9 +535,13 @@ impl SceneBuilder {
         }
         if let Some(env) = self
             .environment
-            .filter(|&e| e as usize >= self.spectra.len())
+            .filter(|&e| e.index() >= self.spectra.len())
         {
-            return Err(SceneError::Reference("environment".into(), "spectrum", env));
+            return Err(SceneError::Reference(
+                "environment".into(),
+                "spectrum",
+                env.0,
+            ));
         }
         let normals: Vec<Vec3> = self
             .triangles
@@ -544,7 +556,7 @@ impl SceneBuilder {
             .zip(&self.triangles)
             .zip(&self.triangle_material)
             .filter_map(|((&normal, vertices), &id)| {
-                let material = self.materials.get(id as usize)?;
+                let material = self.materials.get(id.index())?;
                 Some(Surface::new(normal, triangle_area(vertices), id, material))
             })
             .collect();

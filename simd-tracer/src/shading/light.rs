@@ -12,7 +12,7 @@
 //! reads their records with one permute per field, instead of a search and
 //! a record copy per lane. Both paths give the scalar sample bit for bit.
 
-use crate::ids::NO_ID;
+use crate::ids::SpectrumId;
 use crate::shading::surface::{Surface, SurfacePacket};
 use crate::simd::{LANES, LaneMask};
 use crate::simd::{Vec3x8, lookup_f32x8, lookup_u32x8};
@@ -89,8 +89,8 @@ impl LightRegisters {
             normal: core::array::from_fn(|axis| floats(&|light| light.surface.normal[axis])),
             light_pmf: floats(&|light| light.surface.light_pmf),
             area: floats(&|light| light.surface.area),
-            emission: words(&|light| light.surface.emission),
-            lambert_albedo: words(&|light| light.surface.lambert_albedo),
+            emission: words(&|light| light.surface.emission.0),
+            lambert_albedo: words(&|light| light.surface.lambert_albedo.0),
             triangle: words(&|light| light.triangle),
             two_sided: words(&|light| u32::from(light.surface.two_sided)),
         })
@@ -133,11 +133,13 @@ impl LightRegisters {
                     float(self.normal[1], none.normal.y),
                     float(self.normal[2], none.normal.z),
                 ),
-                emission: word(self.emission, none.emission).to_array(),
+                emission: SpectrumId::from_words(word(self.emission, none.emission.0).to_array()),
                 two_sided: LaneMask::from_simd(cast(two_sided)),
                 light_pmf: float(self.light_pmf, none.light_pmf),
                 area: float(self.area, none.area),
-                lambert_albedo: word(self.lambert_albedo, none.lambert_albedo).to_array(),
+                lambert_albedo: SpectrumId::from_words(
+                    word(self.lambert_albedo, none.lambert_albedo.0).to_array(),
+                ),
             },
             valid: active,
         }
@@ -184,11 +186,11 @@ impl LightSet {
         for (index, (vertices, surface)) in (0u32..).zip(triangles.iter().zip(surfaces.iter_mut()))
         {
             surface.light_pmf = 0.0;
-            if surface.emission == NO_ID {
+            if surface.emission.is_none() {
                 continue;
             }
             let mean = spectra
-                .get(surface.emission as usize)
+                .get(surface.emission.index())
                 .map_or(0.0, SceneSpectrum::mean);
             let sides = if surface.two_sided { 2.0 } else { 1.0 };
             let power = f64::from(surface.area) * PI as f64 * mean * sides;
@@ -355,6 +357,7 @@ pub struct LightSamplePacket {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ids::MaterialId;
     use crate::sampling::rng::Rng;
     use crate::shading::material::Material;
     use crate::shading::surface::{emits_towards, light_pdf_solid_angle};
@@ -370,11 +373,11 @@ mod tests {
             .filter_map(|&c| SceneSpectrum::new(SpectrumSource::Constant(c), range).ok())
             .collect();
         assert_eq!(spectra.len(), 2);
-        let mut dim = Material::lambert("dim", 0);
-        dim.emission = Some(0);
-        let mut bright = Material::lambert("bright", 0);
-        bright.emission = Some(1);
-        let grey = Material::lambert("grey", 0);
+        let mut dim = Material::lambert("dim", SpectrumId(0));
+        dim.emission = Some(SpectrumId(0));
+        let mut bright = Material::lambert("bright", SpectrumId(0));
+        bright.emission = Some(SpectrumId(1));
+        let grey = Material::lambert("grey", SpectrumId(0));
         let tri = |x: f32| {
             [
                 Vec3::new(x, 0.0, 0.0),
@@ -386,7 +389,7 @@ mod tests {
         let mut surfaces: Vec<Surface> = [dim, grey, bright]
             .iter()
             .zip(0..)
-            .map(|(m, id)| Surface::new(Vec3::Z, 0.5, id, m))
+            .map(|(m, id)| Surface::new(Vec3::Z, 0.5, MaterialId(id), m))
             .collect();
         let set = LightSet::new(&triangles, &mut surfaces, &spectra);
         (triangles, surfaces, set)
@@ -435,13 +438,18 @@ mod tests {
                 Vec3::new(x + 1.0, 0.5, 0.0),
                 Vec3::new(x, 1.0, 0.25 * i as f32),
             ]);
-            let mut material = Material::lambert("m", 0);
+            let mut material = Material::lambert("m", SpectrumId(0));
             // Triangle 1 is grey; the others emit, every third two-sided.
             if i != 1 {
-                material.emission = Some(surfaces.len().min(count - 1) as u32);
+                material.emission = Some(SpectrumId(surfaces.len().min(count - 1) as u32));
                 material.two_sided = i % 3 == 0;
             }
-            surfaces.push(Surface::new(Vec3::Z, 0.5 + i as f32, i as u32, &material));
+            surfaces.push(Surface::new(
+                Vec3::Z,
+                0.5 + i as f32,
+                MaterialId(i as u32),
+                &material,
+            ));
         }
         LightSet::new(&triangles, &mut surfaces, &spectra)
     }
@@ -482,8 +490,8 @@ mod tests {
             for lane in 0..LANES {
                 let record = &packet.surface;
                 if !active.contains(lane) {
-                    assert_eq!(record.emission[lane], NO_ID);
-                    assert_eq!(record.lambert_albedo[lane], NO_ID);
+                    assert_eq!(record.emission[lane], SpectrumId::NONE);
+                    assert_eq!(record.lambert_albedo[lane], SpectrumId::NONE);
                     assert_eq!(record.normal.lane(lane), Surface::NONE.normal);
                     assert_eq!(record.area.to_array()[lane], 0.0);
                     assert!(!record.two_sided.contains(lane));

@@ -49,12 +49,12 @@ impl Surface {
     /// The record of an unknown triangle: normal `+z`, no material, no emission.
     pub const NONE: Self = Self {
         normal: Vec3::Z,
-        material: NO_ID,
-        emission: NO_ID,
+        material: MaterialId::NONE,
+        emission: SpectrumId::NONE,
         two_sided: false,
         light_pmf: 0.0,
         area: 0.0,
-        lambert_albedo: NO_ID,
+        lambert_albedo: SpectrumId::NONE,
     };
 
     /// The record of a triangle with this normal, area and material; its
@@ -64,7 +64,7 @@ impl Surface {
         Self {
             normal,
             material: material_id,
-            emission: material.emission.unwrap_or(NO_ID),
+            emission: material.emission.unwrap_or(SpectrumId::NONE),
             two_sided: material.two_sided,
             light_pmf: 0.0,
             area,
@@ -72,7 +72,7 @@ impl Surface {
                 Bsdf::Lambert {
                     albedo: Albedo::Spectrum(id),
                 } => id,
-                _ => NO_ID,
+                _ => SpectrumId::NONE,
             },
         }
     }
@@ -114,11 +114,11 @@ impl PackedSurfaces {
             surface.normal.x.to_bits(),
             surface.normal.y.to_bits(),
             surface.normal.z.to_bits(),
-            surface.emission,
+            surface.emission.0,
             if surface.two_sided { u32::MAX } else { 0 },
             surface.light_pmf.to_bits(),
             surface.area.to_bits(),
-            surface.lambert_albedo,
+            surface.lambert_albedo.0,
         ])
     }
 
@@ -159,11 +159,11 @@ impl PackedSurfaces {
         ] = f32x8::transpose(rows);
         SurfacePacket {
             normal: Vec3x8::new(x, y, z),
-            emission: cast::<f32x8, u32x8>(emission).to_array(),
+            emission: SpectrumId::from_words(cast::<f32x8, u32x8>(emission).to_array()),
             two_sided: LaneMask::from_simd(two_sided),
             light_pmf,
             area,
-            lambert_albedo: cast::<f32x8, u32x8>(lambert_albedo).to_array(),
+            lambert_albedo: SpectrumId::from_words(cast::<f32x8, u32x8>(lambert_albedo).to_array()),
         }
     }
 }
@@ -190,7 +190,8 @@ impl SurfacePacket {
         let zero = f32x8::ZERO;
         let front = LaneMask::from_simd(cos_light.simd_gt(zero));
         let back = LaneMask::from_simd(cos_light.simd_lt(zero)).and(self.two_sided);
-        let none: f32x8 = cast(u32x8::new(self.emission).simd_eq(u32x8::splat(NO_ID)));
+        let none: f32x8 =
+            cast(u32x8::new(SpectrumId::words(self.emission)).simd_eq(u32x8::splat(NO_ID)));
         let emissive = LaneMask::ALL.and_not(LaneMask::from_simd(none));
         front.or(back).and(emissive)
     }
@@ -211,7 +212,9 @@ impl SurfacePacket {
     /// (then [`SurfacePacket::lambert_albedo`] names the albedos).
     #[inline(always)]
     pub fn all_lambert(&self, active: LaneMask) -> bool {
-        active.iter().all(|lane| self.lambert_albedo[lane] != NO_ID)
+        active
+            .iter()
+            .all(|lane| !self.lambert_albedo[lane].is_none())
     }
 }
 
@@ -297,13 +300,13 @@ mod tests {
         scene.validate_surfaces()?;
         let s = &scene.surfaces();
         assert_eq!(s.len(), 5);
-        assert_eq!((s[0].emission, s[0].two_sided), (1, false));
-        assert_eq!((s[1].emission, s[1].two_sided), (1, true));
+        assert_eq!((s[0].emission, s[0].two_sided), (SpectrumId(1), false));
+        assert_eq!((s[1].emission, s[1].two_sided), (SpectrumId(1), true));
         assert_eq!(
             [s[2].emission, s[3].emission, s[4].emission],
-            [NO_ID, NO_ID, 0]
+            [SpectrumId::NONE, SpectrumId::NONE, SpectrumId(0)]
         );
-        let lambert: Vec<u32> = s.iter().map(|r| r.lambert_albedo).collect();
+        let lambert: Vec<u32> = s.iter().map(|r| r.lambert_albedo.0).collect();
         assert_eq!(lambert, [0, 0, 0, NO_ID, NO_ID]);
         for (index, surface) in s.iter().enumerate() {
             assert_eq!(surface.normal, scene.normals()[index]);
@@ -334,12 +337,12 @@ mod tests {
         assert!(check(&s[..4]).is_err());
         let corruptions: [fn(&mut Surface); 7] = [
             |r| r.normal = -r.normal,
-            |r| r.material = 3,
-            |r| r.emission = NO_ID,
+            |r| r.material = MaterialId(3),
+            |r| r.emission = SpectrumId::NONE,
             |r| r.two_sided = !r.two_sided,
             |r| r.light_pmf *= 0.5,
             |r| r.area += 1.0,
-            |r| r.lambert_albedo = NO_ID,
+            |r| r.lambert_albedo = SpectrumId::NONE,
         ];
         assert!(scene.packed_surfaces().packs(s));
         assert!(!scene.packed_surfaces().packs(&s[..4]));
@@ -391,7 +394,8 @@ mod tests {
                 assert_eq!(packet.lambert_albedo[lane], record.lambert_albedo);
                 assert_eq!(
                     emits.contains(lane),
-                    record.emission != NO_ID && emits_towards(record.two_sided, cos[lane])
+                    record.emission != SpectrumId::NONE
+                        && emits_towards(record.two_sided, cos[lane])
                 );
                 let expected = light_pdf_solid_angle(
                     record.light_pmf,
@@ -403,7 +407,7 @@ mod tests {
             }
             let all_lambert = active
                 .iter()
-                .all(|lane| packet.lambert_albedo[lane] != NO_ID);
+                .all(|lane| packet.lambert_albedo[lane] != SpectrumId::NONE);
             assert_eq!(lambert, all_lambert);
         }
         Ok(())

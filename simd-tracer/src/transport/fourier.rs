@@ -56,19 +56,19 @@ pub(super) fn with_reference_fourier<R>(
         SpectralRef::Scene(id) => with(
             scene
                 .spectra()
-                .get(id as usize)
+                .get(id.index())
                 .map_or(&[0.0; MAX_COEFFS], |s| s.coefficients_f32()),
         ),
         SpectralRef::Texture { texture, u, v } => with(
             &scene
                 .textures()
-                .get(texture as usize)
+                .get(texture.index())
                 .map_or([0.0; MAX_COEFFS], |t| t.fourier_at(u, v)),
         ),
         SpectralRef::Angular { id, cos, thickness } => with(
             &scene
                 .angular()
-                .get(id as usize)
+                .get(id.index())
                 .map_or([0.0; MAX_COEFFS], |a| a.fourier(cos, thickness)),
         ),
     }
@@ -79,15 +79,15 @@ pub(super) fn reference_value(scene: &Scene, reference: &SpectralRef, lambda_nm:
     match *reference {
         SpectralRef::Scene(id) => scene
             .spectra()
-            .get(id as usize)
+            .get(id.index())
             .map_or(0.0, |s| s.value(lambda_nm)),
         SpectralRef::Texture { texture, u, v } => scene
             .textures()
-            .get(texture as usize)
+            .get(texture.index())
             .map_or(0.0, |t| t.value_at(u, v, lambda_nm)),
         SpectralRef::Angular { id, cos, thickness } => scene
             .angular()
-            .get(id as usize)
+            .get(id.index())
             .map_or(0.0, |a| a.eval(cos, lambda_nm, thickness)),
     }
 }
@@ -146,8 +146,8 @@ pub(super) fn gather_from_registers<const N: usize>(
     for (lane, spectrum) in lanes.iter().enumerate() {
         match spectrum.of {
             None => {}
-            Some(SpectralRef::Scene(id)) if registers.holds(id) => {
-                ids[lane] = id;
+            Some(SpectralRef::Scene(id)) if registers.holds(id.0) => {
+                ids[lane] = id.0;
                 spectral = spectral.with(lane);
             }
             Some(_) => return None,
@@ -206,7 +206,7 @@ impl<const N: usize> Transport for FourierTransport<N> {
     ) -> Self::Spectra {
         let registers = scene.spectrum_registers();
         let live = lanes.to_simd();
-        let id_lanes = u32x8::new(*ids);
+        let id_lanes = u32x8::new(SpectrumId::words(*ids));
         if !(registers.holds_x8(id_lanes) | !cast::<f32x8, u32x8>(live)).all() {
             return self.gather(scene, wavelengths, &id_spectra(ids, lanes));
         }

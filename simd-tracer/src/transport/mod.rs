@@ -175,12 +175,14 @@ mod tests {
     /// in every fourth lane.
     fn mixed_lanes(spectra: u32, last: impl Fn(usize) -> LaneSpectrum) -> [LaneSpectrum; LANES] {
         core::array::from_fn(|lane| match lane % 4 {
-            0 => LaneSpectrum::scene(lane as u32 % spectra),
-            1 => LaneSpectrum::complement(SpectralRef::Scene((lane as u32 + 1) % spectra)),
+            0 => LaneSpectrum::scene(SpectrumId(lane as u32 % spectra)),
+            1 => LaneSpectrum::complement(SpectralRef::Scene(SpectrumId(
+                (lane as u32 + 1) % spectra,
+            ))),
             2 => LaneSpectrum {
                 constant: 0.25 * lane as f32,
                 scale: -1.5 + lane as f32,
-                of: Some(SpectralRef::Scene((lane as u32 + 2) % spectra)),
+                of: Some(SpectralRef::Scene(SpectrumId((lane as u32 + 2) % spectra))),
             },
             _ => last(lane),
         })
@@ -206,7 +208,7 @@ mod tests {
             if lane == 3 {
                 constant_lane()
             } else {
-                LaneSpectrum::scene(spectra + 5)
+                LaneSpectrum::scene(SpectrumId(spectra + 5))
             }
         });
         assert!(gather_from_registers::<12>(&scene, &lanes).is_none());
@@ -261,7 +263,7 @@ mod tests {
                 if lane == 3 {
                     constant_lane()
                 } else {
-                    LaneSpectrum::scene(spectra + 5)
+                    LaneSpectrum::scene(SpectrumId(spectra + 5))
                 }
             });
             let gathered = transport.gather(&scene, &wavelengths, &lanes);
@@ -309,7 +311,7 @@ mod tests {
             let ids: [SpectrumId; LANES] = core::array::from_fn(|_| {
                 // Every fifth round has unknown ids too.
                 let range = if round % 5 == 0 { spectra + 3 } else { spectra };
-                rng.next_u32() % range
+                SpectrumId(rng.next_u32() % range)
             });
             let by_id = transport.gather_ids(&scene, &(), &ids, lanes);
             let spectra: [LaneSpectrum; LANES] = core::array::from_fn(|lane| {

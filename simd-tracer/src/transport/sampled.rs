@@ -77,7 +77,7 @@ pub(super) fn gather_sampled<const C: usize>(
         let on_grid = match &spectrum.of {
             Some(SpectralRef::Scene(id)) => scene
                 .spectra()
-                .get(*id as usize)
+                .get(id.index())
                 .filter(|s| s.range() == &wavelengths.grid),
             _ => None,
         };

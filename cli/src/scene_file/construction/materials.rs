@@ -14,7 +14,7 @@
 use super::Construction;
 use crate::error::CliError;
 use crate::scene_file::source::Spot;
-use simd_tracer::ids::{MaterialId, SpectrumId, TextureId};
+use simd_tracer::ids::{AngularId, MaterialId, SpectrumId, TextureId};
 use simd_tracer::scene::SceneError;
 use simd_tracer::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, REFERENCE_WAVELENGTH_NM};
@@ -124,7 +124,7 @@ impl Construction<'_> {
         at: &Spot,
         name: &str,
         f: AngularFunction,
-    ) -> Result<u32, CliError> {
+    ) -> Result<AngularId, CliError> {
         self.builder.add_angular(name, f).map_err(|e| match e {
             SceneError::Spectrum(_, e) => self.src.error_at(at, format!("invalid material: {e}")),
             other => self.src.error_at(at, other),
@@ -140,7 +140,7 @@ impl Construction<'_> {
         origin: &Spot,
         n: SpectrumId,
         k: SpectrumId,
-    ) -> Result<u32, CliError> {
+    ) -> Result<AngularId, CliError> {
         let function = AngularFunction::Conductor {
             n: self.prepared(origin, n)?,
             k: self.prepared(origin, k)?,

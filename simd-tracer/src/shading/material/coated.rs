@@ -32,11 +32,11 @@ impl CoatLobes {
         let mean_albedo = match base {
             SpectralRef::Scene(id) => tables
                 .spectra
-                .get(id as usize)
+                .get(id.index())
                 .map_or(0.5, |s| s.mean() as f32),
             SpectralRef::Texture { texture, u, v } => tables
                 .textures
-                .get(texture as usize)
+                .get(texture.index())
                 .map_or(0.5, |t| t.scalar_at(u, v)),
             SpectralRef::Angular { .. } => 0.5,
         };

@@ -261,7 +261,7 @@ pub fn diffuse_fresnel(eta: f64) -> f64 {
 fn angular_mean(tables: &MaterialTables<'_>, id: AngularId, cos: f32, thickness: f32) -> f32 {
     tables
         .angular
-        .get(id as usize)
+        .get(id.index())
         .map_or(0.0, |a| a.mean(cos, thickness))
 }
 

@@ -150,7 +150,7 @@ impl Bsdf {
                 thickness,
             } => {
                 let t = thickness
-                    .and_then(|id| tables.textures.get(id as usize))
+                    .and_then(|id| tables.textures.get(id.index()))
                     .map_or(0.0, |tex| tex.scalar_at(p.uv.x, p.uv.y));
                 let (r, tr, eta) = match (p.front, back) {
                     (false, Some((br, bt))) => (*br, Some(*bt), 1.0 / substrate_ior),
