@@ -35,6 +35,8 @@
 //! Russian roulette starts at `rr_depth` (Mitsuba's default 5) with
 //! survival probability `min(0.95, mean spectral throughput)`.
 
+pub mod compaction;
+
 use crate::scene::Scene;
 
 mod emission;
@@ -296,5 +298,3 @@ mod tests {
         }
     }
 }
-
-pub mod compaction;

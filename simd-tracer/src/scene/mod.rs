@@ -6,6 +6,11 @@
 //! material is two-sided. Degenerate triangles (zero area, non-finite) are
 //! dropped at build time and counted in [`Scene::skipped_triangles`].
 
+pub mod builtin;
+pub mod camera;
+pub mod obj;
+pub mod shapes;
+
 use crate::accel::{Bvh, TriangleSubset};
 use crate::ids::{AngularId, MaterialId, SpectrumId, TextureId};
 use crate::scene::camera::Camera;
@@ -586,11 +591,6 @@ impl SceneBuilder {
         })
     }
 }
-
-pub mod builtin;
-pub mod camera;
-pub mod obj;
-pub mod shapes;
 
 #[cfg(test)]
 mod tests {

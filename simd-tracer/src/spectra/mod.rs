@@ -16,6 +16,9 @@
 //! coefficient `j` of spectrum `s`, so a packet whose lanes name those
 //! spectra reads its coefficients with one permute per coefficient.
 
+pub mod angular;
+pub mod texture;
+
 use crate::simd::LANES;
 use crate::simd::lookup_f32x8;
 use spectral_core::registry::Builtin;
@@ -409,6 +412,3 @@ mod tests {
         assert!(SceneSpectrum::new(bb, range).is_err());
     }
 }
-
-pub mod angular;
-pub mod texture;
