@@ -15,6 +15,14 @@ use crate::simd::{LANES, LaneMask};
 use crate::transport::Transport;
 use wide::f32x8;
 
+/// Where a ray leaving the surface towards `direction` starts: `above`
+/// (offset along the shading-side `normal`) or, for directions below the
+/// surface (transmission, and lights seen through it), `below`.
+#[inline(always)]
+fn departure(direction: Vec3x8, normal: Vec3x8, above: Vec3x8, below: Vec3x8) -> Vec3x8 {
+    Vec3x8::select(direction.dot(normal).simd_lt(f32x8::ZERO), below, above)
+}
+
 /// One packet's share of its group's state in a bounce: its rays (made
 /// the next segment's), its shadow rays and light sample, its random
 /// streams and its wavelengths.
@@ -153,6 +161,7 @@ impl<S: Copy> PathState<S> {
             return;
         }
         let origin = offset_x8(position, normal);
+        let origin_below = offset_x8(position, -normal);
         let shading = if surface.all_lambert(active) {
             Shading::Lambert {
                 albedo: surface.lambert_albedo,
@@ -190,8 +199,7 @@ impl<S: Copy> PathState<S> {
         // the transmitted direct light would be lost. Only the shadow ray
         // moves: `wi`, `eval` and the weights above are those of `origin`
         // (they differ by `O(RAY_EPSILON)`).
-        let light_below = wi.dot(normal).simd_lt(f32x8::ZERO);
-        let shadow_origin = Vec3x8::select(light_below, offset_x8(position, -normal), origin);
+        let shadow_origin = departure(wi, normal, origin, origin_below);
         *shadow = RayPacket {
             origin: shadow_origin.to_array(),
             direction: (light.point - shadow_origin).to_array(),
@@ -214,8 +222,7 @@ impl<S: Copy> PathState<S> {
         for lane in sample.terminate_secondary.and(active).iter() {
             transport.terminate_secondary(wavelengths, lane);
         }
-        let below = sample.wi.dot(normal).simd_lt(f32x8::ZERO);
-        let next_origin = Vec3x8::select(below, offset_x8(position, -normal), origin);
+        let next_origin = departure(sample.wi, normal, origin, origin_below);
         self.previous_pdf = sample.pdf;
 
         // The one truncated product of the bounce: T ⊛ f(sampled direction),
