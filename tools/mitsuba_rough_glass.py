@@ -146,7 +146,7 @@ def main():
     scene["sensor"]["sampler"]["sample_count"] = a.spp
     image = np.array(mi.render(mi.load_dict(scene)))
     if a.out:
-        mi.util.write_bitmap(str(a.out), image)
+        mi.Bitmap(image).write(str(a.out))
     mask = sphere_mask(a.width, a.height)
     for other in a.compare:
         ours = np.array(mi.Bitmap(str(other)))[:, :, :3]
