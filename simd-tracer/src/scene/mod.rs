@@ -8,6 +8,7 @@
 
 pub mod builtin;
 pub mod camera;
+pub mod mesh;
 pub mod obj;
 pub mod shapes;
 
