@@ -264,3 +264,53 @@ pub(super) struct ShadingSample {
     pub(super) terminate_secondary: LaneMask,
     pub(super) spectrum: Factors,
 }
+
+/// The shading normals of a packet's hits (module `path`'s convention):
+/// in lanes on smooth triangles, the interpolated vertex normal
+/// `normalize(b0 n0 + b1 n1 + b2 n2)`, turned to the side of `geometric`
+/// (the geometric normal already on the side of `wo`); where that normal
+/// faces away from `wo` (a grazing view of a strongly bent normal), the
+/// geometric normal. Elsewhere `geometric`.
+pub(super) fn shading_normals(
+    scene: &Scene,
+    hit: &PacketHit,
+    active: LaneMask,
+    geometric: Vec3x8,
+    wo: Vec3x8,
+) -> Vec3x8 {
+    let (u, v) = (hit.u.to_array(), hit.v.to_array());
+    let geometric_lanes = geometric.to_lanes();
+    let wo_lanes = wo.to_lanes();
+    let mut lanes = geometric_lanes;
+    for lane in active.iter() {
+        let Some([n0, n1, n2]) = scene.vertex_normals(hit.triangle[lane] as usize) else {
+            continue;
+        };
+        let interpolated = *n0 * (1.0 - u[lane] - v[lane]) + *n1 * u[lane] + *n2 * v[lane];
+        let Some(n) = interpolated.try_normalize() else {
+            continue;
+        };
+        let g = geometric_lanes[lane];
+        // The vertex normals lie on the front side of the triangle; the
+        // geometric normal here may have been turned to the back.
+        let front = scene
+            .normals()
+            .get(hit.triangle[lane] as usize)
+            .is_none_or(|&ng| ng.dot(g) >= 0.0);
+        let n = if front { n } else { -n };
+        if n.dot(wo_lanes[lane]) > 0.0 {
+            lanes[lane] = n;
+        }
+    }
+    Vec3x8::from_lanes(&lanes)
+}
+
+/// Lanes where `wi` lies on the same side of the shading normal as of the
+/// geometric one: the guard against light leaking through a surface whose
+/// shading normal is bent (module `path`). A direction on opposite sides
+/// counts as neither reflection nor transmission and contributes nothing.
+#[inline(always)]
+pub(super) fn consistent_sides(wi: Vec3x8, geometric: Vec3x8, shading: Vec3x8) -> f32x8 {
+    let (cos_geometric, cos_shading) = (wi.dot(geometric), wi.dot(shading));
+    (cos_geometric * cos_shading).simd_gt(f32x8::ZERO)
+}

@@ -2,7 +2,9 @@
 //! light sample and the bounce itself.
 
 use super::emission::{EmissionSums, Emitted};
-use super::packet_shading::{Shading, offset_x8, power_heuristic_x8, uniforms};
+use super::packet_shading::{
+    Shading, consistent_sides, offset_x8, power_heuristic_x8, shading_normals, uniforms,
+};
 use super::{PathContext, RR_MAX_SURVIVAL, SHADOW_EPSILON};
 use crate::ids::SpectrumId;
 use crate::packet::PacketHit;
@@ -162,13 +164,29 @@ impl<S: Copy> PathState<S> {
         }
         let origin = offset_x8(position, normal);
         let origin_below = offset_x8(position, -normal);
+        // Smooth triangles shade with their interpolated normal; rays
+        // still leave from the geometric surface (`departure`).
+        let smooth = scene.has_vertex_normals();
+        let shading_normal = if smooth {
+            shading_normals(scene, hit, active, normal, wo)
+        } else {
+            normal
+        };
         let shading = if surface.all_lambert(active) {
             Shading::Lambert {
                 albedo: surface.lambert_albedo,
                 lanes: active,
             }
         } else {
-            Shading::general(scene, transport, wavelengths, hit, active, normal, front)
+            Shading::general(
+                scene,
+                transport,
+                wavelengths,
+                hit,
+                active,
+                shading_normal,
+                front,
+            )
         };
 
         // Next-event estimation: one light sample per lane, one shadow packet.
@@ -179,7 +197,11 @@ impl<S: Copy> PathState<S> {
         let distance_sq = to_light.length_squared();
         let wi = to_light * (f32x8::ONE / distance_sq.sqrt());
         let cos_light = -light.surface.normal.dot(wi);
-        let eval = shading.eval(scene, light.valid, normal, wo, wi);
+        let mut eval = shading.eval(scene, light.valid, shading_normal, wo, wi);
+        if smooth {
+            eval.value =
+                consistent_sides(wi, normal, shading_normal).select(eval.value, f32x8::ZERO);
+        }
         let p_light =
             light.surface.light_pmf * distance_sq / (light.surface.area * cos_light.abs());
         let emits = light.surface.emits_towards(cos_light).and(light.valid);
@@ -215,7 +237,11 @@ impl<S: Copy> PathState<S> {
             u,
             v,
         };
-        let sample = shading.sample(scene, active, normal, wo, &uniforms);
+        let mut sample = shading.sample(scene, active, shading_normal, wo, &uniforms);
+        if smooth {
+            let consistent = consistent_sides(sample.wi, normal, shading_normal);
+            sample.valid = sample.valid.and(LaneMask::from_simd(consistent));
+        }
         active = active
             .and(sample.valid)
             .and(LaneMask::from_simd(sample.weight.simd_gt(f32x8::ZERO)));

@@ -6,15 +6,19 @@
 //! material is two-sided. Degenerate triangles (zero area, non-finite) are
 //! dropped at build time and counted in [`Scene::skipped_triangles`].
 
+pub mod analytic;
 pub mod builtin;
 pub mod camera;
 pub mod mesh;
 pub mod obj;
 pub mod shapes;
+pub mod transform;
 
 use crate::accel::{Bvh, TriangleSubset};
-use crate::ids::{AngularId, MaterialId, SpectrumId, TextureId};
+use crate::ids::{AngularId, MaterialId, NO_ID, SpectrumId, TextureId};
 use crate::scene::camera::Camera;
+use crate::scene::mesh::MeshData;
+use crate::scene::transform::Transform;
 use crate::shading::light::{Light, LightSet};
 use crate::shading::material::{Material, MaterialTables};
 use crate::shading::surface::{PackedSurfaces, Surface, triangle_area};
@@ -46,6 +50,8 @@ pub enum SceneError {
     NoCamera,
     /// The BVH failed validation.
     Bvh(String),
+    /// A mesh is malformed (its [`MeshData::validate`] message).
+    Mesh(String),
 }
 
 impl core::fmt::Display for SceneError {
@@ -63,6 +69,7 @@ impl core::fmt::Display for SceneError {
             Self::Empty => write!(f, "the scene has no usable triangle"),
             Self::NoCamera => write!(f, "the scene has no camera"),
             Self::Bvh(message) => write!(f, "BVH: {message}"),
+            Self::Mesh(message) => write!(f, "mesh: {message}"),
         }
     }
 }
@@ -90,6 +97,13 @@ pub struct Scene {
     triangle_material: Vec<MaterialId>,
     /// Texture coordinates of each triangle's vertices (zero if none).
     uvs: Vec<[Vec2; 3]>,
+    /// Per triangle, the index of its vertex normals in
+    /// [`Scene::vertex_normals`], or [`NO_ID`] (flat shaded). Empty if no
+    /// triangle is smooth.
+    shading_index: Vec<u32>,
+    /// Unit vertex normals of the smooth triangles, on the front side of
+    /// their triangle (their mean points the way the winding does).
+    vertex_normals: Vec<[Vec3; 3]>,
     /// The camera.
     camera: Camera,
     /// Radiance arriving from every direction that escapes the scene.
@@ -164,6 +178,19 @@ impl Scene {
     /// uvs
     pub fn uvs(&self) -> &[[Vec2; 3]] {
         &self.uvs
+    }
+
+    /// The unit vertex normals of triangle `index`, if it is smooth shaded.
+    #[inline]
+    pub fn vertex_normals(&self, index: usize) -> Option<&[Vec3; 3]> {
+        let at = *self.shading_index.get(index)?;
+        self.vertex_normals.get(at as usize)
+    }
+
+    /// Whether any triangle has vertex normals.
+    #[inline]
+    pub fn has_vertex_normals(&self) -> bool {
+        !self.vertex_normals.is_empty()
     }
 
     /// camera
@@ -269,6 +296,8 @@ impl Scene {
             + vec_bytes(&self.normals)
             + vec_bytes(&self.triangle_material)
             + vec_bytes(&self.uvs)
+            + vec_bytes(&self.shading_index)
+            + vec_bytes(&self.vertex_normals)
             + vec_bytes(&self.surfaces)
             + self.packed_surfaces.memory_bytes();
         let kept = self.bvh.input_triangles() - self.bvh.skipped_triangles();
@@ -371,9 +400,37 @@ pub struct SceneBuilder {
     triangles: Vec<[Vec3; 3]>,
     triangle_material: Vec<MaterialId>,
     uvs: Vec<[Vec2; 3]>,
+    shading_index: Vec<u32>,
+    vertex_normals: Vec<[Vec3; 3]>,
     camera: Option<Camera>,
     environment: Option<SpectrumId>,
     skipped: usize,
+}
+
+/// How [`SceneBuilder::add_mesh_data`] places a mesh.
+#[derive(Debug, Clone, Copy)]
+pub struct MeshPlacement<'a> {
+    /// Object to world.
+    pub transform: &'a Transform,
+    /// Material of every triangle.
+    pub material: MaterialId,
+    /// Flip the front face (winding and vertex normals), Mitsuba's
+    /// `flip_normals`.
+    pub flip_normals: bool,
+    /// Ignore the vertex normals (flat shading), Mitsuba's `face_normals`.
+    pub face_normals: bool,
+}
+
+/// What [`SceneBuilder::add_mesh_data`] added.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct MeshAdded {
+    /// Triangles kept.
+    pub triangles: usize,
+    /// Triangles skipped as degenerate (zero area or non-finite after the
+    /// transform).
+    pub degenerate: usize,
+    /// Kept triangles with vertex normals.
+    pub smooth: usize,
 }
 
 /// The raw words of a list of ids (for the reference check's messages).
@@ -393,6 +450,8 @@ impl SceneBuilder {
             triangles: Vec::new(),
             triangle_material: Vec::new(),
             uvs: Vec::new(),
+            shading_index: Vec::new(),
+            vertex_normals: Vec::new(),
             camera: None,
             environment: None,
             skipped: 0,
@@ -459,16 +518,110 @@ impl SceneBuilder {
 
     /// Adds one triangle with texture coordinates.
     pub fn add_triangle_uv(&mut self, vertices: [Vec3; 3], uvs: [Vec2; 3], material: MaterialId) {
+        self.add_shaded_triangle(vertices, uvs, None, material);
+    }
+
+    /// Adds one triangle with texture coordinates and, if `normals` is
+    /// given, smooth shading from these vertex normals (normalised here).
+    /// Returns whether it was kept (not degenerate).
+    ///
+    /// A smooth triangle whose normals point, on average, against its
+    /// winding is turned over (two vertices swapped): the front face is
+    /// where the shading normals point, as Mitsuba flips the geometric
+    /// normal to the shading normal's side. A triangle with a zero or
+    /// non-finite vertex normal is shaded flat.
+    pub fn add_shaded_triangle(
+        &mut self,
+        vertices: [Vec3; 3],
+        uvs: [Vec2; 3],
+        normals: Option<[Vec3; 3]>,
+        material: MaterialId,
+    ) -> bool {
         let [a, b, c] = vertices;
-        let area2 = (b - a).cross(c - a).length_squared();
+        let cross = (b - a).cross(c - a);
+        let area2 = cross.length_squared();
         let finite = vertices.iter().all(|v| v.is_finite()) && uvs.iter().all(|t| t.is_finite());
-        if finite && area2.is_finite() && area2 > 0.0 {
-            self.triangles.push(vertices);
-            self.triangle_material.push(material);
-            self.uvs.push(uvs);
-        } else {
+        if !(finite && area2.is_finite() && area2 > 0.0) {
             self.skipped += 1;
+            return false;
         }
+        let unit = normals.and_then(|[n0, n1, n2]| {
+            Some([
+                n0.try_normalize()?,
+                n1.try_normalize()?,
+                n2.try_normalize()?,
+            ])
+        });
+        let (mut vertices, mut uvs, mut unit) = (vertices, uvs, unit);
+        if let Some(n) = unit
+            && (n[0] + n[1] + n[2]).dot(cross) < 0.0
+        {
+            vertices.swap(1, 2);
+            uvs.swap(1, 2);
+            unit = Some([n[0], n[2], n[1]]);
+        }
+        if let Some(n) = unit {
+            if self.shading_index.len() < self.triangles.len() {
+                self.shading_index.resize(self.triangles.len(), NO_ID);
+            }
+            self.shading_index.push(self.vertex_normals.len() as u32);
+            self.vertex_normals.push(n);
+        } else if !self.shading_index.is_empty() {
+            self.shading_index.push(NO_ID);
+        }
+        self.triangles.push(vertices);
+        self.triangle_material.push(material);
+        self.uvs.push(uvs);
+        true
+    }
+
+    /// Adds a mesh read from a file (or made by [`shapes`]), placed by
+    /// `placement`: positions by the transform, vertex normals by its
+    /// inverse transpose; a mirroring transform or `flip_normals` swaps the
+    /// winding (and `flip_normals` negates the normals) so that the front
+    /// face stays outside ([`Transform`]). Triangles missing texture
+    /// coordinates get `(0, 0)`.
+    pub fn add_mesh_data(
+        &mut self,
+        mesh: &MeshData,
+        placement: &MeshPlacement<'_>,
+    ) -> Result<MeshAdded, SceneError> {
+        mesh.validate().map_err(SceneError::Mesh)?;
+        let transform = placement.transform;
+        let positions: Vec<Vec3> = mesh.positions.iter().map(|&p| transform.point(p)).collect();
+        let smooth = !placement.face_normals && !mesh.normals.is_empty();
+        let sign = if placement.flip_normals { -1.0 } else { 1.0 };
+        let normals: Vec<Vec3> = if smooth {
+            mesh.normals
+                .iter()
+                .map(|&n| transform.normal(n).map_or(Vec3::ZERO, |n| sign * n))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let swap = transform.flips_handedness() != placement.flip_normals;
+        let mut added = MeshAdded::default();
+        for &[i0, i1, i2] in &mesh.triangles {
+            let order = if swap { [i0, i2, i1] } else { [i0, i1, i2] };
+            let at = |list: &[Vec3]| order.map(|i| list.get(i as usize).copied());
+            let [Some(a), Some(b), Some(c)] = at(&positions) else {
+                return Err(SceneError::Mesh("an index out of range".into()));
+            };
+            let uvs = order.map(|i| mesh.uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO));
+            let vertex_normals = match at(&normals) {
+                [Some(n0), Some(n1), Some(n2)] => Some([n0, n1, n2]),
+                _ => None,
+            };
+            if self.add_shaded_triangle([a, b, c], uvs, vertex_normals, placement.material) {
+                added.triangles += 1;
+                if self.shading_index.last().is_some_and(|&i| i != NO_ID) {
+                    added.smooth += 1;
+                }
+            } else {
+                added.degenerate += 1;
+            }
+        }
+        Ok(added)
     }
 
     /// Adds the quad `a b c d` (counter-clockwise) as two triangles.
@@ -556,6 +709,10 @@ impl SceneBuilder {
             .collect();
         let bvh = Bvh::build(&self.triangles);
         bvh.validate().map_err(SceneError::Bvh)?;
+        let mut shading_index = self.shading_index;
+        if !self.vertex_normals.is_empty() {
+            shading_index.resize(self.triangles.len(), NO_ID);
+        }
         // Material ids were checked above, so every triangle has a record.
         let mut surfaces: Vec<Surface> = normals
             .iter()
@@ -580,6 +737,8 @@ impl SceneBuilder {
             normals,
             triangle_material: self.triangle_material,
             uvs: self.uvs,
+            shading_index,
+            vertex_normals: self.vertex_normals,
             camera,
             environment: self.environment,
             bvh,

@@ -17,6 +17,7 @@
 //! spectra reads its coefficients with one permute per coefficient.
 
 pub mod angular;
+pub mod environment;
 pub mod texture;
 
 use crate::simd::LANES;
