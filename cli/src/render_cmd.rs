@@ -287,6 +287,7 @@ fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSe
         integrator: IntegratorSettings {
             max_depth,
             rr_depth: args.rr_depth,
+            hide_emitters: false,
         },
         seed: args.seed.or(defaults.seed).unwrap_or(0),
         filter: match args.filter {

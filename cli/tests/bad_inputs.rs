@@ -340,6 +340,7 @@ fn settings(width: u32, height: u32) -> RenderSettings {
         integrator: IntegratorSettings {
             max_depth: 8,
             rr_depth: 5,
+            hide_emitters: false,
         },
         seed: 0,
         filter: Filter::Box,

@@ -102,6 +102,7 @@ fn small_settings() -> RenderSettings {
         integrator: IntegratorSettings {
             max_depth: 5,
             rr_depth: 3,
+            hide_emitters: false,
         },
         seed: 1,
         filter: Filter::Box,

@@ -26,6 +26,7 @@ fn settings() -> RenderSettings {
         integrator: IntegratorSettings {
             max_depth: 5,
             rr_depth: 5,
+            hide_emitters: false,
         },
         ..RenderSettings::default()
     }

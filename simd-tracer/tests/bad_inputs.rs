@@ -138,6 +138,7 @@ fn an_empty_image_is_an_error() -> TestResult {
             integrator: IntegratorSettings {
                 max_depth: 4,
                 rr_depth: 3,
+                hide_emitters: false,
             },
             seed: 0,
             filter: Filter::Box,

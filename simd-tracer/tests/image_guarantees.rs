@@ -99,6 +99,7 @@ fn settings(side: u32, spp: u32) -> RenderSettings {
         integrator: IntegratorSettings {
             max_depth: 6,
             rr_depth: 3,
+            hide_emitters: false,
         },
         seed: 3,
         filter: Filter::gaussian(),

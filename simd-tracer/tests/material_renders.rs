@@ -40,6 +40,7 @@ fn settings(width: u32, height: u32, spp: u32, max_depth: u32) -> RenderSettings
         integrator: IntegratorSettings {
             max_depth,
             rr_depth: 8,
+            hide_emitters: false,
         },
         seed: 11,
         filter: Filter::Box,

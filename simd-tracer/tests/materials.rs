@@ -184,7 +184,7 @@ fn spectral_value(scene: &Scene, s: &LaneSpectrum) -> f64 {
         Some(SpectralRef::Angular { id, cos, thickness }) => {
             f64::from(scene.angular()[id.index()].eval(cos, 550.0, thickness))
         }
-        Some(SpectralRef::Texture { .. }) => 0.0,
+        Some(SpectralRef::Texture { .. } | SpectralRef::Environment { .. }) => 0.0,
     };
     f64::from(s.constant) + f64::from(s.scale) * x
 }

@@ -133,6 +133,7 @@ fn mirror_render(fresnel: AngularFunction) -> TestResult<Vec<f64>> {
         integrator: IntegratorSettings {
             max_depth: 4,
             rr_depth: 8,
+            hide_emitters: false,
         },
         seed: 5,
         filter: Filter::Box,

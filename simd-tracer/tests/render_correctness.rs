@@ -118,6 +118,7 @@ fn settings(size: u32, spp: u32, max_depth: u32) -> RenderSettings {
         integrator: IntegratorSettings {
             max_depth,
             rr_depth: 3,
+            hide_emitters: false,
         },
         seed: 7,
         filter: Filter::Box,
@@ -385,6 +386,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
     let integrator = IntegratorSettings {
         max_depth: 6,
         rr_depth: 2,
+        hide_emitters: false,
     };
     let mut compared = 0;
     for packet_index in 0..64u64 {
@@ -561,6 +563,7 @@ fn group_matches_single<T: Transport>(
     let integrator = IntegratorSettings {
         max_depth: 7,
         rr_depth: 3,
+        hide_emitters: false,
     };
     let (width, height) = (32u32, 32u32);
     let mut rng = Rng::new(11, 12);

@@ -164,6 +164,7 @@ pub fn settings(size: u32, spp: u32, seed: u64, threads: Option<usize>) -> Rende
         integrator: IntegratorSettings {
             max_depth: MAX_DEPTH,
             rr_depth: RR_DEPTH,
+            hide_emitters: false,
         },
         seed,
         filter: Filter::gaussian(),

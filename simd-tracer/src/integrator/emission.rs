@@ -127,6 +127,19 @@ impl<S: Copy> EmissionSums<S> {
         }
     }
 
+    /// Adds `value ⊛ le · weight(lane)` directly (emission that is not a
+    /// scene spectrum, such as an environment map's texels).
+    pub(super) fn add_direct<T: Transport<Spectra = S>>(
+        &mut self,
+        transport: &T,
+        value: &S,
+        le: &S,
+        weight: f32x8,
+    ) {
+        let scaled = transport.scale(value, weight);
+        self.direct = transport.add(&self.direct, &transport.mul(&scaled, le));
+    }
+
     /// The total radiance.
     pub(super) fn finish<T: Transport<Spectra = S>>(
         &self,

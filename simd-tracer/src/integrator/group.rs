@@ -44,6 +44,8 @@ impl<S: Copy, const G: usize> GroupState<S, G> {
                 weight: f32x8::ZERO,
                 light: [SpectrumId::NONE; LANES],
                 lanes: LaneMask::NONE,
+                environment: LaneMask::NONE,
+                environment_uv: [[0.0; 2]; LANES],
                 through_bsdf: transport.zero(),
             }),
         }
@@ -114,7 +116,7 @@ pub fn trace_group<T: Transport, const G: usize>(
                 *hit = scene.bvh().intersect_packet(rays);
             }
         } else if depth >= settings.max_depth
-            && scene.environment().is_none()
+            && !scene.has_environment()
             && scene.emitters().len() <= LAST_SEGMENT_EMITTERS
         {
             counts.shadow += last_segment_hits(scene, &rays, &mut hits, &mut shadows);

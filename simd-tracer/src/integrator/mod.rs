@@ -65,6 +65,9 @@ pub struct IntegratorSettings {
     pub max_depth: u32,
     /// Depth from which Russian roulette may end paths.
     pub rr_depth: u32,
+    /// Emitters (the environment, emissive surfaces) are not seen by camera
+    /// rays, though they light the scene (Mitsuba's `hide_emitters`).
+    pub hide_emitters: bool,
 }
 
 impl Default for IntegratorSettings {
@@ -72,6 +75,7 @@ impl Default for IntegratorSettings {
         Self {
             max_depth: 8,
             rr_depth: 5,
+            hide_emitters: false,
         }
     }
 }

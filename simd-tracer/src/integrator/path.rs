@@ -11,10 +11,13 @@ use crate::packet::PacketHit;
 use crate::packet::RayPacket;
 use crate::sampling::rng::RngPacket;
 use crate::scene::Scene;
-use crate::shading::material::SampleUniforms;
+use crate::shading::light_sampler::LightEmission;
+use crate::shading::material::{LaneSpectrum, SampleUniforms, SpectralRef};
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
+use crate::spectra::environment::EnvironmentMap;
 use crate::transport::Transport;
+use glam::Vec3;
 use wide::f32x8;
 
 /// Where a ray leaving the surface towards `direction` starts: `above`
@@ -23,6 +26,123 @@ use wide::f32x8;
 #[inline(always)]
 fn departure(direction: Vec3x8, normal: Vec3x8, above: Vec3x8, below: Vec3x8) -> Vec3x8 {
     Vec3x8::select(direction.dot(normal).simd_lt(f32x8::ZERO), below, above)
+}
+
+/// The largest `f32` below 1: a rescaled light number stays in [0, 1).
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// Power heuristic `a²/(a² + b²)` of one lane (0 where both are 0).
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
+}
+
+/// The environment map's radiance at `uv` in the lanes of `lanes` (0
+/// elsewhere).
+fn environment_spectra<T: Transport>(
+    transport: &T,
+    scene: &Scene,
+    wavelengths: &T::Wavelengths,
+    lanes: LaneMask,
+    uv: &[[f32; 2]; LANES],
+) -> T::Spectra {
+    let spectra: [LaneSpectrum; LANES] = core::array::from_fn(|lane| {
+        if lanes.contains(lane) {
+            LaneSpectrum::of(SpectralRef::Environment { uv: uv[lane] })
+        } else {
+            LaneSpectrum::ZERO
+        }
+    });
+    transport.gather(scene, wavelengths, &spectra)
+}
+
+/// The light samples of the lanes that chose a light other than a
+/// triangle, 8-wide for the bounce to blend in.
+struct OtherLights {
+    /// Lanes with such a sample.
+    lanes: LaneMask,
+    /// Of those, the delta lights (point, directional).
+    delta: LaneMask,
+    /// Of those, lights at infinity (directional, environment).
+    infinite: LaneMask,
+    /// Of those, the environment map.
+    environment: LaneMask,
+    wi: Vec3x8,
+    /// Point-light positions (the shadow rays' ends).
+    target: Vec3x8,
+    pdf: f32x8,
+    /// Emission factor (1 outside `lanes`).
+    factor: f32x8,
+    emission: [SpectrumId; LANES],
+    environment_uv: [[f32; 2]; LANES],
+}
+
+impl Default for OtherLights {
+    fn default() -> Self {
+        Self {
+            lanes: LaneMask::NONE,
+            delta: LaneMask::NONE,
+            infinite: LaneMask::NONE,
+            environment: LaneMask::NONE,
+            wi: Vec3x8::splat(Vec3::Z),
+            target: Vec3x8::splat(Vec3::ZERO),
+            pdf: f32x8::ZERO,
+            factor: f32x8::ONE,
+            emission: [SpectrumId::NONE; LANES],
+            environment_uv: [[0.0; 2]; LANES],
+        }
+    }
+}
+
+impl OtherLights {
+    /// Samples the lanes of `lanes` (their rescaled light numbers in
+    /// `u_light`, points on the light from `uv`) from `origin`.
+    fn sample(
+        &mut self,
+        scene: &Scene,
+        lanes: LaneMask,
+        u_light: &[f32; LANES],
+        uv: [f32x8; 2],
+        origin: Vec3x8,
+    ) {
+        let (u, v) = (uv[0].to_array(), uv[1].to_array());
+        let origins = origin.to_lanes();
+        let (mut wi, mut target) = ([Vec3::Z; LANES], [Vec3::ZERO; LANES]);
+        let (mut pdf, mut factor) = ([0.0f32; LANES], [1.0f32; LANES]);
+        for lane in lanes.iter() {
+            let Some(sample) = scene.light_sampler().sample(
+                u_light[lane],
+                [u[lane], v[lane]],
+                origins[lane],
+                scene.environment_map(),
+            ) else {
+                continue;
+            };
+            self.lanes = self.lanes.with(lane);
+            wi[lane] = sample.wi;
+            pdf[lane] = sample.pdf;
+            factor[lane] = sample.factor;
+            if sample.delta {
+                self.delta = self.delta.with(lane);
+            }
+            if sample.distance.is_infinite() {
+                self.infinite = self.infinite.with(lane);
+            } else {
+                target[lane] = origins[lane] + sample.wi * sample.distance;
+            }
+            match sample.emission {
+                LightEmission::Spectrum(id) => self.emission[lane] = id,
+                LightEmission::Environment(at) => {
+                    self.environment = self.environment.with(lane);
+                    self.environment_uv[lane] = at;
+                }
+            }
+        }
+        self.wi = Vec3x8::from_lanes(&wi);
+        self.target = Vec3x8::from_lanes(&target);
+        self.pdf = f32x8::new(pdf);
+        self.factor = f32x8::new(factor);
+    }
 }
 
 /// One packet's share of its group's state in a bounce: its rays (made
@@ -55,6 +175,11 @@ pub(super) struct NeeSample<S> {
     /// The lights' emission spectra, in the lanes of `lanes`.
     pub(super) light: [SpectrumId; LANES],
     pub(super) lanes: LaneMask,
+    /// Lanes of `lanes` whose light is the environment map (their
+    /// emission is the map at `environment_uv`, not `light`).
+    pub(super) environment: LaneMask,
+    /// Map coordinates of the environment samples.
+    pub(super) environment_uv: [[f32; 2]; LANES],
     /// Throughput times the BSDF's spectral factor towards the light.
     pub(super) through_bsdf: S,
 }
@@ -105,9 +230,15 @@ impl<S: Copy> PathState<S> {
         if self.active.is_empty() {
             return;
         }
-        // Escaped lanes see the environment (no NEE for it, so no MIS).
+        // Escaped lanes see the environment: a constant one without NEE
+        // (weight 1), a map MIS-weighted against its NEE samples. With
+        // `hide_emitters`, camera rays see neither.
         let missed = self.active.and_not(hit.hit);
-        if let (Some(env), false) = (scene.environment(), missed.is_empty()) {
+        let visible = !(settings.hide_emitters && depth == 1);
+        if let (Some(map), false, true) = (scene.environment_map(), missed.is_empty(), visible) {
+            self.add_environment(context, wavelengths, rays, missed, map);
+        }
+        if let (Some(env), false, true) = (scene.environment(), missed.is_empty(), visible) {
             self.emitted.add(
                 transport,
                 scene,
@@ -139,7 +270,7 @@ impl<S: Copy> PathState<S> {
         // Emission at the hit points, MIS-weighted against NEE (weight 1
         // after a camera ray or a delta lobe: no MIS).
         let emits = surface.emits_towards(cos_o).and(active);
-        if !emits.is_empty() {
+        if !emits.is_empty() && visible {
             let distance = hit.t * direction_length;
             let p_light = surface.light_pdf(distance * distance, cos_o);
             let weight = self
@@ -189,43 +320,84 @@ impl<S: Copy> PathState<S> {
             )
         };
 
-        // Next-event estimation: one light sample per lane, one shadow packet.
-        let u_light = uniforms(rngs, active).to_array();
+        // Next-event estimation: one light sample per lane, one shadow
+        // packet. A lane samples the emissive triangles with probability
+        // `P_tri` (1 without other lights), else a point, directional or
+        // environment light (`shading::light_sampler`).
+        let mut u_light = uniforms(rngs, active).to_array();
         let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
-        let light = scene.lights().sample_packet(active, &u_light, u, v);
+        let sampler = scene.light_sampler();
+        let mut others = LaneMask::NONE;
+        if sampler.has_others() {
+            let share = sampler.triangle_share();
+            for lane in active.iter() {
+                if u_light[lane] >= share {
+                    others = others.with(lane);
+                    u_light[lane] = ((u_light[lane] - share) / (1.0 - share)).min(ONE_BELOW);
+                } else {
+                    u_light[lane] = (u_light[lane] / share).min(ONE_BELOW);
+                }
+            }
+        }
+        let light = scene
+            .lights()
+            .sample_packet(active.and_not(others), &u_light, u, v);
         let to_light = light.point - origin;
         let distance_sq = to_light.length_squared();
-        let wi = to_light * (f32x8::ONE / distance_sq.sqrt());
+        let mut wi = to_light * (f32x8::ONE / distance_sq.sqrt());
         let cos_light = -light.surface.normal.dot(wi);
-        let mut eval = shading.eval(scene, light.valid, shading_normal, wo, wi);
+        let mut p_light =
+            light.surface.light_pmf * distance_sq / (light.surface.area * cos_light.abs());
+        let mut emits = light.surface.emits_towards(cos_light).and(light.valid);
+        let mut other = OtherLights::default();
+        if !others.is_empty() {
+            other.sample(scene, others, &u_light, [u, v], origin);
+            wi = Vec3x8::select(other.lanes.to_simd(), other.wi, wi);
+            p_light = other.lanes.to_simd().select(other.pdf, p_light);
+            emits = emits.or(other.lanes);
+        }
+        let mut eval = shading.eval(scene, light.valid.or(other.lanes), shading_normal, wo, wi);
         if smooth {
             eval.value =
                 consistent_sides(wi, normal, shading_normal).select(eval.value, f32x8::ZERO);
         }
-        let p_light =
-            light.surface.light_pmf * distance_sq / (light.surface.area * cos_light.abs());
-        let emits = light.surface.emits_towards(cos_light).and(light.valid);
         let usable = eval.value.simd_gt(f32x8::ZERO)
             & p_light.simd_gt(f32x8::ZERO)
-            & distance_sq.simd_gt(f32x8::ZERO);
+            & (distance_sq.simd_gt(f32x8::ZERO) | other.lanes.to_simd());
         let nee_lanes = emits.and(LaneMask::from_simd(usable));
-        nee.weight = nee_lanes.to_simd().select(
-            eval.value * power_heuristic_x8(p_light, eval.pdf) / p_light,
-            f32x8::ZERO,
-        );
-        (nee.light, nee.lanes) = (light.surface.emission, nee_lanes);
+        // Delta lights take no MIS; their emission factor carries `1/d²`.
+        let mis = other
+            .delta
+            .to_simd()
+            .select(f32x8::ONE, power_heuristic_x8(p_light, eval.pdf));
+        nee.weight = nee_lanes
+            .to_simd()
+            .select(eval.value * mis * other.factor / p_light, f32x8::ZERO);
+        nee.light = light.surface.emission;
+        for lane in other.lanes.iter() {
+            nee.light[lane] = other.emission[lane];
+        }
+        nee.lanes = nee_lanes;
+        nee.environment = other.environment.and(nee_lanes);
+        nee.environment_uv = other.environment_uv;
         // A light below the surface is seen through a transmitting BSDF
         // (e.g. from inside rough glass): its shadow ray starts below the
         // surface, as a sampled transmission does. From `origin`, above, it
         // would hit its own triangle, and the light samples' MIS share of
         // the transmitted direct light would be lost. Only the shadow ray
         // moves: `wi`, `eval` and the weights above are those of `origin`
-        // (they differ by `O(RAY_EPSILON)`).
+        // (they differ by `O(RAY_EPSILON)`). Rays to lights at infinity
+        // run along `wi` without end; to a point light they stop short of it.
         let shadow_origin = departure(wi, normal, origin, origin_below);
+        let target = Vec3x8::select(other.lanes.to_simd(), other.target, light.point);
+        let infinite = other.infinite.to_simd();
         *shadow = RayPacket {
             origin: shadow_origin.to_array(),
-            direction: (light.point - shadow_origin).to_array(),
-            t_max: f32x8::splat(1.0 - SHADOW_EPSILON),
+            direction: Vec3x8::select(infinite, wi, target - shadow_origin).to_array(),
+            t_max: infinite.select(
+                f32x8::splat(f32::INFINITY),
+                f32x8::splat(1.0 - SHADOW_EPSILON),
+            ),
             active: nee_lanes,
         };
 
@@ -303,6 +475,19 @@ impl<S: Copy> PathState<S> {
     ) {
         let weight = blocked.to_simd().select(f32x8::ZERO, nee.weight);
         if weight.simd_gt(f32x8::ZERO).any() {
+            let environment = nee.environment.to_simd();
+            if !nee.environment.is_empty() {
+                let le = environment_spectra(
+                    transport,
+                    scene,
+                    wavelengths,
+                    nee.environment,
+                    &nee.environment_uv,
+                );
+                let weight = environment.select(weight, f32x8::ZERO);
+                self.emitted
+                    .add_direct(transport, &nee.through_bsdf, &le, weight);
+            }
             self.emitted.add(
                 transport,
                 scene,
@@ -310,10 +495,42 @@ impl<S: Copy> PathState<S> {
                 &Emitted {
                     through: &nee.through_bsdf,
                     emission: &nee.light,
-                    lanes: nee.lanes,
-                    weight,
+                    lanes: nee.lanes.and_not(nee.environment),
+                    weight: environment.select(f32x8::ZERO, weight),
                 },
             );
         }
+    }
+
+    /// Adds the environment map seen by the escaped lanes `missed` of
+    /// `rays`, MIS-weighted against the map's light samples after a BSDF
+    /// sample (weight 1 after a camera ray or a delta lobe).
+    fn add_environment<T: Transport<Spectra = S>>(
+        &mut self,
+        context: &PathContext<'_, T>,
+        wavelengths: &T::Wavelengths,
+        rays: &RayPacket,
+        missed: LaneMask,
+        map: &EnvironmentMap,
+    ) {
+        let PathContext {
+            transport, scene, ..
+        } = *context;
+        let directions = Vec3x8::from_array(rays.direction).to_lanes();
+        let previous = self.previous_pdf.to_array();
+        let mut uv = [[0.0f32; 2]; LANES];
+        let mut weight = [0.0f32; LANES];
+        for lane in missed.iter() {
+            uv[lane] = map.uv_of(directions[lane]);
+            weight[lane] = if previous[lane] > 0.0 {
+                let p_light = scene.light_sampler().environment_pdf(map, directions[lane]);
+                power_heuristic(previous[lane], p_light)
+            } else {
+                1.0
+            };
+        }
+        let le = environment_spectra(transport, scene, wavelengths, missed, &uv);
+        self.emitted
+            .add_direct(transport, &self.throughput, &le, f32x8::new(weight));
     }
 }

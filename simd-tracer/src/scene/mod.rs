@@ -20,9 +20,11 @@ use crate::scene::camera::Camera;
 use crate::scene::mesh::MeshData;
 use crate::scene::transform::Transform;
 use crate::shading::light::{Light, LightSet};
+use crate::shading::light_sampler::{DirectionalLight, LightSampler, PointLight, SceneLights};
 use crate::shading::material::{Material, MaterialTables};
 use crate::shading::surface::{PackedSurfaces, Surface, triangle_area};
 use crate::spectra::angular::{AngularFunction, AngularSpectrum};
+use crate::spectra::environment::EnvironmentMap;
 use crate::spectra::texture::Texture;
 use crate::spectra::{SceneSpectrum, SpectrumRegisters, SpectrumSource};
 use glam::{Vec2, Vec3};
@@ -52,6 +54,8 @@ pub enum SceneError {
     Bvh(String),
     /// A mesh is malformed (its [`MeshData::validate`] message).
     Mesh(String),
+    /// A light is invalid.
+    Light(String),
 }
 
 impl core::fmt::Display for SceneError {
@@ -70,6 +74,7 @@ impl core::fmt::Display for SceneError {
             Self::NoCamera => write!(f, "the scene has no camera"),
             Self::Bvh(message) => write!(f, "BVH: {message}"),
             Self::Mesh(message) => write!(f, "mesh: {message}"),
+            Self::Light(message) => write!(f, "light: {message}"),
         }
     }
 }
@@ -108,6 +113,10 @@ pub struct Scene {
     camera: Camera,
     /// Radiance arriving from every direction that escapes the scene.
     environment: Option<SpectrumId>,
+    /// An environment map (instead of the constant environment).
+    environment_map: Option<EnvironmentMap>,
+    /// Which light NEE samples: triangles, point, directional, environment.
+    light_sampler: LightSampler,
     /// The acceleration structure.
     bvh: Bvh,
     /// Emissive triangles and their sampling distribution.
@@ -201,6 +210,24 @@ impl Scene {
     /// environment
     pub fn environment(&self) -> Option<SpectrumId> {
         self.environment
+    }
+
+    /// The environment map, if any.
+    #[inline]
+    pub fn environment_map(&self) -> Option<&EnvironmentMap> {
+        self.environment_map.as_ref()
+    }
+
+    /// Whether rays that escape see anything (a constant environment or a map).
+    #[inline]
+    pub fn has_environment(&self) -> bool {
+        self.environment.is_some() || self.environment_map.is_some()
+    }
+
+    /// The light selection of next-event estimation.
+    #[inline]
+    pub fn light_sampler(&self) -> &LightSampler {
+        &self.light_sampler
     }
 
     /// bvh
@@ -307,7 +334,12 @@ impl Scene {
             + self.bvh.flat_memory_bytes();
         let lights = self.lights.len() * LIGHT_BYTES
             + self.triangles.len() * size_of::<u32>()
-            + self.emitters.len() * size_of::<u32>();
+            + self.emitters.len() * size_of::<u32>()
+            + self.light_sampler.memory_bytes()
+            + self
+                .environment_map
+                .as_ref()
+                .map_or(0, EnvironmentMap::memory_bytes);
         let spectra: usize = self.spectra.iter().map(SceneSpectrum::memory_bytes).sum();
         let angular: usize = self
             .angular
@@ -404,6 +436,9 @@ pub struct SceneBuilder {
     vertex_normals: Vec<[Vec3; 3]>,
     camera: Option<Camera>,
     environment: Option<SpectrumId>,
+    environment_map: Option<EnvironmentMap>,
+    point_lights: Vec<PointLight>,
+    directional_lights: Vec<DirectionalLight>,
     skipped: usize,
 }
 
@@ -454,6 +489,9 @@ impl SceneBuilder {
             vertex_normals: Vec::new(),
             camera: None,
             environment: None,
+            environment_map: None,
+            point_lights: Vec::new(),
+            directional_lights: Vec::new(),
             skipped: 0,
         }
     }
@@ -657,9 +695,28 @@ impl SceneBuilder {
         self.camera = Some(camera);
     }
 
-    /// Sets a constant environment emission.
+    /// Sets a constant environment emission (it replaces an environment map).
     pub fn set_environment(&mut self, spectrum: Option<SpectrumId>) {
         self.environment = spectrum;
+        if spectrum.is_some() {
+            self.environment_map = None;
+        }
+    }
+
+    /// Sets an environment map (it replaces a constant environment).
+    pub fn set_environment_map(&mut self, map: EnvironmentMap) {
+        self.environment = None;
+        self.environment_map = Some(map);
+    }
+
+    /// Adds a point light.
+    pub fn add_point_light(&mut self, light: PointLight) {
+        self.point_lights.push(light);
+    }
+
+    /// Adds a directional light (its direction is normalised at build).
+    pub fn add_directional_light(&mut self, light: DirectionalLight) {
+        self.directional_lights.push(light);
     }
 
     /// Builds the BVH and the light distribution.
@@ -723,7 +780,36 @@ impl SceneBuilder {
                 Some(Surface::new(normal, triangle_area(vertices), id, material))
             })
             .collect();
-        let lights = LightSet::new(&self.triangles, &mut surfaces, &self.spectra);
+        let mut lights = LightSet::new(&self.triangles, &mut surfaces, &self.spectra);
+        let mut directional = self.directional_lights;
+        for light in &mut directional {
+            light.direction = light.direction.try_normalize().ok_or_else(|| {
+                SceneError::Light("a directional light's direction has zero length".into())
+            })?;
+        }
+        for point in &self.point_lights {
+            if !(point.position.is_finite() && point.scale.is_finite() && point.scale >= 0.0) {
+                return Err(SceneError::Light(
+                    "a point light's position or scale is not finite".into(),
+                ));
+            }
+        }
+        let scene_radius = bvh
+            .bounds()
+            .map_or(1.0, |(min, max)| 0.5 * (max - min).length());
+        let light_sampler = LightSampler::new(&SceneLights {
+            triangle_power: lights.total_power(),
+            points: &self.point_lights,
+            directional: &directional,
+            environment: self.environment_map.as_ref(),
+            scene_radius,
+            spectra: &self.spectra,
+        })
+        .map_err(SceneError::Light)?;
+        light_sampler.validate().map_err(SceneError::Light)?;
+        if light_sampler.has_others() {
+            lights.scale_selection(light_sampler.triangle_share(), &mut surfaces);
+        }
         let emitters = emitters(&bvh, &surfaces);
         let spectrum_registers = SpectrumRegisters::new(&self.spectra);
         let packed_surfaces = PackedSurfaces::new(&surfaces);
@@ -741,6 +827,8 @@ impl SceneBuilder {
             vertex_normals: self.vertex_normals,
             camera,
             environment: self.environment,
+            environment_map: self.environment_map,
+            light_sampler,
             bvh,
             lights,
             surfaces,

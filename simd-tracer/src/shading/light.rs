@@ -46,6 +46,8 @@ pub struct LightSet {
     light_of_triangle: Vec<u32>,
     /// The lights in registers, if there are 1 to [`LANES`] of them.
     registers: Option<LightRegisters>,
+    /// `Σ A π L̄` (doubled when two-sided) over the lights.
+    total_power: f64,
 }
 
 /// Up to [`LANES`] lights, each field in one register (lane `l`: light
@@ -205,6 +207,7 @@ impl LightSet {
             }
         }
         let total: f64 = powers.iter().sum();
+        set.total_power = total;
         let mut running = 0.0;
         for (light, p) in set.lights.iter_mut().zip(&powers) {
             running += p;
@@ -220,6 +223,26 @@ impl LightSet {
         }
         set.registers = LightRegisters::new(&set.lights, &set.cdf);
         set
+    }
+
+    /// `Σ A π L̄` over the emissive triangles (doubled when two-sided).
+    pub fn total_power(&self) -> f64 {
+        self.total_power
+    }
+
+    /// Multiplies every selection probability by `share`, the probability
+    /// that next-event estimation samples a triangle at all
+    /// ([`crate::shading::light_sampler`]), in the lights, their registers
+    /// and the records `surfaces`. The CDF is left relative: the caller
+    /// rescales its light number.
+    pub fn scale_selection(&mut self, share: f32, surfaces: &mut [Surface]) {
+        for light in &mut self.lights {
+            light.surface.light_pmf *= share;
+            if let Some(surface) = surfaces.get_mut(light.triangle as usize) {
+                surface.light_pmf = light.surface.light_pmf;
+            }
+        }
+        self.registers = LightRegisters::new(&self.lights, &self.cdf);
     }
 
     /// Checks the invariants sampling relies on: one CDF entry per light,

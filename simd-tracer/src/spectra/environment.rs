@@ -335,22 +335,25 @@ impl EnvironmentMap {
         weights
     }
 
-    /// The mean luminance over the sphere (`∫ Y dω / 4π`), for the light's
-    /// share of next-event estimation.
-    pub fn mean_luminance(&self) -> f64 {
+    /// The mean spectral radiance over the sphere and the spectral range
+    /// (`∫ c₀ dω / 4π`, `c₀` each texel's mean over the range), for the
+    /// light's share of next-event estimation.
+    pub fn mean_radiance(&self) -> f64 {
         let (w, h) = (self.width as usize, self.height as usize);
         let mut sum = 0.0f64;
         for r in 0..h {
             let sin_theta = f64::from((PI * (r as f32 + 0.5) / h as f32).sin());
             let row: f64 = (0..w)
-                .map(|c| f64::from(self.luminance.get(r * w + c).copied().unwrap_or(0.0)))
+                .map(|c| {
+                    let texel = (r * w + c) * ENVIRONMENT_COEFFS;
+                    f64::from(self.fourier.get(texel).copied().unwrap_or(0.0))
+                })
                 .sum();
             sum += row * sin_theta;
         }
-        // Σ L sinθ Δθ Δφ / 4π with Δθ Δφ = 2π² / (W H).
-        sum * 2.0 * std::f64::consts::PI.powi(2)
-            / (w as f64 * h as f64)
-            / (4.0 * std::f64::consts::PI)
+        // Σ c₀ sinθ Δθ Δφ / 4π with Δθ Δφ = 2π² / (W H).
+        let pi = std::f64::consts::PI;
+        sum * 2.0 * pi * pi / (w as f64 * h as f64) / (4.0 * pi)
     }
 }
 
@@ -392,14 +395,9 @@ mod tests {
             let c: [f32; ENVIRONMENT_COEFFS] = env.fourier_at(uv);
             let reference = exact.project::<ENVIRONMENT_COEFFS>(&range);
             let size = reference.coeffs[0].abs().max(1e-6);
-            for j in 0..ENVIRONMENT_COEFFS {
-                let error = (f64::from(c[j]) - reference.coeffs[j]).abs();
-                assert!(
-                    error < 2e-3 * size,
-                    "{rgb:?} c{j}: {} vs {}",
-                    c[j],
-                    reference.coeffs[j]
-                );
+            for (j, (&got, &want)) in c.iter().zip(&reference.coeffs).enumerate() {
+                let error = (f64::from(got) - want).abs();
+                assert!(error < 2e-3 * size, "{rgb:?} c{j}: {got} vs {want}");
             }
             for l in [380.0f32, 455.0, 532.5, 610.0, 700.0, 825.0] {
                 let (got, want) = (env.value_at(uv, l), exact.value(f64::from(l)) as f32);
@@ -463,12 +461,13 @@ mod tests {
                 assert!(!lit || near);
             }
         }
-        // A uniform map has mean luminance Y(1, 1, 1) = 1.
+        // A uniform white map's mean radiance is the mean of D65 at Y = 1.
         let uniform = map(16, 8, &[[1.0; 3]; 128]);
+        let d65 = uniform.illuminant.mean();
         assert!(
-            (uniform.mean_luminance() - 1.0).abs() < 0.01,
-            "{}",
-            uniform.mean_luminance()
+            (uniform.mean_radiance() / d65 - 1.0).abs() < 0.01,
+            "{} vs {d65}",
+            uniform.mean_radiance()
         );
     }
 

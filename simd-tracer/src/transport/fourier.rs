@@ -65,6 +65,11 @@ pub(super) fn with_reference_fourier<R>(
                 .get(texture.index())
                 .map_or([0.0; MAX_COEFFS], |t| t.fourier_at(u, v)),
         ),
+        SpectralRef::Environment { uv } => with(
+            &scene
+                .environment_map()
+                .map_or([0.0; MAX_COEFFS], |map| map.fourier_at(uv)),
+        ),
         SpectralRef::Angular { id, cos, thickness } => with(
             &scene
                 .angular()
@@ -85,6 +90,9 @@ pub(super) fn reference_value(scene: &Scene, reference: &SpectralRef, lambda_nm:
             .textures()
             .get(texture.index())
             .map_or(0.0, |t| t.value_at(u, v, lambda_nm)),
+        SpectralRef::Environment { uv } => scene
+            .environment_map()
+            .map_or(0.0, |map| map.value_at(uv, lambda_nm)),
         SpectralRef::Angular { id, cos, thickness } => scene
             .angular()
             .get(id.index())

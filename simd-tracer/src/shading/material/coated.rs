@@ -38,7 +38,7 @@ impl CoatLobes {
                 .textures
                 .get(texture.index())
                 .map_or(0.5, |t| t.scalar_at(u, v)),
-            SpectralRef::Angular { .. } => 0.5,
+            SpectralRef::Angular { .. } | SpectralRef::Environment { .. } => 0.5,
         };
         Self {
             base,

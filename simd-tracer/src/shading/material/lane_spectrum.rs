@@ -1,6 +1,7 @@
 //! What a BSDF hands the transport per lane: a spectral factor
-//! `constant + scale · X`, `X` a scene spectrum, a texture lookup or an
-//! angular spectrum at `cos θ` ([`SpectralRef`]); the transport evaluates
+//! `constant + scale · X`, `X` a scene spectrum, a texture lookup, the
+//! environment map in a direction or an angular spectrum at `cos θ`
+//! ([`SpectralRef`]); the transport evaluates
 //! `X` in its own representation.
 
 use crate::ids::{AngularId, SpectrumId, TextureId};
@@ -18,6 +19,11 @@ pub enum SpectralRef {
         u: f32,
         /// Coordinate v.
         v: f32,
+    },
+    /// The scene's environment map at map coordinates `(u, v)`.
+    Environment {
+        /// Map coordinates `[u, v]`.
+        uv: [f32; 2],
     },
     /// An angular spectrum at `cos θ` (and a film thickness in [0, 1]).
     Angular {

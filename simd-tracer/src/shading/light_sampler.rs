@@ -1,0 +1,329 @@
+//! Which light next-event estimation samples: the emissive triangles
+//! ([`crate::shading::light::LightSet`]) as one group, and the lights that
+//! are not triangles — point lights, directional lights and an environment
+//! map — each chosen with probability proportional to its power, as
+//! pbrt-v4's power light sampler does:
+//!
+//! * triangles: `Σ A π L̄` (doubled when two-sided);
+//! * point light of intensity `I`: `4π Ī`;
+//! * directional light of irradiance `E`: `π r² Ē`, `r` the radius of the
+//!   scene's bounding sphere (the power crossing the scene);
+//! * environment map: `π r² · 4π L̄`, `L̄` its mean radiance over the sphere.
+//!
+//! Bars are means over the spectral range. The triangles' share `P_tri`
+//! scales their selection probabilities (stored in the surface records for
+//! MIS); a lane whose light number `ξ ≥ P_tri` samples the other lights
+//! with `(ξ − P_tri)/(1 − P_tri)`. With no other light `P_tri = 1` and
+//! nothing changes.
+//!
+//! Point and directional lights are delta lights: reached only by NEE
+//! (no MIS; their sample's "pdf" is the selection probability and the
+//! emission factor carries `1/d²` for points). The environment map is
+//! sampled from its piecewise-constant luminance distribution
+//! ([`EnvironmentMap::sampling_weights`]) with the solid-angle pdf
+//! `P · p(u, v) / (2π² sin θ)`, combined with BSDF sampling by MIS when a
+//! path escapes.
+
+use crate::ids::SpectrumId;
+use crate::sampling::distribution::Distribution2D;
+use crate::spectra::SceneSpectrum;
+use crate::spectra::environment::EnvironmentMap;
+use glam::Vec3;
+use std::f64::consts::PI;
+
+/// A point light: radiant intensity `scale · I(λ)` in every direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointLight {
+    /// Position.
+    pub position: Vec3,
+    /// Intensity spectrum `I`.
+    pub intensity: SpectrumId,
+    /// Multiplier.
+    pub scale: f32,
+}
+
+/// A directional light: irradiance `scale · E(λ)` on surfaces facing it,
+/// arriving along `direction`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectionalLight {
+    /// Unit direction in which the light travels.
+    pub direction: Vec3,
+    /// Irradiance spectrum `E`.
+    pub irradiance: SpectrumId,
+    /// Multiplier.
+    pub scale: f32,
+}
+
+/// A light that is not a triangle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum OtherLight {
+    Point(PointLight),
+    Directional(DirectionalLight),
+    Environment,
+}
+
+/// What a lane's light sample emits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LightEmission {
+    /// A scene spectrum.
+    Spectrum(SpectrumId),
+    /// The environment map at these coordinates.
+    Environment([f32; 2]),
+}
+
+/// A sample of a light that is not a triangle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OtherLightSample {
+    /// Unit direction towards the light.
+    pub wi: Vec3,
+    /// Distance to the light ([`f32::INFINITY`] for directional and
+    /// environment lights).
+    pub distance: f32,
+    /// Solid-angle pdf including the selection probability, or for a delta
+    /// light the selection probability alone.
+    pub pdf: f32,
+    /// Whether the light is a delta light (no MIS).
+    pub delta: bool,
+    /// Multiplier of the emission: `scale / d²` (point), `scale`
+    /// (directional), 1 (environment).
+    pub factor: f32,
+    /// The emission.
+    pub emission: LightEmission,
+}
+
+/// The light selection of a scene (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LightSampler {
+    triangle_share: f32,
+    others: Vec<OtherLight>,
+    /// Absolute selection probability of each other light.
+    pmf: Vec<f32>,
+    /// CDF over the other lights (conditional on not choosing triangles).
+    cdf: Vec<f32>,
+    environment: Option<Distribution2D>,
+    environment_pmf: f32,
+}
+
+impl Default for LightSampler {
+    fn default() -> Self {
+        Self {
+            triangle_share: 1.0,
+            others: Vec::new(),
+            pmf: Vec::new(),
+            cdf: Vec::new(),
+            environment: None,
+            environment_pmf: 0.0,
+        }
+    }
+}
+
+/// The lights of a scene as [`LightSampler::new`] reads them.
+#[derive(Debug, Clone, Copy)]
+pub struct SceneLights<'a> {
+    /// Power of all emissive triangles (`Σ A π L̄`).
+    pub triangle_power: f64,
+    /// Point lights.
+    pub points: &'a [PointLight],
+    /// Directional lights.
+    pub directional: &'a [DirectionalLight],
+    /// The environment map.
+    pub environment: Option<&'a EnvironmentMap>,
+    /// Radius of the scene's bounding sphere.
+    pub scene_radius: f32,
+    /// The scene's spectra (for the mean emissions).
+    pub spectra: &'a [SceneSpectrum],
+}
+
+impl LightSampler {
+    /// The selection of `lights`; an error names a light whose power is not
+    /// finite or a spectrum that does not exist.
+    pub fn new(lights: &SceneLights<'_>) -> Result<Self, String> {
+        let mean = |id: SpectrumId| {
+            lights
+                .spectra
+                .get(id.index())
+                .map(SceneSpectrum::mean)
+                .ok_or_else(|| format!("light spectrum {} does not exist", id.0))
+        };
+        let radius = f64::from(lights.scene_radius.max(0.0));
+        let mut others = Vec::new();
+        let mut powers = Vec::new();
+        for light in lights.points {
+            others.push(OtherLight::Point(*light));
+            powers.push(4.0 * PI * f64::from(light.scale) * mean(light.intensity)?);
+        }
+        for light in lights.directional {
+            others.push(OtherLight::Directional(*light));
+            powers.push(PI * radius * radius * f64::from(light.scale) * mean(light.irradiance)?);
+        }
+        let mut environment = None;
+        if let Some(map) = lights.environment {
+            let (width, height) = map.size();
+            let weights = map.sampling_weights();
+            // A black map emits nothing and is never sampled.
+            if weights.iter().any(|&w| w > 0.0) {
+                environment = Some(Distribution2D::new(
+                    width as usize,
+                    height as usize,
+                    &weights,
+                )?);
+                others.push(OtherLight::Environment);
+                powers.push(PI * radius * radius * 4.0 * PI * map.mean_radiance());
+            }
+        }
+        if let Some(bad) = powers.iter().position(|p| !(p.is_finite() && *p >= 0.0)) {
+            return Err(format!("light {bad}: power is not finite"));
+        }
+        let triangle_power = lights.triangle_power.max(0.0);
+        let other_power: f64 = powers.iter().sum();
+        let total = triangle_power + other_power;
+        if others.is_empty() || total.is_nan() || total <= 0.0 {
+            return Ok(Self::default());
+        }
+        let mut sampler = Self {
+            triangle_share: (triangle_power / total) as f32,
+            others,
+            ..Self::default()
+        };
+        let mut running = 0.0;
+        for p in &powers {
+            running += p;
+            sampler.cdf.push((running / other_power) as f32);
+            sampler.pmf.push((p / total) as f32);
+        }
+        if let Some(last) = sampler.cdf.last_mut() {
+            *last = 1.0;
+        }
+        sampler.environment_pmf = sampler
+            .others
+            .iter()
+            .zip(&sampler.pmf)
+            .find(|(l, _)| matches!(l, OtherLight::Environment))
+            .map_or(0.0, |(_, &p)| p);
+        sampler.environment = environment;
+        Ok(sampler)
+    }
+
+    /// Checks the invariants: one probability and CDF entry per light, the
+    /// CDF non-decreasing to 1, probabilities summing with the triangles'
+    /// share to 1, a distribution exactly when an environment is sampled.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.others.len();
+        if self.pmf.len() != n || self.cdf.len() != n {
+            return Err(format!(
+                "{n} lights, {} pmf, {} cdf entries",
+                self.pmf.len(),
+                self.cdf.len()
+            ));
+        }
+        if self.cdf.windows(2).any(|w| w[0] > w[1]) || self.cdf.last().is_some_and(|&c| c != 1.0) {
+            return Err("the CDF of the other lights is not a CDF".into());
+        }
+        let sum: f32 = self.pmf.iter().sum::<f32>() + self.triangle_share;
+        if (sum - 1.0).abs() > 1e-4 {
+            return Err(format!("selection probabilities sum to {sum}"));
+        }
+        let sampled = self.others.contains(&OtherLight::Environment);
+        match (&self.environment, sampled) {
+            (Some(d), true) => d.validate(),
+            (None, false) => Ok(()),
+            _ => Err("environment distribution without the light, or the reverse".into()),
+        }
+    }
+
+    /// The probability that NEE samples the emissive triangles.
+    #[inline]
+    pub fn triangle_share(&self) -> f32 {
+        self.triangle_share
+    }
+
+    /// Whether there are lights besides triangles.
+    #[inline]
+    pub fn has_others(&self) -> bool {
+        !self.others.is_empty()
+    }
+
+    /// Number of lights besides triangles.
+    pub fn other_count(&self) -> usize {
+        self.others.len()
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.others.capacity() * size_of::<OtherLight>()
+            + (self.pmf.capacity() + self.cdf.capacity()) * size_of::<f32>()
+            + self
+                .environment
+                .as_ref()
+                .map_or(0, Distribution2D::memory_bytes)
+    }
+
+    /// Samples one of the other lights from `x`, `o`: `u_light` (the
+    /// rescaled light number in [0, 1)), `(u, v)` for the point on it, seen
+    /// from `origin`. `None` if there is no other light or the sample is
+    /// unusable (zero pdf, a point light at the origin).
+    pub fn sample(
+        &self,
+        u_light: f32,
+        [u, v]: [f32; 2],
+        origin: Vec3,
+        map: Option<&EnvironmentMap>,
+    ) -> Option<OtherLightSample> {
+        let last = self.others.len().checked_sub(1)?;
+        let index = self.cdf.partition_point(|&c| c <= u_light).min(last);
+        let pmf = *self.pmf.get(index)?;
+        match *self.others.get(index)? {
+            OtherLight::Point(light) => {
+                let to = light.position - origin;
+                let distance_sq = to.length_squared();
+                let distance = distance_sq.sqrt();
+                (distance_sq > 0.0 && distance_sq.is_finite()).then(|| OtherLightSample {
+                    wi: to / distance,
+                    distance,
+                    pdf: pmf,
+                    delta: true,
+                    factor: light.scale / distance_sq,
+                    emission: LightEmission::Spectrum(light.intensity),
+                })
+            }
+            OtherLight::Directional(light) => Some(OtherLightSample {
+                wi: -light.direction,
+                distance: f32::INFINITY,
+                pdf: pmf,
+                delta: true,
+                factor: light.scale,
+                emission: LightEmission::Spectrum(light.irradiance),
+            }),
+            OtherLight::Environment => {
+                let (map, distribution) = (map?, self.environment.as_ref()?);
+                let (uv, pdf_uv) = distribution.sample([u, v]);
+                let (wi, sin_theta) = map.direction_of(uv);
+                let pdf = pmf * pdf_uv / (2.0 * std::f32::consts::PI.powi(2) * sin_theta);
+                (sin_theta > 0.0 && pdf > 0.0 && pdf.is_finite()).then_some(OtherLightSample {
+                    wi,
+                    distance: f32::INFINITY,
+                    pdf,
+                    delta: false,
+                    factor: 1.0,
+                    emission: LightEmission::Environment(uv),
+                })
+            }
+        }
+    }
+
+    /// The solid-angle pdf (with the selection probability) with which NEE
+    /// samples the environment towards `direction`: the MIS weight of a
+    /// BSDF sample that escapes. 0 without an environment map.
+    pub fn environment_pdf(&self, map: &EnvironmentMap, direction: Vec3) -> f32 {
+        let Some(distribution) = &self.environment else {
+            return 0.0;
+        };
+        let uv = map.uv_of(direction);
+        let sin_theta = (std::f32::consts::PI * uv[1]).sin();
+        if sin_theta <= 0.0 {
+            return 0.0;
+        }
+        self.environment_pmf * distribution.pdf(uv)
+            / (2.0 * std::f32::consts::PI.powi(2) * sin_theta)
+    }
+}
