@@ -1,3 +1,4 @@
 //! Random numbers and sampling.
 
+pub mod distribution;
 pub mod rng;
