@@ -10,6 +10,7 @@ pub mod builtin;
 pub mod camera;
 pub mod mesh;
 pub mod obj;
+pub mod ply;
 pub mod shapes;
 
 use crate::accel::{Bvh, TriangleSubset};
