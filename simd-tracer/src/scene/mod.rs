@@ -11,6 +11,7 @@ pub mod camera;
 pub mod mesh;
 pub mod obj;
 pub mod ply;
+pub mod serialized;
 pub mod shapes;
 
 use crate::accel::{Bvh, TriangleSubset};
