@@ -61,6 +61,7 @@
 
 use crate::scene::mesh::{MAX_MESH_ELEMENTS, MeshData, MeshFileError};
 use glam::{Vec2, Vec3};
+use std::collections::HashSet;
 
 /// An integer property type.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -258,6 +259,10 @@ fn parse_header(bytes: &[u8]) -> Result<Header, MeshFileError> {
     let mut line_number = 1;
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
+    // Names seen, to refuse repeats in time linear in the header's size:
+    // element names, and (element index, property name).
+    let mut element_names = HashSet::new();
+    let mut property_names = HashSet::new();
     loop {
         if rest.is_empty() {
             return Err(MeshFileError::new(
@@ -311,7 +316,7 @@ fn parse_header(bytes: &[u8]) -> Result<Header, MeshFileError> {
                         format!("element count `{count}` is not a non-negative integer"),
                     )
                 })?;
-                if elements.iter().any(|e| e.name == *name) {
+                if !element_names.insert(*name) {
                     return Err(header_error(
                         line_number,
                         format!("a second `{name}` element"),
@@ -326,10 +331,11 @@ fn parse_header(bytes: &[u8]) -> Result<Header, MeshFileError> {
             (Some("property"), words) => {
                 let (kind, name) =
                     parse_property(words).map_err(|m| header_error(line_number, m))?;
+                let element_index = elements.len();
                 let element = elements
                     .last_mut()
                     .ok_or_else(|| header_error(line_number, "a property before any element"))?;
-                if element.properties.iter().any(|p| p.name == name) {
+                if !property_names.insert((element_index, name)) {
                     return Err(header_error(
                         line_number,
                         format!("a second property `{name}` in element `{}`", element.name),
