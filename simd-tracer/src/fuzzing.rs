@@ -8,11 +8,18 @@
 //!   also find hits the oracle's box rounding culls, never lose one).
 //! * [`obj`]: arbitrary OBJ and MTL text through the loader and the scene
 //!   build: `Err` or a valid scene, never a panic.
+//! * [`ply`]: arbitrary bytes through the PLY parser: `Err` or a mesh that
+//!   passes [`MeshData::validate`](crate::scene::mesh::MeshData::validate).
+//! * [`serialized`]: arbitrary bytes through the Mitsuba serialized parser,
+//!   every shape the file's table declares: `Err` or a valid mesh, and an
+//!   index past the table is an `Err`.
 
 use crate::accel::{Bvh, Hit, WideStack};
 use crate::packet::{Ray, RayPacket};
 use crate::scene::camera::Camera;
 use crate::scene::obj::{ObjSource, load_obj};
+use crate::scene::ply::parse_ply;
+use crate::scene::serialized::{parse_serialized, serialized_shape_count};
 use crate::scene::{SceneBuilder, SceneError};
 use crate::simd::LANES;
 use glam::Vec3;
@@ -240,4 +247,26 @@ pub fn obj(bytes: &[u8]) {
         Err(SceneError::Bvh(message)) => panic!("BVH validation failed: {message}"),
         Err(_) => {}
     }
+}
+
+/// Arbitrary bytes as a PLY file.
+pub fn ply(bytes: &[u8]) {
+    if let Ok(mesh) = parse_ply(bytes) {
+        assert_eq!(mesh.validate(), Ok(()));
+    }
+}
+
+/// Arbitrary bytes as a Mitsuba serialized file: every shape its table
+/// declares, and the index after the last.
+pub fn serialized(bytes: &[u8]) {
+    let Ok(count) = serialized_shape_count(bytes) else {
+        assert!(parse_serialized(bytes, 0).is_err());
+        return;
+    };
+    for index in 0..count {
+        if let Ok(mesh) = parse_serialized(bytes, index) {
+            assert_eq!(mesh.validate(), Ok(()), "shape {index}");
+        }
+    }
+    assert!(parse_serialized(bytes, count).is_err());
 }

@@ -11,6 +11,8 @@ pub mod builtin;
 pub mod camera;
 pub mod mesh;
 pub mod obj;
+pub mod ply;
+pub mod serialized;
 pub mod shapes;
 pub mod transform;
 
