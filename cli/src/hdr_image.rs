@@ -30,8 +30,9 @@
 //! and Mitsuba 3 (`rgbe_to_float` of `src/core/bitmap.cpp`) do not, so that
 //! values in [0, 1] written as RGBE read back in [0, 1]. Renders are
 //! compared against Mitsuba 3, so this reader uses Mitsuba's convention:
-//! no ½ (a texel differs from Radiance's reading by half a mantissa step,
-//! at most 1/256 of the brightest channel's exponent range).
+//! no ½. Each component reads half a mantissa step, `2^(e − 137)`, lower
+//! than in Radiance: at most 1/256 of the pixel's brightest component
+//! (whose mantissa is 128 … 255 as Radiance writes it).
 //!
 //! Header lines: `FORMAT=32-bit_rle_rgbe` is the only format accepted
 //! (also when the line is absent, as in Radiance); `FORMAT=32-bit_rle_xyze`
@@ -64,8 +65,7 @@
 
 use crate::error::CliError;
 use crate::texture_file::{
-    EXR_MAGIC, PNG_MAGIC, check_texels, decode_exr_channels, decode_png, error, read_exr_header,
-    read_file_start,
+    EXR_MAGIC, PNG_MAGIC, decode_exr_channels, decode_png, error, read_exr_header, read_file_start,
 };
 use simd_tracer::spectra::texture::MAX_TEXELS;
 use spectral_core::color::srgb_decode;
@@ -499,7 +499,6 @@ fn load_exr(path: &Path) -> Result<RgbImage, CliError> {
 /// A PNG file, sRGB-decoded to linear (grey as grey, alpha ignored).
 fn load_png(path: &Path) -> Result<RgbImage, CliError> {
     let pixels = decode_png(path)?;
-    check_texels(path, pixels.width as usize, pixels.height as usize)?;
     let decode = |v: f32| srgb_decode(f64::from(v)) as f32;
     let texels = pixels
         .values
