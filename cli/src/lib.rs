@@ -4,6 +4,7 @@
 pub mod coeffs;
 pub mod error;
 pub mod experiment;
+pub mod hdr_image;
 pub mod image_out;
 pub mod neural_report;
 pub mod render_cmd;

@@ -41,8 +41,10 @@ use std::path::Path;
 /// Largest texture file accepted, bytes (512 MiB).
 pub const MAX_TEXTURE_FILE_BYTES: u64 = 512 * 1024 * 1024;
 
-const PNG_MAGIC: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
-const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+/// The first bytes of a PNG file (PNG specification, §5.2).
+pub(crate) const PNG_MAGIC: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+/// The first bytes of an OpenEXR file (its magic number 20000630, little-endian).
+pub(crate) const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 
 /// What a texture is used for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -58,12 +60,15 @@ enum Format {
     Exr,
 }
 
-fn error(path: &Path, message: impl std::fmt::Display) -> CliError {
+/// An input error whose message starts with `path`.
+pub(crate) fn error(path: &Path, message: impl std::fmt::Display) -> CliError {
     CliError::input(format!("{}: {message}", path.display()))
 }
 
-/// Checks the file (exists, size) and recognises its format.
-fn sniff(path: &Path) -> Result<Format, CliError> {
+/// Checks the file (exists, is not a folder, at most
+/// [`MAX_TEXTURE_FILE_BYTES`]) and reads its first 8 bytes: the bytes and how
+/// many were read (fewer for a shorter file).
+pub(crate) fn read_file_start(path: &Path) -> Result<([u8; 8], usize), CliError> {
     let metadata = std::fs::metadata(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
     if metadata.is_dir() {
         return Err(error(path, "is a directory"));
@@ -88,6 +93,12 @@ fn sniff(path: &Path) -> Result<Format, CliError> {
             Err(e) => return Err(error(path, format!("cannot read: {e}"))),
         }
     }
+    Ok((magic, filled))
+}
+
+/// Checks the file and recognises its format.
+fn sniff(path: &Path) -> Result<Format, CliError> {
+    let (magic, filled) = read_file_start(path)?;
     if filled == 8 && magic == PNG_MAGIC {
         Ok(Format::Png)
     } else if filled >= 4 && magic[..4] == EXR_MAGIC {
@@ -97,7 +108,8 @@ fn sniff(path: &Path) -> Result<Format, CliError> {
     }
 }
 
-fn check_texels(path: &Path, width: usize, height: usize) -> Result<(), CliError> {
+/// Refuses an image with a zero side or more than [`MAX_TEXELS`] texels.
+pub(crate) fn check_texels(path: &Path, width: usize, height: usize) -> Result<(), CliError> {
     let texels = width.saturating_mul(height);
     if width == 0 || height == 0 || texels > MAX_TEXELS {
         return Err(error(
@@ -124,14 +136,20 @@ pub fn load_texture(
 }
 
 /// A decoded image: channels per texel and values in [0, 1] (PNG) or linear.
-struct Pixels {
-    width: u32,
-    height: u32,
-    channels: usize,
-    values: Vec<f32>,
+pub(crate) struct Pixels {
+    /// Texels per row.
+    pub(crate) width: u32,
+    /// Rows.
+    pub(crate) height: u32,
+    /// Values per texel: 1 (grey), 2 (grey, alpha), 3 (RGB) or 4 (RGBA).
+    pub(crate) channels: usize,
+    /// `width × height × channels` values, row-major from the top-left.
+    pub(crate) values: Vec<f32>,
 }
 
-fn decode_png(path: &Path) -> Result<Pixels, CliError> {
+/// Decodes a PNG file to values `v / (2^bits − 1)` in [0, 1], palettes
+/// expanded, refusing images over [`MAX_TEXELS`] from the header.
+pub(crate) fn decode_png(path: &Path) -> Result<Pixels, CliError> {
     let file = File::open(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
     // 16-bit RGBA at the texel limit: 8 bytes per texel.
     let limits = png::Limits {
@@ -228,6 +246,91 @@ fn load_png(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Text
     }
 }
 
+/// Reads the header of the OpenEXR file in `reader` (at its start), checks
+/// the first part's size with [`check_texels`] and rewinds the reader:
+/// the first part's header.
+pub(crate) fn read_exr_header(
+    reader: &mut (impl BufRead + Seek),
+    path: &Path,
+) -> Result<exr::meta::header::Header, CliError> {
+    let meta = exr::meta::MetaData::read_from_buffered(&mut *reader, false)
+        .map_err(|e| error(path, format!("bad OpenEXR header: {e}")))?;
+    reader
+        .seek(SeekFrom::Start(0))
+        .map_err(|e| error(path, format!("cannot read: {e}")))?;
+    let Some(header) = meta.headers.into_iter().next() else {
+        return Err(error(path, "OpenEXR file has no part"));
+    };
+    check_texels(path, header.layer_size.0, header.layer_size.1)?;
+    Ok(header)
+}
+
+/// The channels of an OpenEXR image's first part, any sample type.
+pub(crate) struct ExrChannels {
+    /// Texels per row.
+    pub(crate) width: u32,
+    /// Rows.
+    pub(crate) height: u32,
+    channels: exr::image::AnyChannels<exr::image::FlatSamples>,
+}
+
+impl ExrChannels {
+    /// The values of channel `name` as `f32`, row-major from the top-left.
+    pub(crate) fn channel(&self, name: &str) -> Option<Vec<f32>> {
+        self.channels
+            .list
+            .iter()
+            .find(|c| c.name.eq(name))
+            .map(|c| c.sample_data.values_as_f32().collect())
+    }
+
+    /// The values of the only channel, if there is exactly one.
+    pub(crate) fn only_channel(&self) -> Option<Vec<f32>> {
+        match self.channels.list.as_slice() {
+            [only] => Some(only.sample_data.values_as_f32().collect()),
+            _ => None,
+        }
+    }
+
+    /// The channel names, for messages.
+    pub(crate) fn names(&self) -> String {
+        let names: Vec<String> = self
+            .channels
+            .list
+            .iter()
+            .map(|c| c.name.to_string())
+            .collect();
+        names.join(", ")
+    }
+}
+
+/// Decodes every channel of the first part of the OpenEXR file in `reader`
+/// (at its start; check the header with [`read_exr_header`] first).
+pub(crate) fn decode_exr_channels(
+    reader: impl BufRead + Seek,
+    path: &Path,
+) -> Result<ExrChannels, CliError> {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(reader)
+        .map_err(|e| error(path, format!("cannot decode OpenEXR: {e}")))?;
+    let layer = image.layer_data;
+    let (width, height) = (layer.size.0, layer.size.1);
+    check_texels(path, width, height)?;
+    let (Ok(width), Ok(height)) = (u32::try_from(width), u32::try_from(height)) else {
+        return Err(error(path, "image size does not fit in 32 bits"));
+    };
+    Ok(ExrChannels {
+        width,
+        height,
+        channels: layer.channel_data,
+    })
+}
+
 /// Loads an OpenEXR texture from `reader`, positioned at the start of the
 /// file; `path` names the file in messages.
 fn load_exr(
@@ -236,15 +339,7 @@ fn load_exr(
     usage: TextureUse,
     range: SpectralRange,
 ) -> Result<Texture, CliError> {
-    let meta = exr::meta::MetaData::read_from_buffered(&mut reader, false)
-        .map_err(|e| error(path, format!("bad OpenEXR header: {e}")))?;
-    reader
-        .seek(SeekFrom::Start(0))
-        .map_err(|e| error(path, format!("cannot read: {e}")))?;
-    let Some(header) = meta.headers.first() else {
-        return Err(error(path, "OpenEXR file has no part"));
-    };
-    check_texels(path, header.layer_size.0, header.layer_size.1)?;
+    let header = read_exr_header(&mut reader, path)?;
     let has_f0 = header.channels.list.iter().any(|c| c.name.eq("F0"));
     let describe = |e| error(path, format!("invalid texture: {e}"));
     if has_f0 {
@@ -269,28 +364,10 @@ fn load_exr(
         return Texture::fourier(image.width, image.height, image.n, image.coeffs, range)
             .map_err(describe);
     }
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(reader)
-        .map_err(|e| error(path, format!("cannot decode OpenEXR: {e}")))?;
-    let layer = &image.layer_data;
-    let (width, height) = (layer.size.0, layer.size.1);
-    check_texels(path, width, height)?;
-    let (Ok(w32), Ok(h32)) = (u32::try_from(width), u32::try_from(height)) else {
-        return Err(error(path, "image size does not fit in 32 bits"));
-    };
-    let list = &layer.channel_data.list;
-    let channel = |name: &str| -> Option<Vec<f32>> {
-        list.iter()
-            .find(|c| c.name.eq(name))
-            .map(|c| c.sample_data.values_as_f32().collect())
-    };
-    let count = width * height;
-    let names: Vec<String> = list.iter().map(|c| c.name.to_string()).collect();
+    let image = decode_exr_channels(reader, path)?;
+    let (w32, h32) = (image.width, image.height);
+    let channel = |name: &str| image.channel(name);
+    let count = w32 as usize * h32 as usize;
     match usage {
         TextureUse::Albedo => {
             let rgb: Vec<[f32; 3]> = match (channel("R"), channel("G"), channel("B"), channel("Y"))
@@ -312,7 +389,7 @@ fn load_exr(
                         path,
                         format!(
                             "an albedo EXR needs channels R, G, B, or Y, or F0 … (found {})",
-                            names.join(", ")
+                            image.names()
                         ),
                     ));
                 }
@@ -320,18 +397,14 @@ fn load_exr(
             Texture::rgb(w32, h32, &rgb, range).map_err(describe)
         }
         TextureUse::Thickness => {
-            let values = match channel("Y") {
-                Some(y) => y,
-                None if list.len() == 1 => list
-                    .first()
-                    .map(|c| c.sample_data.values_as_f32().collect())
-                    .unwrap_or_default(),
+            let values = match channel("Y").or_else(|| image.only_channel()) {
+                Some(values) => values,
                 None => {
                     return Err(error(
                         path,
                         format!(
                             "a thickness EXR needs a Y channel or a single channel (found {})",
-                            names.join(", ")
+                            image.names()
                         ),
                     ));
                 }

@@ -66,3 +66,38 @@ fn coefficient_exr_seeds_read_back() -> TestResult {
     }
     Ok(())
 }
+
+#[test]
+fn rgbe_corpus() -> TestResult {
+    let count = replay_corpus("rgbe", fspec_cli::hdr_image::fuzz_rgbe)?;
+    assert!(count >= 5, "only {count} seeds");
+    Ok(())
+}
+
+/// The hand-written seeds are what their names say: `valid-*` files parse,
+/// `broken-*` files are refused.
+#[test]
+fn rgbe_seeds_parse_or_fail_as_named() -> TestResult {
+    let mut seen = 0;
+    for entry in std::fs::read_dir(corpus_dir("rgbe"))? {
+        let path = entry?.path();
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let parsed = fspec_cli::hdr_image::parse_rgbe(&std::fs::read(&path)?);
+        if name.starts_with("valid-") {
+            let image = parsed.map_err(|e| format!("{name}: {e}"))?;
+            assert_eq!(
+                image.texels.len(),
+                image.width as usize * image.height as usize
+            );
+            seen += 1;
+        } else if name.starts_with("broken-") {
+            assert!(parsed.is_err(), "{name} parsed");
+            seen += 1;
+        }
+    }
+    assert!(seen >= 10, "only {seen} named seeds");
+    Ok(())
+}
