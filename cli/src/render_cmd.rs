@@ -177,6 +177,11 @@ pub struct RenderArgs {
     /// Seed of every random stream (same seed, same image).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Camera rays do not see emitters (the environment, emissive
+    /// surfaces), which still light the scene (Mitsuba's `hide_emitters`;
+    /// default: the scene's `[render] hide_emitters`, else off).
+    #[arg(long)]
+    pub hide_emitters: bool,
     /// Worker threads (default: all cores; the image does not depend on it).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -287,7 +292,7 @@ fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSe
         integrator: IntegratorSettings {
             max_depth,
             rr_depth: args.rr_depth,
-            hide_emitters: false,
+            hide_emitters: args.hide_emitters || defaults.hide_emitters.unwrap_or(false),
         },
         seed: args.seed.or(defaults.seed).unwrap_or(0),
         filter: match args.filter {
@@ -814,6 +819,18 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
         eprintln!(
             "fspec: warning: {} degenerate triangles skipped",
             scene.skipped_triangles()
+        );
+    }
+    if defaults.instances.copies > 0 {
+        eprintln!(
+            "fspec: {} instance(s) flattened into {} triangles of the scene's {} (about {:.1} MiB of its {:.1} MiB)",
+            defaults.instances.copies,
+            defaults.instances.triangles,
+            scene.triangles().len(),
+            defaults.instances.triangles as f64 * scene.memory_bytes() as f64
+                / scene.triangles().len().max(1) as f64
+                / f64::from(1 << 20),
+            scene.memory_bytes() as f64 / f64::from(1 << 20),
         );
     }
     let wavelengths = spectral_wavelengths(&scene.range(), args.spectral_step_nm);

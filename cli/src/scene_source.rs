@@ -22,6 +22,10 @@ pub struct SceneDefaults {
     pub max_depth: Option<u32>,
     /// Seed.
     pub seed: Option<u64>,
+    /// Camera rays do not see emitters.
+    pub hide_emitters: Option<bool>,
+    /// Instances placed (flattened into the triangle list).
+    pub instances: crate::scene_file::InstanceCount,
 }
 
 /// The builder, defaults and warnings of the scene named by `argument`.
@@ -61,6 +65,8 @@ pub fn resolve_scene(
         spp: loaded.render.spp,
         max_depth: loaded.render.max_depth,
         seed: loaded.render.seed,
+        hide_emitters: loaded.render.hide_emitters,
+        instances: loaded.instances,
     };
     Ok((loaded.builder, defaults, loaded.warnings))
 }

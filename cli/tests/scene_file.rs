@@ -172,6 +172,7 @@ fn render_defaults_are_read() -> TestResult {
             spp: Some(64),
             max_depth: Some(8),
             seed: Some(1),
+            hide_emitters: None,
         }
     );
     let dir = test_dir("defaults")?;

@@ -167,7 +167,8 @@ mod toml_reader;
 mod toml_scene;
 
 use crate::error::CliError;
-use construction::{FaceMaterials, Mesher, load_obj_geometry};
+pub use construction::InstanceCount;
+use construction::{FaceMaterials, Mesher, Placement, load_obj_geometry};
 use glam::Vec3;
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::{SceneBuilder, SceneError};
@@ -194,6 +195,8 @@ pub struct LoadedScene {
     pub render: RenderDefaults,
     /// Warnings, one line each (`file:line: key: message`).
     pub warnings: Vec<String>,
+    /// Instances placed (flattened into the triangle list).
+    pub instances: InstanceCount,
 }
 
 /// Render settings a scene file may preset (command-line flags override).
@@ -209,6 +212,8 @@ pub struct RenderDefaults {
     pub max_depth: Option<u32>,
     /// Random seed.
     pub seed: Option<u64>,
+    /// Camera rays do not see emitters.
+    pub hide_emitters: Option<bool>,
 }
 
 /// Parses and validates a scene file (module docs); every reference is
@@ -279,6 +284,7 @@ pub fn load_obj_scene(path: &Path) -> Result<LoadedScene, CliError> {
         &mut mesher,
         path,
         &FaceMaterials::Mapped(HashMap::new()),
+        &Placement::default(),
     )
     .map_err(CliError::input)?;
     let shown = path.display();
@@ -316,5 +322,6 @@ pub fn load_obj_scene(path: &Path) -> Result<LoadedScene, CliError> {
         builder,
         render: RenderDefaults::default(),
         warnings,
+        instances: InstanceCount::default(),
     })
 }

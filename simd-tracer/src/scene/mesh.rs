@@ -90,6 +90,42 @@ impl MeshData {
         Ok(())
     }
 
+    /// Fills in vertex normals where the mesh has none, as Mitsuba does for
+    /// meshes without normals (unless `face_normals`): each vertex's normal
+    /// is the sum of its triangles' unit normals weighted by the triangle's
+    /// angle at the vertex (Thürmer and Wüthrich 1998), so the result does
+    /// not depend on how a face is split into triangles. A vertex of only
+    /// degenerate triangles gets a zero normal (its triangles are dropped).
+    pub fn compute_vertex_normals(&mut self) {
+        if !self.normals.is_empty() {
+            return;
+        }
+        let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        for triangle in &self.triangles {
+            let corners = triangle.map(|i| self.positions.get(i as usize).copied());
+            let [Some(a), Some(b), Some(c)] = corners else {
+                continue;
+            };
+            let Some(n) = (b - a).cross(c - a).try_normalize() else {
+                continue;
+            };
+            for (k, &index) in triangle.iter().enumerate() {
+                let p = [a, b, c];
+                let (e1, e2) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+                let angle = e1.angle_between(e2);
+                if let Some(slot) = normals.get_mut(index as usize)
+                    && angle.is_finite()
+                {
+                    *slot += n * angle;
+                }
+            }
+        }
+        self.normals = normals
+            .into_iter()
+            .map(|n| n.try_normalize().unwrap_or(Vec3::ZERO))
+            .collect();
+    }
+
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
         self.positions.capacity() * size_of::<Vec3>()
@@ -110,6 +146,39 @@ mod tests {
             uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
             triangles: vec![[0, 1, 2], [0, 2, 3]],
         }
+    }
+
+    #[test]
+    fn computed_normals_are_angle_weighted() {
+        // A unit cube corner: three faces meeting at the origin, one split
+        // into two triangles. Angle weighting gives (1, 1, 1)/√3 whatever
+        // the split; area or count weighting would favour the split face.
+        let mut corner = MeshData {
+            positions: vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::Y,
+                Vec3::Z,
+                Vec3::new(1.0, 1.0, 0.0),
+            ],
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            // Face z = 0 (normal −z) split into two, faces x = 0 and y = 0.
+            triangles: vec![[0, 2, 4], [0, 4, 1], [0, 3, 2], [0, 1, 3]],
+        };
+        corner.compute_vertex_normals();
+        assert_eq!(corner.validate(), Ok(()));
+        let expected = Vec3::new(-1.0, -1.0, -1.0).normalize();
+        assert!(
+            (corner.normals[0] - expected).length() < 1e-6,
+            "{}",
+            corner.normals[0]
+        );
+        // Normals given are kept.
+        let mut given = quad();
+        given.normals = vec![Vec3::X; 4];
+        given.compute_vertex_normals();
+        assert_eq!(given.normals, vec![Vec3::X; 4]);
     }
 
     #[test]

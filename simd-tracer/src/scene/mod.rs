@@ -444,6 +444,10 @@ pub struct SceneBuilder {
     skipped: usize,
 }
 
+/// Vertex normals within this cosine of the face normal (about 0.08°)
+/// count as the face normal.
+const FLAT_COSINE: f32 = 1.0 - 1e-6;
+
 /// How [`SceneBuilder::add_mesh_data`] places a mesh.
 #[derive(Debug, Clone, Copy)]
 pub struct MeshPlacement<'a> {
@@ -592,6 +596,10 @@ impl SceneBuilder {
                 n2.try_normalize()?,
             ])
         });
+        // Vertex normals that all equal the face normal shade flat: no
+        // interpolation per hit.
+        let face = cross.normalize();
+        let unit = unit.filter(|n| n.iter().any(|n| n.dot(face) < FLAT_COSINE));
         let (mut vertices, mut uvs, mut unit) = (vertices, uvs, unit);
         if let Some(n) = unit
             && (n[0] + n[1] + n[2]).dot(cross) < 0.0

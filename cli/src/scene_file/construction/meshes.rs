@@ -15,10 +15,14 @@ use crate::error::CliError;
 use crate::scene_file::source::Spot;
 use glam::{Vec2, Vec3};
 use simd_tracer::ids::MaterialId;
-use simd_tracer::scene::SceneBuilder;
+use simd_tracer::scene::mesh::MeshData;
 use simd_tracer::scene::obj::{
     ObjError, add_default_material, load_obj_file, load_options, mtl_material,
 };
+use simd_tracer::scene::ply::parse_ply;
+use simd_tracer::scene::serialized::parse_serialized;
+use simd_tracer::scene::transform::Transform;
+use simd_tracer::scene::{MeshPlacement, SceneBuilder};
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
@@ -67,6 +71,112 @@ impl Mesher {
     }
 }
 
+/// How a mesh is placed: its transform and Mitsuba's `flip_normals` and
+/// `face_normals`.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Placement {
+    /// Object to world.
+    pub(crate) transform: Transform,
+    /// Turn the front face over.
+    pub(crate) flip_normals: bool,
+    /// Shade flat, ignoring vertex normals.
+    pub(crate) face_normals: bool,
+}
+
+/// A mesh's parts, each with its material, as read from a file or made by
+/// a shape, before placement (what an instance places again).
+pub(crate) type MeshParts = Vec<(MeshData, MaterialId)>;
+
+impl Mesher {
+    /// Adds `parts` placed by `placement`; the degenerate triangles skipped.
+    pub(crate) fn place(
+        &mut self,
+        builder: &mut SceneBuilder,
+        parts: &[(MeshData, MaterialId)],
+        placement: &Placement,
+    ) -> Result<usize, String> {
+        let mut degenerate = 0;
+        for (mesh, material) in parts {
+            let added = builder
+                .add_mesh_data(
+                    mesh,
+                    &MeshPlacement {
+                        transform: &placement.transform,
+                        material: *material,
+                        flip_normals: placement.flip_normals,
+                        face_normals: placement.face_normals,
+                    },
+                )
+                .map_err(|e| e.to_string())?;
+            self.triangles += added.triangles;
+            self.degenerate += added.degenerate;
+            degenerate += added.degenerate;
+            if self.emissive.contains(material) {
+                self.emissive_triangles += added.triangles;
+            }
+            if added.triangles > 0 {
+                let (lo, hi) = mesh.positions.iter().fold(
+                    self.bounds.unwrap_or((Vec3::INFINITY, Vec3::NEG_INFINITY)),
+                    |(lo, hi), &p| {
+                        let w = placement.transform.point(p);
+                        (lo.min(w), hi.max(w))
+                    },
+                );
+                self.bounds = Some((lo, hi));
+            }
+        }
+        Ok(degenerate)
+    }
+}
+
+/// Largest mesh file read (PLY, serialized), bytes (4 GiB): a mesh of
+/// tens of millions of triangles; anything larger is refused before it is
+/// read.
+pub(crate) const MAX_MESH_FILE_BYTES: u64 = 4 << 30;
+
+/// Which format a mesh file is in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum MeshFormat {
+    /// Stanford PLY.
+    Ply,
+    /// Mitsuba's `serialized`, one shape of the file.
+    Serialized {
+        /// The shape's index in the file.
+        shape_index: u32,
+    },
+}
+
+/// The bytes of a file, refused when missing, a directory or too large
+/// (errors: `path: message`).
+pub(crate) fn read_file(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
+    let shown = path.display();
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => return Err(format!("{shown}: is a directory")),
+        Ok(m) if m.len() > limit => {
+            return Err(format!(
+                "{shown}: {} bytes, larger than the limit of {limit}",
+                m.len()
+            ));
+        }
+        Ok(_) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(format!("{shown}: no such file"));
+        }
+        Err(e) => return Err(format!("{shown}: cannot read: {e}")),
+    }
+    std::fs::read(path).map_err(|e| format!("{shown}: cannot read: {e}"))
+}
+
+/// Reads a PLY or serialized mesh (errors: `path: message`).
+pub(crate) fn load_mesh_file(path: &Path, format: MeshFormat) -> Result<MeshData, String> {
+    let bytes = read_file(path, MAX_MESH_FILE_BYTES)?;
+    let mesh = match format {
+        MeshFormat::Ply => parse_ply(&bytes),
+        MeshFormat::Serialized { shape_index } => parse_serialized(&bytes, shape_index),
+    };
+    mesh.map_err(|e| format!("{}: {e}", path.display()))
+}
+
 /// Which material the faces of an OBJ get.
 pub(crate) enum FaceMaterials {
     /// One material for every face.
@@ -91,12 +201,59 @@ fn mtl_error(shown: &impl std::fmt::Display, error: ObjError) -> String {
     }
 }
 
-/// Loads the triangles of an OBJ file (errors: `path: message`).
+/// One `tobj` model as a [`MeshData`]: its vertex normals (`vn`) and
+/// texture coordinates (`vt`) where every vertex has one.
+fn obj_mesh(mesh: &tobj::Mesh) -> Result<MeshData, String> {
+    let vertices = mesh.positions.len() / 3;
+    let triples = |values: &[f32]| -> Vec<Vec3> {
+        values
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect()
+    };
+    let normals = if mesh.normals.len() == 3 * vertices {
+        triples(&mesh.normals)
+    } else {
+        Vec::new()
+    };
+    let uvs = if mesh.texcoords.len() == 2 * vertices {
+        mesh.texcoords
+            .chunks_exact(2)
+            .map(|c| Vec2::new(c[0], c[1]))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let triangles = mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    let data = MeshData {
+        positions: triples(&mesh.positions),
+        normals,
+        uvs,
+        triangles,
+    };
+    data.validate().map_err(|e| {
+        if e.contains("refers to vertex") {
+            // OBJ counts from 1.
+            format!("face vertex index out of range ({e})")
+        } else {
+            e
+        }
+    })?;
+    Ok(data)
+}
+
+/// Loads the triangles of an OBJ file, placed by `placement` (errors:
+/// `path: message`).
 pub(crate) fn load_obj_geometry(
     builder: &mut SceneBuilder,
     mesher: &mut Mesher,
     path: &Path,
     faces: &FaceMaterials,
+    placement: &Placement,
 ) -> Result<ObjInfo, String> {
     let shown = path.display();
     match std::fs::metadata(path) {
@@ -135,6 +292,7 @@ pub(crate) fn load_obj_geometry(
     }
     let mut default_material = None;
     let before = mesher.degenerate;
+    let mut parts = Vec::with_capacity(models.len());
     for model in &models {
         let mesh = &model.mesh;
         let material = match faces {
@@ -152,33 +310,12 @@ pub(crate) fn load_obj_geometry(
                 },
             },
         };
-        let position = |index: u32| -> Option<Vec3> {
-            let i = index as usize * 3;
-            Some(Vec3::new(
-                *mesh.positions.get(i)?,
-                *mesh.positions.get(i + 1)?,
-                *mesh.positions.get(i + 2)?,
-            ))
-        };
-        let uv = |index: u32| -> Vec2 {
-            let i = index as usize * 2;
-            match (mesh.texcoords.get(i), mesh.texcoords.get(i + 1)) {
-                (Some(&u), Some(&v)) => Vec2::new(u, v),
-                _ => Vec2::ZERO,
-            }
-        };
-        for face in mesh.indices.chunks_exact(3) {
-            let mut vertices = [Vec3::ZERO; 3];
-            let mut uvs = [Vec2::ZERO; 3];
-            for (k, &index) in face.iter().enumerate() {
-                vertices[k] = position(index).ok_or_else(|| {
-                    format!("{shown}: face vertex index {} out of range", index + 1)
-                })?;
-                uvs[k] = uv(index);
-            }
-            mesher.triangle(builder, vertices, uvs, material);
-        }
+        parts.push((
+            obj_mesh(mesh).map_err(|e| format!("{shown}: {e}"))?,
+            material,
+        ));
     }
+    mesher.place(builder, &parts, placement)?;
     Ok(ObjInfo {
         degenerate: mesher.degenerate - before,
         mtl_names: materials.iter().map(|m| m.name.clone()).collect(),
@@ -193,19 +330,89 @@ impl Construction<'_> {
         at: &Spot,
         path: &Path,
         faces: &FaceMaterials,
+        placement: &Placement,
     ) -> Result<ObjInfo, CliError> {
-        let info = load_obj_geometry(&mut self.builder, &mut self.mesher, path, faces)
+        let info = load_obj_geometry(&mut self.builder, &mut self.mesher, path, faces, placement)
             .map_err(|e| self.src.error_at(at, e))?;
-        if info.degenerate > 0 {
+        self.warn_degenerate(at, info.degenerate);
+        Ok(info)
+    }
+
+    fn warn_degenerate(&mut self, at: &Spot, degenerate: usize) {
+        if degenerate > 0 {
             self.warn(
                 at,
                 format!(
-                    "{} degenerate triangle(s) (zero area or non-finite) are skipped",
-                    info.degenerate
+                    "{degenerate} degenerate triangle(s) (zero area or non-finite) are skipped"
                 ),
             );
         }
-        Ok(info)
+    }
+
+    /// Reads the mesh file `path` named at `at` (errors follow `at`'s key).
+    pub(crate) fn read_mesh(
+        &self,
+        at: &Spot,
+        path: &Path,
+        format: MeshFormat,
+    ) -> Result<MeshData, CliError> {
+        load_mesh_file(path, format).map_err(|e| self.src.error_at(at, e))
+    }
+
+    /// Places `parts` (a mesh read from a file or a shape) and, if `name`
+    /// is given, keeps them for instances.
+    pub(crate) fn place(
+        &mut self,
+        at: &Spot,
+        parts: MeshParts,
+        placement: &Placement,
+        name: Option<&str>,
+    ) -> Result<(), CliError> {
+        let degenerate = self
+            .mesher
+            .place(&mut self.builder, &parts, placement)
+            .map_err(|e| self.src.error_at(at, e))?;
+        self.warn_degenerate(at, degenerate);
+        if let Some(name) = name {
+            self.named_meshes.insert(name.to_string(), parts);
+        }
+        Ok(())
+    }
+
+    /// Keeps `parts` for instances without placing them (Mitsuba's
+    /// `shapegroup`).
+    pub(crate) fn keep_for_instances(&mut self, name: &str, parts: MeshParts) {
+        self.named_meshes.insert(name.to_string(), parts);
+    }
+
+    /// Whether a mesh of this name is kept for instances.
+    pub(crate) fn has_named_mesh(&self, name: &str) -> bool {
+        self.named_meshes.contains_key(name)
+    }
+
+    /// Places the named mesh again (flattened into the scene's triangles;
+    /// the copies and their triangles are counted in
+    /// [`Construction::instances`]), every part in `material` if given.
+    /// `false` if there is no mesh of that name.
+    pub(crate) fn instance(
+        &mut self,
+        at: &Spot,
+        name: &str,
+        placement: &Placement,
+        material: Option<MaterialId>,
+    ) -> Result<bool, CliError> {
+        let Some(parts) = self.named_meshes.get(name) else {
+            return Ok(false);
+        };
+        let parts: MeshParts = match material {
+            Some(m) => parts.iter().map(|(mesh, _)| (mesh.clone(), m)).collect(),
+            None => parts.clone(),
+        };
+        let before = self.mesher.triangles;
+        self.place(at, parts, placement, None)?;
+        self.instances.copies += 1;
+        self.instances.triangles += (self.mesher.triangles - before) as u64;
+        Ok(true)
     }
 
     /// Adds the quad `v` (counter-clockwise seen from the front) as two

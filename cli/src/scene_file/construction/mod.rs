@@ -21,14 +21,20 @@
 //! * `spectra`: named and built-in spectra, scaling, spectrum errors.
 //! * `materials`: named materials, albedo checks, BSDFs and their angular
 //!   functions.
-//! * `meshes`: triangles, quads and OBJ/MTL files.
+//! * `meshes`: triangles, quads, OBJ/MTL, PLY and serialized files,
+//!   analytic shapes, transforms and instances.
+//! * `lights`: point and directional lights, environment maps.
 
+mod lights;
 mod materials;
 mod meshes;
 mod spectra;
 
+pub(crate) use lights::MapSettings;
 pub(crate) use materials::{ThinFilm, coated};
-pub(crate) use meshes::{FaceMaterials, Mesher, load_obj_geometry};
+pub(crate) use meshes::{
+    FaceMaterials, MeshFormat, MeshParts, Mesher, Placement, load_obj_geometry,
+};
 pub(crate) use spectra::{builtin_error, tabulated_message};
 
 use super::source::{Source, Spot};
@@ -61,6 +67,21 @@ pub(crate) struct Construction<'s> {
     textures: HashMap<(PathBuf, TextureUse), TextureId>,
     mesher: Mesher,
     has_environment: bool,
+    /// Meshes kept for instances, by name.
+    named_meshes: HashMap<String, MeshParts>,
+    /// The instances placed so far.
+    instances: InstanceCount,
+    /// Point and directional lights added.
+    lights: usize,
+}
+
+/// Instances placed, flattened into the scene's triangle list.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct InstanceCount {
+    /// Copies placed.
+    pub copies: u32,
+    /// Triangles they added.
+    pub triangles: u64,
 }
 
 impl<'s> Construction<'s> {
@@ -82,6 +103,9 @@ impl<'s> Construction<'s> {
             textures: HashMap::new(),
             mesher: Mesher::default(),
             has_environment: false,
+            named_meshes: HashMap::new(),
+            instances: InstanceCount::default(),
+            lights: 0,
         }
     }
 
@@ -138,7 +162,12 @@ impl<'s> Construction<'s> {
     /// Whether nothing lights the scene (no emissive triangle and no
     /// environment).
     pub(crate) fn is_unlit(&self) -> bool {
-        self.mesher.emissive_triangles == 0 && !self.has_environment
+        self.mesher.emissive_triangles == 0 && !self.has_environment && self.lights == 0
+    }
+
+    /// The instances placed so far.
+    pub(crate) fn instances(&self) -> InstanceCount {
+        self.instances
     }
 
     /// The builder and the warnings, with the unused spectra and materials

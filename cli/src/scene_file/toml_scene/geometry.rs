@@ -1,56 +1,330 @@
-//! `[[meshes]]` and `[[quads]]`: OBJ files with their material mapping, and
-//! quads given by their corners.
+//! `[[meshes]]`, `[[shapes]]`, `[[instances]]` and `[[quads]]`: mesh files
+//! (OBJ with their material mapping, PLY, Mitsuba `serialized`), Mitsuba's
+//! analytic shapes, copies of named meshes, and quads given by their
+//! corners; meshes and shapes placed by a `transform`.
 
 use super::Loader;
 use crate::error::CliError;
-use crate::scene_file::construction::FaceMaterials;
-use crate::scene_file::toml_reader::Item;
+use crate::scene_file::construction::{FaceMaterials, MeshFormat, Placement};
+use crate::scene_file::toml_reader::{Item, Table};
 use glam::Vec3;
+use simd_tracer::ids::MaterialId;
+use simd_tracer::scene::analytic::{
+    DEFAULT_SAG, cube_mesh, disk_mesh, rectangle_mesh, segments_for_sag, sphere_mesh,
+};
+use simd_tracer::scene::transform::Transform;
 use std::collections::HashMap;
 
+/// The mesh-file keys: exactly one of them names the file.
+const MESH_FILES: &[&str] = &["obj", "ply", "serialized"];
+
 impl Loader<'_> {
-    /// `[[meshes]]`: each an OBJ with `material` (every face) or
-    /// `materials` (per MTL name, the rest converted from the MTL).
+    /// `transform`, `flip_normals` and `face_normals` of a mesh or shape,
+    /// with `local` (the shape's own placement) applied first.
+    fn placement(&self, table: &Table<'_, '_>, local: Transform) -> Result<Placement, CliError> {
+        let src = &self.src;
+        let flag = |key: &str| -> Result<bool, CliError> {
+            table.get(key).map_or(Ok(false), |i| i.boolean(src))
+        };
+        let transform = match table.get("transform") {
+            Some(item) => local
+                .then(&self.transform(&item)?)
+                .map_err(|e| item.err(src, e))?,
+            None => local,
+        };
+        Ok(Placement {
+            transform,
+            flip_normals: flag("flip_normals")?,
+            face_normals: flag("face_normals")?,
+        })
+    }
+
+    /// `name`, if given: unique among the meshes kept for instances.
+    fn mesh_name<'t>(&self, table: &Table<'t, '_>) -> Result<Option<&'t str>, CliError> {
+        let Some(item) = table.get("name") else {
+            return Ok(None);
+        };
+        let name = item.string(&self.src)?;
+        if self.cx.has_named_mesh(name) {
+            return Err(item.err(&self.src, format!("a mesh named \"{name}\" exists already")));
+        }
+        Ok(Some(name))
+    }
+
+    /// `[[meshes]]`: each one mesh file (`obj`, `ply` or `serialized` with
+    /// `shape_index`), placed by `transform`; an OBJ with `material` (every
+    /// face) or `materials` (per MTL name, the rest converted from the
+    /// MTL), a PLY or serialized mesh with `material`. `name` keeps it for
+    /// `[[instances]]`; `instanced_only = true` keeps it without placing it.
     pub(super) fn meshes_section(&mut self, item: &Item<'_, '_>) -> Result<(), CliError> {
         for mesh in item.array(&self.src)? {
             let table = mesh.table(&self.src)?;
-            table.allow(&self.src, &["obj", "material", "materials"], "a mesh")?;
-            let obj_item = table.require(&self.src, "obj", "a mesh needs `obj = \"file.obj\"`")?;
-            let path = self.file(&obj_item)?;
-            let faces = match (table.get("material"), table.get("materials")) {
-                (Some(_), Some(map)) => {
-                    return Err(map.err(
+            table.allow(
+                &self.src,
+                &[
+                    "obj",
+                    "ply",
+                    "serialized",
+                    "shape_index",
+                    "material",
+                    "materials",
+                    "transform",
+                    "flip_normals",
+                    "face_normals",
+                    "name",
+                    "instanced_only",
+                ],
+                "a mesh",
+            )?;
+            let files: Vec<(&str, Item<'_, '_>)> = MESH_FILES
+                .iter()
+                .filter_map(|&key| table.get(key).map(|i| (key, i)))
+                .collect();
+            let [(kind, file_item)] = files.as_slice() else {
+                return Err(table.err(
+                    &self.src,
+                    "a mesh needs exactly one of `obj`, `ply`, `serialized` (the file)",
+                ));
+            };
+            let path = self.file(file_item)?;
+            let placement = self.placement(&table, Transform::IDENTITY)?;
+            let name = self.mesh_name(&table)?;
+            let instanced_only = match table.get("instanced_only") {
+                Some(i) => {
+                    let only = i.boolean(&self.src)?;
+                    if only && name.is_none() {
+                        return Err(i.err(&self.src, "needs `name` (instances refer to it)"));
+                    }
+                    only
+                }
+                None => false,
+            };
+            if let Some(index) = table.get("shape_index")
+                && *kind != "serialized"
+            {
+                return Err(index.err(&self.src, "only a `serialized` mesh has shapes"));
+            }
+            if *kind == "obj" {
+                if name.is_some() {
+                    return Err(table.err(
                         &self.src,
-                        "give either `material` (every face) or `materials` (per MTL name), not both",
+                        "`name` (instancing) is for PLY and serialized meshes and shapes",
                     ));
                 }
-                (Some(material), None) => FaceMaterials::All(self.material_ref(&material)?),
-                (None, map) => {
-                    let mut mapped = HashMap::new();
-                    let mut spans = Vec::new();
-                    if let Some(map) = map {
-                        for (mtl, target) in map.table(&self.src)?.entries() {
-                            mapped.insert(mtl.to_string(), self.material_ref(&target)?);
-                            spans.push((mtl.to_string(), target));
-                        }
+                self.obj_mesh(&table, file_item, &path, &placement)?;
+                continue;
+            }
+            if let Some(map) = table.get("materials") {
+                return Err(map.err(&self.src, "per-MTL `materials` only apply to OBJ files"));
+            }
+            let format = match *kind {
+                "ply" => MeshFormat::Ply,
+                _ => MeshFormat::Serialized {
+                    shape_index: match table.get("shape_index") {
+                        Some(i) => i.integer(&self.src, 0, i64::from(u32::MAX))? as u32,
+                        None => 0,
+                    },
+                },
+            };
+            let material = self.material_ref(&table.require(
+                &self.src,
+                "material",
+                "a PLY or serialized mesh needs `material`",
+            )?)?;
+            let mut data = self.cx.read_mesh(&file_item.spot(), &path, format)?;
+            // As Mitsuba: smooth unless `face_normals`, from the file's
+            // normals or, without them, from the faces.
+            if !placement.face_normals {
+                data.compute_vertex_normals();
+            }
+            let parts = vec![(data, material)];
+            match name {
+                Some(name) if instanced_only => self.cx.keep_for_instances(name, parts),
+                _ => self.cx.place(&file_item.spot(), parts, &placement, name)?,
+            }
+        }
+        Ok(())
+    }
+
+    /// An OBJ of `[[meshes]]` with its material mapping.
+    fn obj_mesh(
+        &mut self,
+        table: &Table<'_, '_>,
+        obj_item: &Item<'_, '_>,
+        path: &std::path::Path,
+        placement: &Placement,
+    ) -> Result<(), CliError> {
+        let faces = match (table.get("material"), table.get("materials")) {
+            (Some(_), Some(map)) => {
+                return Err(map.err(
+                    &self.src,
+                    "give either `material` (every face) or `materials` (per MTL name), not both",
+                ));
+            }
+            (Some(material), None) => FaceMaterials::All(self.material_ref(&material)?),
+            (None, map) => {
+                let mut mapped = HashMap::new();
+                let mut spans = Vec::new();
+                if let Some(map) = map {
+                    for (mtl, target) in map.table(&self.src)?.entries() {
+                        mapped.insert(mtl.to_string(), self.material_ref(&target)?);
+                        spans.push((mtl.to_string(), target));
                     }
-                    let info = self.cx.load_obj(
-                        &obj_item.spot(),
-                        &path,
-                        &FaceMaterials::Mapped(mapped),
-                    )?;
-                    for (mtl, target) in spans {
-                        if !info.mtl_names.contains(&mtl) {
-                            self.cx.warn(
-                                &target.spot(),
-                                format!("the MTL of {} has no material \"{mtl}\"", path.display()),
-                            );
-                        }
+                }
+                let info = self.cx.load_obj(
+                    &obj_item.spot(),
+                    path,
+                    &FaceMaterials::Mapped(mapped),
+                    placement,
+                )?;
+                for (mtl, target) in spans {
+                    if !info.mtl_names.contains(&mtl) {
+                        self.cx.warn(
+                            &target.spot(),
+                            format!("the MTL of {} has no material \"{mtl}\"", path.display()),
+                        );
                     }
-                    continue;
+                }
+                return Ok(());
+            }
+        };
+        self.cx
+            .load_obj(&obj_item.spot(), path, &faces, placement)?;
+        Ok(())
+    }
+
+    /// `[[shapes]]`: Mitsuba's analytic shapes, tessellated
+    /// (`simd_tracer::scene::analytic`): `type = "sphere"` (`center`,
+    /// `radius`), `"rectangle"`, `"cube"`, `"disk"`, each with `material`,
+    /// `transform`, `flip_normals`, and `sag` (sphere and disk: the largest
+    /// distance of the tessellation from the surface, in radii).
+    pub(super) fn shapes_section(&mut self, item: &Item<'_, '_>) -> Result<(), CliError> {
+        for shape in item.array(&self.src)? {
+            let src = &self.src;
+            let table = shape.table(src)?;
+            table.allow(
+                src,
+                &[
+                    "type",
+                    "center",
+                    "radius",
+                    "sag",
+                    "material",
+                    "transform",
+                    "flip_normals",
+                    "name",
+                    "instanced_only",
+                ],
+                "a shape",
+            )?;
+            let kind_item = table.require(src, "type", "sphere, rectangle, cube or disk")?;
+            let kind = kind_item.string(src)?;
+            let curved = matches!(kind, "sphere" | "disk");
+            let sag = match table.get("sag") {
+                Some(i) if curved => {
+                    let sag = i.number(src)?;
+                    if !(sag > 0.0 && sag < 1.0) {
+                        return Err(
+                            i.err(src, "must be between 0 and 1 (a fraction of the radius)")
+                        );
+                    }
+                    sag as f32
+                }
+                Some(i) => return Err(i.err(src, "only a sphere or a disk is tessellated")),
+                None => DEFAULT_SAG,
+            };
+            for key in ["center", "radius"] {
+                if let (Some(i), false) = (table.get(key), kind == "sphere") {
+                    return Err(i.err(src, "only a sphere has `center` and `radius`"));
+                }
+            }
+            let (mesh, local) = match kind {
+                "sphere" => {
+                    let center = table
+                        .get("center")
+                        .map_or(Ok(Vec3::ZERO), |c| c.vec3(src))?;
+                    let radius = match table.get("radius") {
+                        Some(r) => {
+                            let r = r.number(src)?;
+                            if r <= 0.0 {
+                                return Err(table.get("radius").map_or_else(
+                                    || table.err(src, "radius"),
+                                    |i| i.err(src, "must be > 0"),
+                                ));
+                            }
+                            r as f32
+                        }
+                        None => 1.0,
+                    };
+                    let local = Transform::scale(Vec3::splat(radius))
+                        .and_then(|s| s.then(&Transform::translate(center)?))
+                        .map_err(|e| table.err(src, e))?;
+                    (sphere_mesh(segments_for_sag(sag)), local)
+                }
+                "disk" => (disk_mesh(segments_for_sag(sag)), Transform::IDENTITY),
+                "rectangle" => (rectangle_mesh(), Transform::IDENTITY),
+                "cube" => (cube_mesh(), Transform::IDENTITY),
+                other => {
+                    return Err(kind_item.err(
+                        src,
+                        format!("unknown shape \"{other}\" (sphere, rectangle, cube, disk)"),
+                    ));
                 }
             };
-            self.cx.load_obj(&obj_item.spot(), &path, &faces)?;
+            let material = self.material_ref(&table.require(
+                &self.src,
+                "material",
+                "a shape needs `material`",
+            )?)?;
+            let placement = self.placement(&table, local)?;
+            let name = self.mesh_name(&table)?;
+            let only = table
+                .get("instanced_only")
+                .map_or(Ok(false), |i| i.boolean(&self.src))?;
+            let parts = vec![(mesh, material)];
+            match name {
+                Some(name) if only => self.cx.keep_for_instances(name, parts),
+                _ => self.cx.place(&kind_item.spot(), parts, &placement, name)?,
+            }
+        }
+        Ok(())
+    }
+
+    /// `[[instances]]`: `mesh` (the `name` of a mesh or shape), placed by
+    /// `transform` (after the mesh's own file coordinates; the named mesh's
+    /// transform is not applied), optionally all in `material`.
+    pub(super) fn instances_section(&mut self, item: &Item<'_, '_>) -> Result<(), CliError> {
+        for instance in item.array(&self.src)? {
+            let table = instance.table(&self.src)?;
+            table.allow(
+                &self.src,
+                &[
+                    "mesh",
+                    "transform",
+                    "material",
+                    "flip_normals",
+                    "face_normals",
+                ],
+                "an instance",
+            )?;
+            let mesh_item = table.require(&self.src, "mesh", "the `name` of a mesh or shape")?;
+            let name = mesh_item.string(&self.src)?;
+            let material: Option<MaterialId> = match table.get("material") {
+                Some(m) => Some(self.material_ref(&m)?),
+                None => None,
+            };
+            let placement = self.placement(&table, Transform::IDENTITY)?;
+            if !self
+                .cx
+                .instance(&mesh_item.spot(), name, &placement, material)?
+            {
+                return Err(mesh_item.err(
+                    &self.src,
+                    format!(
+                        "no mesh or shape named \"{name}\" (give it `name` before the instances)"
+                    ),
+                ));
+            }
         }
         Ok(())
     }

@@ -16,9 +16,11 @@
 //! * `geometry`: `[[meshes]]` and `[[quads]]`.
 
 mod geometry;
+mod lights;
 mod materials;
 mod settings;
 mod spectra;
+mod transform;
 
 use super::LoadedScene;
 use super::construction::Construction;
@@ -74,7 +76,10 @@ impl Loader<'_> {
                 "spectra",
                 "materials",
                 "meshes",
+                "shapes",
+                "instances",
                 "quads",
+                "lights",
                 "environment",
             ],
             "a scene file",
@@ -97,8 +102,17 @@ impl Loader<'_> {
         if let Some(item) = root.get("meshes") {
             self.meshes_section(&item)?;
         }
+        if let Some(item) = root.get("shapes") {
+            self.shapes_section(&item)?;
+        }
+        if let Some(item) = root.get("instances") {
+            self.instances_section(&item)?;
+        }
         if let Some(item) = root.get("quads") {
             self.quads_section(&item)?;
+        }
+        if let Some(item) = root.get("lights") {
+            self.lights_section(&item)?;
         }
         let mesher = self.cx.mesher();
         if mesher.triangles == 0 {
@@ -108,15 +122,16 @@ impl Loader<'_> {
                     mesher.degenerate
                 )
             } else {
-                "the scene has no geometry (add [[meshes]] or [[quads]])".to_string()
+                "the scene has no geometry (add [[meshes]], [[shapes]] or [[quads]])".to_string()
             };
             return Err(self.src.error(&root.span, "meshes", message));
         }
         let unlit = self.cx.is_unlit();
+        let instances = self.cx.instances();
         let (builder, mut warnings) = self.cx.finish();
         if unlit {
             warnings.push(format!(
-                "{}: the scene has no light (no emissive triangle and no [environment]): it renders black",
+                "{}: the scene has no light (no emissive triangle, [[lights]] or [environment]): it renders black",
                 self.src.file
             ));
         }
@@ -124,6 +139,7 @@ impl Loader<'_> {
             builder,
             render,
             warnings,
+            instances,
         })
     }
 }

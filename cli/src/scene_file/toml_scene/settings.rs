@@ -3,9 +3,14 @@
 
 use super::Loader;
 use crate::error::CliError;
+use crate::scene_file::construction::MapSettings;
 use crate::scene_file::toml_reader::Item;
 use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults};
-use glam::Vec3;
+use glam::{Mat3, Vec3};
+
+/// How far `Mᵀ M` may be from the identity for `M` to count as a rotation
+/// (rotations composed in `f32`, or given as a rounded matrix).
+const ROTATION_TOLERANCE: f32 = 1e-4;
 use simd_tracer::scene::camera::{Camera, CameraError};
 
 impl Loader<'_> {
@@ -15,7 +20,14 @@ impl Loader<'_> {
         let table = item.table(src)?;
         table.allow(
             src,
-            &["width", "height", "spp", "max_depth", "seed"],
+            &[
+                "width",
+                "height",
+                "spp",
+                "max_depth",
+                "seed",
+                "hide_emitters",
+            ],
             "[render]",
         )?;
         let get = |key: &str, min: i64, max: i64| -> Result<Option<i64>, CliError> {
@@ -28,6 +40,10 @@ impl Loader<'_> {
             spp: get("spp", 1, u32_max)?.map(|v| v as u32),
             max_depth: get("max_depth", 1, u32_max)?.map(|v| v as u32),
             seed: get("seed", 0, i64::MAX)?.map(|v| v as u64),
+            hide_emitters: table
+                .get("hide_emitters")
+                .map(|i| i.boolean(src))
+                .transpose()?,
         })
     }
 
@@ -60,17 +76,64 @@ impl Loader<'_> {
         Ok(())
     }
 
-    /// `[environment]`: a constant radiance from every direction.
+    /// `[environment]`: a constant radiance from every direction
+    /// (`spectrum`), or an equirectangular map (`map`, with `transform`, a
+    /// rotation), times `scale`.
     pub(super) fn environment_section(&mut self, item: &Item<'_, '_>) -> Result<(), CliError> {
         let table = item.table(&self.src)?;
-        table.allow(&self.src, &["spectrum", "scale"], "[environment]")?;
+        table.allow(
+            &self.src,
+            &["spectrum", "map", "transform", "scale"],
+            "[environment]",
+        )?;
         let scale = match table.get("scale") {
             Some(s) => s.non_negative(&self.src)?,
             None => 1.0,
         };
-        let spectrum = table.require(&self.src, "spectrum", "the environment needs `spectrum`")?;
-        let id = self.spectrum_ref(&spectrum, scale)?;
-        self.cx.set_environment(id);
+        match (table.get("spectrum"), table.get("map")) {
+            (Some(spectrum), None) => {
+                if let Some(t) = table.get("transform") {
+                    return Err(t.err(&self.src, "a constant environment has no `transform`"));
+                }
+                let id = self.spectrum_ref(&spectrum, scale)?;
+                self.cx.set_environment(id);
+            }
+            (None, Some(map)) => {
+                let path = self.file(&map)?;
+                let to_world = match table.get("transform") {
+                    Some(t) => {
+                        let affine = self.transform(&t)?.affine();
+                        let linear = Mat3::from(affine.matrix3);
+                        let rotation = (linear.transpose() * linear - Mat3::IDENTITY)
+                            .to_cols_array()
+                            .iter()
+                            .all(|e| e.abs() < ROTATION_TOLERANCE);
+                        if !rotation || affine.translation.length() > 0.0 {
+                            return Err(t.err(
+                                &self.src,
+                                "an environment map's transform must be a rotation",
+                            ));
+                        }
+                        linear
+                    }
+                    None => Mat3::IDENTITY,
+                };
+                self.cx.environment_map(
+                    &map.spot(),
+                    &MapSettings {
+                        path: &path,
+                        scale: scale as f32,
+                        to_world,
+                    },
+                )?;
+            }
+            _ => {
+                return Err(table.err(
+                    &self.src,
+                    "the environment needs exactly one of `spectrum` (constant) and `map` (an image file)",
+                ));
+            }
+        }
         Ok(())
     }
 }
