@@ -113,9 +113,7 @@ impl MeshData {
                 let p = [a, b, c];
                 let (e1, e2) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
                 let angle = e1.angle_between(e2);
-                if let Some(slot) = normals.get_mut(index as usize)
-                    && angle.is_finite()
-                {
+                if let (Some(slot), true) = (normals.get_mut(index as usize), angle.is_finite()) {
                     *slot += n * angle;
                 }
             }

@@ -601,9 +601,7 @@ impl SceneBuilder {
         let face = cross.normalize();
         let unit = unit.filter(|n| n.iter().any(|n| n.dot(face) < FLAT_COSINE));
         let (mut vertices, mut uvs, mut unit) = (vertices, uvs, unit);
-        if let Some(n) = unit
-            && (n[0] + n[1] + n[2]).dot(cross) < 0.0
-        {
+        if let Some(n) = unit.filter(|n| (n[0] + n[1] + n[2]).dot(cross) < 0.0) {
             vertices.swap(1, 2);
             uvs.swap(1, 2);
             unit = Some([n[0], n[2], n[1]]);

@@ -99,9 +99,7 @@ impl Loader<'_> {
                 }
                 None => false,
             };
-            if let Some(index) = table.get("shape_index")
-                && *kind != "serialized"
-            {
+            if let (Some(index), false) = (table.get("shape_index"), *kind == "serialized") {
                 return Err(index.err(&self.src, "only a `serialized` mesh has shapes"));
             }
             if *kind == "obj" {
