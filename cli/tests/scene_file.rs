@@ -1016,7 +1016,7 @@ fn warnings_for_unused_shadowing_and_darkness() -> TestResult {
     assert_eq!(
         warnings,
         vec![format!(
-            "{}: the scene has no light (no emissive triangle and no [environment]): it renders black",
+            "{}: the scene has no light (no emissive triangle, [[lights]] or [environment]): it renders black",
             path.display()
         )]
     );

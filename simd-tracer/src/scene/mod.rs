@@ -560,6 +560,12 @@ impl SceneBuilder {
         self.add_triangle_uv(vertices, [Vec2::ZERO; 3], material);
     }
 
+    /// Counts `count` triangles that a loader dropped before adding them
+    /// (non-finite values) among [`Scene::skipped_triangles`].
+    pub fn count_skipped(&mut self, count: usize) {
+        self.skipped += count;
+    }
+
     /// Adds one triangle with texture coordinates.
     pub fn add_triangle_uv(&mut self, vertices: [Vec3; 3], uvs: [Vec2; 3], material: MaterialId) {
         self.add_shaded_triangle(vertices, uvs, None, material);

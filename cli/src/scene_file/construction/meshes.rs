@@ -202,8 +202,11 @@ fn mtl_error(shown: &impl std::fmt::Display, error: ObjError) -> String {
 }
 
 /// One `tobj` model as a [`MeshData`]: its vertex normals (`vn`) and
-/// texture coordinates (`vt`) where every vertex has one.
-fn obj_mesh(mesh: &tobj::Mesh) -> Result<MeshData, String> {
+/// texture coordinates (`vt`) where every vertex has one. Triangles with a
+/// non-finite vertex or texture coordinate are dropped and counted (the
+/// second value), as the builder drops degenerate ones; a non-finite normal
+/// becomes zero (its triangles shade flat).
+fn obj_mesh(mesh: &tobj::Mesh) -> Result<(MeshData, usize), String> {
     let vertices = mesh.positions.len() / 3;
     let triples = |values: &[f32]| -> Vec<Vec3> {
         values
@@ -211,12 +214,17 @@ fn obj_mesh(mesh: &tobj::Mesh) -> Result<MeshData, String> {
             .map(|c| Vec3::new(c[0], c[1], c[2]))
             .collect()
     };
-    let normals = if mesh.normals.len() == 3 * vertices {
+    let mut normals = if mesh.normals.len() == 3 * vertices {
         triples(&mesh.normals)
     } else {
         Vec::new()
     };
-    let uvs = if mesh.texcoords.len() == 2 * vertices {
+    for n in &mut normals {
+        if !n.is_finite() {
+            *n = Vec3::ZERO;
+        }
+    }
+    let mut uvs: Vec<Vec2> = if mesh.texcoords.len() == 2 * vertices {
         mesh.texcoords
             .chunks_exact(2)
             .map(|c| Vec2::new(c[0], c[1]))
@@ -224,13 +232,35 @@ fn obj_mesh(mesh: &tobj::Mesh) -> Result<MeshData, String> {
     } else {
         Vec::new()
     };
-    let triangles = mesh
+    let mut positions = triples(&mesh.positions);
+    let finite = |i: u32| {
+        positions.get(i as usize).is_none_or(|p| p.is_finite())
+            && uvs.get(i as usize).is_none_or(|t| t.is_finite())
+    };
+    let all: Vec<[u32; 3]> = mesh
         .indices
         .chunks_exact(3)
         .map(|t| [t[0], t[1], t[2]])
         .collect();
+    let triangles: Vec<[u32; 3]> = all
+        .iter()
+        .copied()
+        .filter(|t| t.iter().all(|&i| finite(i)))
+        .collect();
+    let dropped = all.len() - triangles.len();
+    // The dropped triangles' non-finite values are unreferenced now.
+    for p in &mut positions {
+        if !p.is_finite() {
+            *p = Vec3::ZERO;
+        }
+    }
+    for t in &mut uvs {
+        if !t.is_finite() {
+            *t = Vec2::ZERO;
+        }
+    }
     let data = MeshData {
-        positions: triples(&mesh.positions),
+        positions,
         normals,
         uvs,
         triangles,
@@ -243,7 +273,7 @@ fn obj_mesh(mesh: &tobj::Mesh) -> Result<MeshData, String> {
             e
         }
     })?;
-    Ok(data)
+    Ok((data, dropped))
 }
 
 /// Loads the triangles of an OBJ file, placed by `placement` (errors:
@@ -310,10 +340,10 @@ pub(crate) fn load_obj_geometry(
                 },
             },
         };
-        parts.push((
-            obj_mesh(mesh).map_err(|e| format!("{shown}: {e}"))?,
-            material,
-        ));
+        let (data, dropped) = obj_mesh(mesh).map_err(|e| format!("{shown}: {e}"))?;
+        mesher.degenerate += dropped;
+        builder.count_skipped(dropped);
+        parts.push((data, material));
     }
     mesher.place(builder, &parts, placement)?;
     Ok(ObjInfo {
