@@ -917,10 +917,11 @@ pub fn summary_line(summary: &RenderSummary) -> String {
         ""
     };
     format!(
-        "rendered {} passes{stopped} in {seconds:.2} s ({:.2} M samples/s{rejected}); predicted peak memory {}; wrote {}",
+        "rendered {} passes{stopped} in {seconds:.2} s ({:.2} M samples/s{rejected}); predicted peak memory {} (scene {}); wrote {}",
         summary.passes,
         summary.samples as f64 / seconds.max(1e-9) / 1e6,
         format_bytes(summary.memory.peak_bytes()),
+        format_bytes(summary.memory.scene_bytes),
         files.join(", ")
     )
 }
