@@ -318,12 +318,150 @@ impl LightSampler {
         let Some(distribution) = &self.environment else {
             return 0.0;
         };
-        let uv = map.uv_of(direction);
-        let sin_theta = (std::f32::consts::PI * uv[1]).sin();
+        let (uv, sin_theta) = map.uv_and_sin_theta(direction);
         if sin_theta <= 0.0 {
             return 0.0;
         }
         self.environment_pmf * distribution.pdf(uv)
             / (2.0 * std::f32::consts::PI.powi(2) * sin_theta)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::rng::Rng;
+    use crate::spectra::environment::EnvironmentImage;
+    use glam::Mat3;
+    use spectral_core::SpectralRange;
+    use std::f32::consts::PI as PI32;
+
+    /// A map brightest towards `+x` and up, dark below, rotated.
+    fn map(sun_gain: f32) -> EnvironmentMap {
+        let (w, h) = (32u32, 16u32);
+        let mut rgb = Vec::new();
+        for r in 0..h {
+            for c in 0..w {
+                let (u, v) = ((c as f32 + 0.5) / w as f32, (r as f32 + 0.5) / h as f32);
+                let lobe = (0.5 + 0.5 * (2.0 * PI32 * u).sin()).powi(3);
+                let sky = if v < 0.5 { 1.0 } else { 0.05 };
+                rgb.push([0.2 + sun_gain * lobe * sky, 0.3 * sky, 0.1]);
+            }
+        }
+        let image = EnvironmentImage {
+            width: w,
+            height: h,
+            rgb: &rgb,
+            scale: 1.0,
+            to_world: Mat3::from_rotation_y(0.4),
+        };
+        match EnvironmentMap::new(&image, SpectralRange::VISIBLE) {
+            Ok(m) => m,
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    fn sampler(map: &EnvironmentMap) -> LightSampler {
+        let spectra = [];
+        match LightSampler::new(&SceneLights {
+            triangle_power: 0.0,
+            points: &[],
+            directional: &[],
+            environment: Some(map),
+            scene_radius: 1.0,
+            spectra: &spectra,
+        }) {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    /// Direction bins: `PHI` longitudes × `Z` bands of equal `cos θ` about
+    /// the world `+y` axis (not the map's rows: the map is rotated).
+    const PHI: usize = 12;
+    const Z: usize = 8;
+
+    fn bin(d: Vec3) -> usize {
+        let z = ((d.y + 1.0) / 2.0 * Z as f32).clamp(0.0, Z as f32 - 1.0) as usize;
+        let phi = (d.z.atan2(d.x) / std::f32::consts::TAU).rem_euclid(1.0);
+        let p = ((phi * PHI as f32) as usize).min(PHI - 1);
+        z * PHI + p
+    }
+
+    /// The probability of each bin under `environment_pdf` of `map`, by a
+    /// midpoint rule over 64 × 64 points per bin.
+    fn expected(sampler: &LightSampler, map: &EnvironmentMap) -> Vec<f64> {
+        const FINE: usize = 64;
+        let mut p = vec![0.0f64; PHI * Z];
+        let cell = (2.0 / (Z * FINE) as f64) * (std::f64::consts::TAU / (PHI * FINE) as f64);
+        for zi in 0..Z * FINE {
+            let y = -1.0 + (zi as f64 + 0.5) * 2.0 / (Z * FINE) as f64;
+            let s = (1.0 - y * y).sqrt();
+            for pi in 0..PHI * FINE {
+                let phi = (pi as f64 + 0.5) * std::f64::consts::TAU / (PHI * FINE) as f64;
+                let d = Vec3::new((s * phi.cos()) as f32, y as f32, (s * phi.sin()) as f32);
+                p[bin(d)] += f64::from(sampler.environment_pdf(map, d)) * cell;
+            }
+        }
+        p
+    }
+
+    /// χ² of sampled directions against the bins' expected counts; the
+    /// critical value for p = 10⁻⁴ by the Wilson–Hilferty approximation
+    /// `k (1 − 2/9k + z √(2/9k))³`, `z = 3.719` (the normal quantile).
+    fn chi_squared(counts: &[u64], probabilities: &[f64], n: u64) -> (f64, f64) {
+        let mut chi2 = 0.0;
+        let mut bins = 0;
+        for (&c, &p) in counts.iter().zip(probabilities) {
+            let e = p * n as f64;
+            if e > 5.0 {
+                chi2 += (c as f64 - e).powi(2) / e;
+                bins += 1;
+            }
+        }
+        let k = f64::from(bins - 1);
+        let z = 3.719;
+        let a = 2.0 / (9.0 * k);
+        (chi2, k * (1.0 - a + z * a.sqrt()).powi(3))
+    }
+
+    #[test]
+    fn sampled_environment_directions_follow_their_pdf() {
+        let env = map(4.0);
+        let s = sampler(&env);
+        assert_eq!(s.validate(), Ok(()));
+        assert_eq!(s.triangle_share(), 0.0);
+        let p = expected(&s, &env);
+        let total: f64 = p.iter().sum();
+        assert!((total - 1.0).abs() < 2e-3, "pdf integrates to {total}");
+        let n = 200_000u64;
+        let mut rng = Rng::new(5, 9);
+        let mut counts = vec![0u64; PHI * Z];
+        for _ in 0..n {
+            let u = [rng.next_f32(), rng.next_f32()];
+            let Some(sample) = s.sample(rng.next_f32(), u, Vec3::ZERO, Some(&env)) else {
+                panic!("no sample");
+            };
+            // The sample's pdf is the pdf of its direction.
+            let pdf = s.environment_pdf(&env, sample.wi);
+            assert!(
+                (pdf - sample.pdf).abs() <= 1e-3 * pdf,
+                "{pdf} vs {} at {:?} {:?}",
+                sample.pdf,
+                sample.wi,
+                env.uv_and_sin_theta(sample.wi)
+            );
+            counts[bin(sample.wi)] += 1;
+        }
+        let (chi2, critical) = chi_squared(&counts, &p, n);
+        assert!(chi2 < critical, "χ² {chi2} ≥ {critical}");
+        // Negative control: the expected counts of a map with a weaker sun.
+        let other = map(3.0);
+        let q = expected(&sampler(&other), &other);
+        let (chi2_wrong, critical_wrong) = chi_squared(&counts, &q, n);
+        assert!(
+            chi2_wrong > critical_wrong,
+            "a wrong map passes: {chi2_wrong}"
+        );
     }
 }

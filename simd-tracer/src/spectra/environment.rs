@@ -232,13 +232,23 @@ impl EnvironmentMap {
     /// The map coordinates `(u, v)` of the world direction `direction`
     /// (any length; `(0, 0)` for a zero or non-finite one).
     pub fn uv_of(&self, direction: Vec3) -> [f32; 2] {
+        self.uv_and_sin_theta(direction).0
+    }
+
+    /// [`EnvironmentMap::uv_of`] and `sin θ`, taken from the direction's
+    /// horizontal length (near the poles `sin(acos(y))` loses every digit).
+    pub fn uv_and_sin_theta(&self, direction: Vec3) -> ([f32; 2], f32) {
         let Some(d) = (self.to_local * direction).try_normalize() else {
-            return [0.0, 0.0];
+            return ([0.0, 0.0], 0.0);
         };
+        let sin_theta = (d.x * d.x + d.z * d.z).sqrt();
         let u = (d.x.atan2(-d.z) / TAU).rem_euclid(1.0);
         // `rem_euclid` of a tiny negative number rounds to 1.
         let u = if u >= 1.0 { 0.0 } else { u };
-        [u, d.y.clamp(-1.0, 1.0).acos() / PI]
+        // `v` stays below 1 (the largest `f32` below it), inside the last
+        // row, as `u` stays below 1.
+        let v = (d.y.clamp(-1.0, 1.0).acos() / PI).min(1.0 - f32::EPSILON / 2.0);
+        ([u, v], sin_theta)
     }
 
     /// The unit world direction of map coordinates `(u, v)` and `sin θ`.
