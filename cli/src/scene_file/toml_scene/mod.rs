@@ -14,19 +14,20 @@
 //! * `spectra`: `[spectra]` and spectrum references.
 //! * `materials`: `[materials]`, one function per material type.
 //! * `geometry`: `[[meshes]]` and `[[quads]]`.
+//! * `textures`: texture references (a file, or a table with the sampling
+//!   keys; checkerboards).
 
 mod geometry;
 mod materials;
 mod settings;
 mod spectra;
+mod textures;
 
 use super::LoadedScene;
 use super::construction::Construction;
 use super::source::Source;
 use super::toml_reader::{self, Item, Table};
 use crate::error::CliError;
-use crate::texture_file::TextureUse;
-use simd_tracer::ids::TextureId;
 use std::path::PathBuf;
 
 /// Loads the scene described by the TOML text of `src`, with file
@@ -57,12 +58,6 @@ impl Loader<'_> {
     fn file(&self, item: &Item<'_, '_>) -> Result<PathBuf, CliError> {
         let name = item.string(&self.src)?;
         self.cx.resolve_file(&item.spot(), name)
-    }
-
-    /// The texture that `item` names.
-    fn texture(&mut self, item: &Item<'_, '_>, usage: TextureUse) -> Result<TextureId, CliError> {
-        let path = self.file(item)?;
-        self.cx.texture(&item.spot(), &path, usage)
     }
 
     fn load(mut self, root: &Table<'_, '_>) -> Result<LoadedScene, CliError> {
