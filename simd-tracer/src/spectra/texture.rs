@@ -28,9 +28,13 @@
 //!
 //! scale first, then rotation, then offset: Mitsuba's `to_uv` written as
 //! `<scale/>`, `<rotate/>`, `<translate/>` in that order (`T · R · S`).
-//! A scale of 4 repeats an image 4 times across the surface. The identity
-//! (the default) is skipped, so that untransformed lookups are bit for bit
-//! those without a transform.
+//! A scale of 4 repeats an image 4 times across a quad. The identity (the
+//! default) is skipped, so that untransformed lookups are bit for bit
+//! those without a transform. Why the options belong to the texture: the
+//! BSDFs and transports pass the hit's `(u, v)` on untouched
+//! (`SpectralRef::Texture`) and only call [`Texture::fourier_at`],
+//! [`Texture::value_at`] and [`Texture::scalar_at`], so a new option or
+//! kind of texture changes nothing there.
 //!
 //! # Image lookups
 //!
