@@ -33,6 +33,7 @@ fn scene_toml_seeds_are_scenes() -> TestResult {
         "dielectrics.toml",
         "thin-film.toml",
         "spectra.toml",
+        "checkerboard.toml",
     ] {
         let loaded = fspec_cli::scene_file::load_scene_file(&corpus_dir("scene_toml").join(seed))
             .map_err(|e| format!("{seed}: {e}"))?;

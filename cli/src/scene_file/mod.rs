@@ -116,6 +116,17 @@
 //!   `F0 … F{N−1}` (Fourier coefficients per texel) — see
 //!   [`crate::texture_file`]. Meshes supply the texture coordinates (`vt`);
 //!   quads map their vertices to (0, 0), (1, 0), (1, 1), (0, 1).
+//! * `albedo_texture` and `thickness_texture` may also be a table:
+//!   `{ file = "a.png", wrap = "mirror", filter = "nearest", uv_scale = [4, 4],
+//!   uv_offset = [0.5, 0], uv_rotation_deg = 30 }` or
+//!   `{ checkerboard = [<spectrum ref>, <spectrum ref>], uv_scale = [8, 8] }`
+//!   (exactly one of `file` and `checkerboard`; `wrap` is `repeat`, the
+//!   default, `mirror` or `clamp`, `filter` `bilinear`, the default, or
+//!   `nearest`, both for images only; the coordinates are scaled, then
+//!   rotated counter-clockwise, then offset:
+//!   `uv' = R(θ) · (S · uv) + offset`). The checkerboard is Mitsuba 3's:
+//!   the first spectrum where the halves of `u'` and `v'` agree. Semantics
+//!   in `simd_tracer::spectra::texture`.
 //! * `thin-film`: `layers = [{ ior = 2.0, k = 0.0, thickness_nm = 400 }, …]`
 //!   (1 to 16 layers, the first on the incident side; `ior` as above, `k >= 0`
 //!   default 0, `thickness_nm >= 0`), `substrate = { ior = 1.5, k = 0.0 }`

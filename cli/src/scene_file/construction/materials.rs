@@ -93,6 +93,12 @@ impl Construction<'_> {
     /// The reflectance spectrum `id` as an albedo, with a warning at `at`
     /// when it exceeds 1 somewhere.
     pub(crate) fn albedo_spectrum(&mut self, at: &Spot, id: SpectrumId) -> Albedo {
+        self.warn_reflectance_above_one(at, id);
+        Albedo::Spectrum(id)
+    }
+
+    /// Warns at `at` when the reflectance spectrum `id` exceeds 1 somewhere.
+    pub(crate) fn warn_reflectance_above_one(&mut self, at: &Spot, id: SpectrumId) {
         let max = self.builder.spectrum(id).map_or(0.0, |s| s.max_value());
         if max > 1.001 {
             self.warn(
@@ -100,7 +106,6 @@ impl Construction<'_> {
                 format!("reflectance exceeds 1 (max {max:.3}): the surface adds energy"),
             );
         }
-        Albedo::Spectrum(id)
     }
 
     /// `ior` if it stays finite and `>= 1` over the scene's range.

@@ -4,7 +4,8 @@
 //! [`Construction`] wraps the [`SceneBuilder`] together with everything a
 //! scene description refers to by name or by file: named spectra (with the
 //! built-in fallback, shadowing and scaling), named materials, the BSDFs'
-//! angular functions, textures (cached per file and use), OBJ meshes and
+//! angular functions, textures (image files cached per file, use and
+//! sampling; checkerboards of two spectra), OBJ meshes and
 //! quads (degenerate triangles counted), the camera and environment, and
 //! the warnings (unused names, albedos above 1, skipped triangles). Every
 //! error and warning is reported at a [`Spot`] of the [`Source`], so the
@@ -24,11 +25,13 @@
 //! * `meshes`: triangles, quads, OBJ/MTL, PLY and serialized files,
 //!   analytic shapes, transforms and instances.
 //! * `lights`: point and directional lights, environment maps.
+//! * `textures`: image textures and checkerboards with their sampling.
 
 mod lights;
 mod materials;
 mod meshes;
 mod spectra;
+mod textures;
 
 pub(crate) use lights::MapSettings;
 pub(crate) use materials::{ThinFilm, coated};
@@ -39,7 +42,6 @@ pub(crate) use spectra::{builtin_error, tabulated_message};
 
 use super::source::{Source, Spot};
 use crate::error::CliError;
-use crate::texture_file::{TextureUse, load_texture};
 use materials::NamedMaterial;
 use simd_tracer::ids::{SpectrumId, TextureId};
 use simd_tracer::scene::SceneBuilder;
@@ -47,7 +49,8 @@ use simd_tracer::scene::camera::Camera;
 use spectra::NamedSpectrum;
 use spectral_core::SpectralRange;
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
+use textures::TextureKey;
 
 /// A scene under construction (module docs).
 pub(crate) struct Construction<'s> {
@@ -64,7 +67,7 @@ pub(crate) struct Construction<'s> {
     builtins: HashMap<String, SpectrumId>,
     materials: HashMap<String, NamedMaterial>,
     material_order: Vec<String>,
-    textures: HashMap<(PathBuf, TextureUse), TextureId>,
+    textures: HashMap<TextureKey, TextureId>,
     mesher: Mesher,
     has_environment: bool,
     /// Meshes kept for instances, by name.
@@ -124,23 +127,6 @@ impl<'s> Construction<'s> {
                 .src
                 .error_at(at, "file references are not available here")),
         }
-    }
-
-    /// The texture of the file `path` for `usage`, loaded once.
-    pub(crate) fn texture(
-        &mut self,
-        at: &Spot,
-        path: &Path,
-        usage: TextureUse,
-    ) -> Result<TextureId, CliError> {
-        if let Some(&id) = self.textures.get(&(path.to_path_buf(), usage)) {
-            return Ok(id);
-        }
-        let texture =
-            load_texture(path, usage, self.range).map_err(|e| self.src.error_at(at, e))?;
-        let id = self.builder.add_texture(texture);
-        self.textures.insert((path.to_path_buf(), usage), id);
-        Ok(id)
     }
 
     /// Sets the camera.

@@ -14,12 +14,15 @@
 //! * `spectra`: `[spectra]` and spectrum references.
 //! * `materials`: `[materials]`, one function per material type.
 //! * `geometry`: `[[meshes]]` and `[[quads]]`.
+//! * `textures`: texture references (a file, or a table with the sampling
+//!   keys; checkerboards).
 
 mod geometry;
 mod lights;
 mod materials;
 mod settings;
 mod spectra;
+mod textures;
 mod transform;
 
 use super::LoadedScene;
@@ -27,8 +30,6 @@ use super::construction::Construction;
 use super::source::Source;
 use super::toml_reader::{self, Item, Table};
 use crate::error::CliError;
-use crate::texture_file::TextureUse;
-use simd_tracer::ids::TextureId;
 use std::path::PathBuf;
 
 /// Loads the scene described by the TOML text of `src`, with file
@@ -59,12 +60,6 @@ impl Loader<'_> {
     fn file(&self, item: &Item<'_, '_>) -> Result<PathBuf, CliError> {
         let name = item.string(&self.src)?;
         self.cx.resolve_file(&item.spot(), name)
-    }
-
-    /// The texture that `item` names.
-    fn texture(&mut self, item: &Item<'_, '_>, usage: TextureUse) -> Result<TextureId, CliError> {
-        let path = self.file(item)?;
-        self.cx.texture(&item.spot(), &path, usage)
     }
 
     fn load(mut self, root: &Table<'_, '_>) -> Result<LoadedScene, CliError> {
