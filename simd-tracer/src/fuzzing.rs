@@ -12,7 +12,9 @@
 //!   passes [`MeshData::validate`](crate::scene::mesh::MeshData::validate).
 //! * [`serialized`]: arbitrary bytes through the Mitsuba serialized parser,
 //!   every shape the file's table declares: `Err` or a valid mesh, and an
-//!   index past the table is an `Err`.
+//!   index past the table is an `Err`. The same bytes are also taken as the
+//!   inflated stream of a one-shape file (compressed here), since zlib's
+//!   checksum makes nearly every mutation of compressed data fail early.
 
 use crate::accel::{Bvh, Hit, WideStack};
 use crate::packet::{Ray, RayPacket};
@@ -256,9 +258,25 @@ pub fn ply(bytes: &[u8]) {
     }
 }
 
-/// Arbitrary bytes as a Mitsuba serialized file: every shape its table
-/// declares, and the index after the last.
+/// Arbitrary bytes as a Mitsuba serialized file; then, after the first
+/// byte (even: version 4, odd: version 3), as the inflated stream of the
+/// one shape of a file built around them.
 pub fn serialized(bytes: &[u8]) {
+    serialized_file(bytes);
+    let Some((&selector, stream)) = bytes.split_first() else {
+        return;
+    };
+    let version: u8 = if selector & 1 == 0 { 4 } else { 3 };
+    let mut file = vec![0x1C, 0x04, version, 0];
+    file.extend(miniz_oxide::deflate::compress_to_vec_zlib(stream, 1));
+    let offset_bytes = if version == 4 { 8 } else { 4 };
+    file.extend(std::iter::repeat_n(0, offset_bytes));
+    file.extend(1_u32.to_le_bytes());
+    serialized_file(&file);
+}
+
+/// Every shape of a serialized file, and the index after the last.
+fn serialized_file(bytes: &[u8]) {
     let Ok(count) = serialized_shape_count(bytes) else {
         assert!(parse_serialized(bytes, 0).is_err());
         return;
