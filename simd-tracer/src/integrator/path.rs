@@ -349,37 +349,46 @@ impl<S: Copy> PathState<S> {
         let mut p_light =
             light.surface.light_pmf * distance_sq / (light.surface.area * cos_light.abs());
         let mut emits = light.surface.emits_towards(cos_light).and(light.valid);
-        let mut other = OtherLights::default();
-        if !others.is_empty() {
+        let other = (!others.is_empty()).then(|| {
+            let mut other = OtherLights::default();
             other.sample(scene, others, &u_light, [u, v], origin);
             wi = Vec3x8::select(other.lanes.to_simd(), other.wi, wi);
             p_light = other.lanes.to_simd().select(other.pdf, p_light);
             emits = emits.or(other.lanes);
-        }
-        let mut eval = shading.eval(scene, light.valid.or(other.lanes), shading_normal, wo, wi);
+            other
+        });
+        let other_lanes = other.as_ref().map_or(LaneMask::NONE, |o| o.lanes);
+        let mut eval = shading.eval(scene, light.valid.or(other_lanes), shading_normal, wo, wi);
         if smooth {
             eval.value =
                 consistent_sides(wi, normal, shading_normal).select(eval.value, f32x8::ZERO);
         }
         let usable = eval.value.simd_gt(f32x8::ZERO)
             & p_light.simd_gt(f32x8::ZERO)
-            & (distance_sq.simd_gt(f32x8::ZERO) | other.lanes.to_simd());
+            & (distance_sq.simd_gt(f32x8::ZERO) | other_lanes.to_simd());
         let nee_lanes = emits.and(LaneMask::from_simd(usable));
         // Delta lights take no MIS; their emission factor carries `1/d²`.
-        let mis = other
-            .delta
-            .to_simd()
-            .select(f32x8::ONE, power_heuristic_x8(p_light, eval.pdf));
-        nee.weight = nee_lanes
-            .to_simd()
-            .select(eval.value * mis * other.factor / p_light, f32x8::ZERO);
+        let weight = match &other {
+            None => eval.value * power_heuristic_x8(p_light, eval.pdf) / p_light,
+            Some(other) => {
+                let mis = other
+                    .delta
+                    .to_simd()
+                    .select(f32x8::ONE, power_heuristic_x8(p_light, eval.pdf));
+                eval.value * mis * other.factor / p_light
+            }
+        };
+        nee.weight = nee_lanes.to_simd().select(weight, f32x8::ZERO);
         nee.light = light.surface.emission;
-        for lane in other.lanes.iter() {
-            nee.light[lane] = other.emission[lane];
-        }
         nee.lanes = nee_lanes;
-        nee.environment = other.environment.and(nee_lanes);
-        nee.environment_uv = other.environment_uv;
+        nee.environment = LaneMask::NONE;
+        if let Some(other) = &other {
+            nee.environment = other.environment.and(nee_lanes);
+            for lane in other.lanes.iter() {
+                nee.light[lane] = other.emission[lane];
+            }
+            nee.environment_uv = other.environment_uv;
+        }
         // A light below the surface is seen through a transmitting BSDF
         // (e.g. from inside rough glass): its shadow ray starts below the
         // surface, as a sampled transmission does. From `origin`, above, it
@@ -389,16 +398,24 @@ impl<S: Copy> PathState<S> {
         // (they differ by `O(RAY_EPSILON)`). Rays to lights at infinity
         // run along `wi` without end; to a point light they stop short of it.
         let shadow_origin = departure(wi, normal, origin, origin_below);
-        let target = Vec3x8::select(other.lanes.to_simd(), other.target, light.point);
-        let infinite = other.infinite.to_simd();
-        *shadow = RayPacket {
-            origin: shadow_origin.to_array(),
-            direction: Vec3x8::select(infinite, wi, target - shadow_origin).to_array(),
-            t_max: infinite.select(
-                f32x8::splat(f32::INFINITY),
-                f32x8::splat(1.0 - SHADOW_EPSILON),
-            ),
-            active: nee_lanes,
+        let short = f32x8::splat(1.0 - SHADOW_EPSILON);
+        *shadow = match &other {
+            None => RayPacket {
+                origin: shadow_origin.to_array(),
+                direction: (light.point - shadow_origin).to_array(),
+                t_max: short,
+                active: nee_lanes,
+            },
+            Some(other) => {
+                let target = Vec3x8::select(other.lanes.to_simd(), other.target, light.point);
+                let infinite = other.infinite.to_simd();
+                RayPacket {
+                    origin: shadow_origin.to_array(),
+                    direction: Vec3x8::select(infinite, wi, target - shadow_origin).to_array(),
+                    t_max: infinite.select(f32x8::splat(f32::INFINITY), short),
+                    active: nee_lanes,
+                }
+            }
         };
 
         // BSDF sampling for the continuation.
