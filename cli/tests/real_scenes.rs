@@ -297,6 +297,12 @@ fn new_keys_refuse_bad_values_with_one_line() -> TestResult {
             "exists already",
         ),
         (
+            "only-without-name",
+            "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\ninstanced_only = true\n",
+            "instanced_only",
+            "needs `name`",
+        ),
+        (
             "light-type",
             "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\n[[lights]]\ntype = \"spot\"\n",
             "spot",

@@ -258,9 +258,9 @@ impl LightSampler {
                 .map_or(0, Distribution2D::memory_bytes)
     }
 
-    /// Samples one of the other lights from `x`, `o`: `u_light` (the
-    /// rescaled light number in [0, 1)), `(u, v)` for the point on it, seen
-    /// from `origin`. `None` if there is no other light or the sample is
+    /// Samples one of the other lights: `u_light` (the rescaled light
+    /// number in [0, 1)) picks it, `(u, v)` the direction or point on it,
+    /// seen from `origin`. `None` if there is no other light or the sample is
     /// unusable (zero pdf, a point light at the origin).
     pub fn sample(
         &self,

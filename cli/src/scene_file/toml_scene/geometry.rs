@@ -39,16 +39,32 @@ impl Loader<'_> {
         })
     }
 
-    /// `name`, if given: unique among the meshes kept for instances.
-    fn mesh_name<'t>(&self, table: &Table<'t, '_>) -> Result<Option<&'t str>, CliError> {
-        let Some(item) = table.get("name") else {
-            return Ok(None);
+    /// `name`, if given (unique among the meshes kept for instances), and
+    /// `instanced_only` (which needs `name`).
+    fn instancing<'t>(&self, table: &Table<'t, '_>) -> Result<(Option<&'t str>, bool), CliError> {
+        let name = match table.get("name") {
+            Some(item) => {
+                let name = item.string(&self.src)?;
+                if self.cx.has_named_mesh(name) {
+                    return Err(
+                        item.err(&self.src, format!("a mesh named \"{name}\" exists already"))
+                    );
+                }
+                Some(name)
+            }
+            None => None,
         };
-        let name = item.string(&self.src)?;
-        if self.cx.has_named_mesh(name) {
-            return Err(item.err(&self.src, format!("a mesh named \"{name}\" exists already")));
-        }
-        Ok(Some(name))
+        let only = match table.get("instanced_only") {
+            Some(i) => {
+                let only = i.boolean(&self.src)?;
+                if only && name.is_none() {
+                    return Err(i.err(&self.src, "needs `name` (instances refer to it)"));
+                }
+                only
+            }
+            None => false,
+        };
+        Ok((name, only))
     }
 
     /// `[[meshes]]`: each one mesh file (`obj`, `ply` or `serialized` with
@@ -88,17 +104,7 @@ impl Loader<'_> {
             };
             let path = self.file(file_item)?;
             let placement = self.placement(&table, Transform::IDENTITY)?;
-            let name = self.mesh_name(&table)?;
-            let instanced_only = match table.get("instanced_only") {
-                Some(i) => {
-                    let only = i.boolean(&self.src)?;
-                    if only && name.is_none() {
-                        return Err(i.err(&self.src, "needs `name` (instances refer to it)"));
-                    }
-                    only
-                }
-                None => false,
-            };
+            let (name, instanced_only) = self.instancing(&table)?;
             if let (Some(index), false) = (table.get("shape_index"), *kind == "serialized") {
                 return Err(index.err(&self.src, "only a `serialized` mesh has shapes"));
             }
@@ -275,10 +281,7 @@ impl Loader<'_> {
                 "a shape needs `material`",
             )?)?;
             let placement = self.placement(&table, local)?;
-            let name = self.mesh_name(&table)?;
-            let only = table
-                .get("instanced_only")
-                .map_or(Ok(false), |i| i.boolean(&self.src))?;
+            let (name, only) = self.instancing(&table)?;
             let parts = vec![(mesh, material)];
             match name {
                 Some(name) if only => self.cx.keep_for_instances(name, parts),
