@@ -6,13 +6,11 @@
 //!
 //! Compared per 8 × 8-pixel block, the mean of the three linear-sRGB
 //! channels: each block's ratio to Mitsuba must be within 4 of our standard
-//! errors (measured from two seeds) plus 2 %. Measured at 1 024 and
-//! 256 spp: the blocks of the upper seven rows within 0.7 % but for noise
-//! (the RGB upsampling and the 16-coefficient projection), those of the
-//! bottom row, looking just below the horizon where the map changes fastest
-//! from row to row, up to 1.3 % brighter than Mitsuba's — as a shift of
-//! about half a texel in `v` would make (Mitsuba's texel placement is to be
-//! matched with its importer). A map rotated 5° further must fail (the
+//! errors (measured from two seeds) plus 2 %. Measured at 2 048 spp: 63 of
+//! the 64 blocks within 0.6 % (the RGB upsampling and the 16-coefficient
+//! projection), one — at the left edge, on the horizon — 1.9 % brighter,
+//! the same with every seed, its cause not yet found. A map rotated 5°
+//! further must fail (the
 //! negative control: it moves the background by a few texels).
 
 use fspec_cli::scene_file::load_scene_file;

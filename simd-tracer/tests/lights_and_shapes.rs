@@ -376,9 +376,8 @@ fn diffuse_sphere_under_a_cosine_sky_matches_the_closed_form() -> TestResult {
     let (width, height) = (128u32, 64u32);
     let mut texels = Vec::new();
     for r in 0..height {
-        let cos = (PI * (f64::from(r) + 0.5) / f64::from(height))
-            .cos()
-            .max(0.0) as f32;
+        // Rows sit at θ = π r / (H − 1) (corner-aligned, as Mitsuba's).
+        let cos = (PI * f64::from(r) / f64::from(height - 1)).cos().max(0.0) as f32;
         texels.extend(std::iter::repeat_n([cos; 3], width as usize));
     }
     let rho = 0.8;

@@ -19,9 +19,15 @@
 //! **Mapping** (Mitsuba's `envmap`, local frame `+y` up): the direction
 //! `d = (sin φ sin θ, cos θ, −cos φ sin θ)` with `φ = 2π u`, `θ = π v`;
 //! inversely `u = atan2(d.x, −d.z) / 2π` (wrapped into [0, 1)),
-//! `v = acos(d.y) / π`. Row 0 of the image is `v = 0` (straight up). The
-//! map's `to_world` is a rotation. Lookups are bilinear between texel
-//! centres `((i + ½)/W, (j + ½)/H)`, wrapping in `u` and clamped in `v`.
+//! `v = acos(d.y) / π`. The map's `to_world` is a rotation. Texel
+//! positions and interpolation follow Mitsuba 3.9's `envmap`: columns are
+//! texel-centred, `u_i = (i + ½)/W`, wrapping; rows are corner-aligned,
+//! `v_j = j/(H − 1)` (row 0 straight up, the last row straight down).
+//! Between the four nearest texels the *shape* `S` (the sigmoid spectrum)
+//! and the *intensity* `k · 2m` are interpolated bilinearly each and then
+//! multiplied, as Mitsuba's spectral variants do (the upsampling is
+//! nonlinear, so this is not the interpolation of the texels' spectra);
+//! the stored coefficients are those of `S · D65 / Y_D65` alone.
 //!
 //! **Sampling weights** ([`EnvironmentMap::sampling_weights`]): the exact
 //! mean of the bilinear interpolant of the luminance over each texel,
@@ -177,7 +183,9 @@ impl EnvironmentMap {
             .map(|texel| {
                 let largest = texel[0].max(texel[1]).max(texel[2]);
                 if largest == 0.0 || scale == 0.0 {
-                    return Ok(([0.0; 3], 0.0, [0.0; ENVIRONMENT_COEFFS]));
+                    // Black: Mitsuba's zero reflectance (S ≡ 0) at zero intensity.
+                    let black = SigmoidPolynomial::grey(0.0).coeffs.map(|c| c as f32);
+                    return Ok((black, 0.0, [0.0; ENVIRONMENT_COEFFS]));
                 }
                 let intensity = 2.0 * f64::from(largest);
                 let shape = srgb_reflectance(texel.map(|v| f64::from(v) / intensity))?;
@@ -185,7 +193,7 @@ impl EnvironmentMap {
                 Ok((
                     shape.coeffs.map(|c| c as f32),
                     intensity as f32,
-                    projection.coefficients(&shape, intensity),
+                    projection.coefficients(&shape, 1.0),
                 ))
             })
             .collect();
@@ -266,7 +274,7 @@ impl EnvironmentMap {
         let (w, h) = (self.width as i64, self.height as i64);
         let finite = |x: f32| if x.is_finite() { x } else { 0.0 };
         let x = finite(u) * w as f32 - 0.5;
-        let y = (finite(v) * h as f32 - 0.5).clamp(0.0, (h - 1) as f32);
+        let y = finite(v).clamp(0.0, 1.0) * (h - 1) as f32;
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let column = |c: f32| (c as i64).rem_euclid(w) as usize;
@@ -281,11 +289,21 @@ impl EnvironmentMap {
         ]
     }
 
-    /// Bilinear Fourier coefficients at `(u, v)` (zero past
+    /// The bilinear intensity `Σ w k` at `(u, v)`.
+    fn intensity_at(&self, footprint: &[(usize, f32); 4]) -> f32 {
+        footprint
+            .iter()
+            .map(|&(texel, weight)| weight * self.intensity.get(texel).copied().unwrap_or(0.0))
+            .sum()
+    }
+
+    /// Fourier coefficients at `(u, v)` (module docs: the bilinear
+    /// shape's coefficients times the bilinear intensity; zero past
     /// [`ENVIRONMENT_COEFFS`]).
     pub fn fourier_at<const M: usize>(&self, uv: [f32; 2]) -> [f32; M] {
+        let footprint = self.footprint(uv);
         let mut out = [0.0f32; M];
-        for (texel, weight) in self.footprint(uv) {
+        for &(texel, weight) in &footprint {
             let start = texel * ENVIRONMENT_COEFFS;
             if let Some(c) = self.fourier.get(start..start + ENVIRONMENT_COEFFS) {
                 for (o, &value) in out.iter_mut().zip(c) {
@@ -293,31 +311,28 @@ impl EnvironmentMap {
                 }
             }
         }
-        out
+        let k = self.intensity_at(&footprint);
+        out.map(|c| c * k)
     }
 
-    /// The radiance at `(u, v)` and `lambda_nm` (bilinear in the texels'
-    /// spectra).
+    /// The radiance at `(u, v)` and `lambda_nm` (module docs: the bilinear
+    /// shape at `λ` times the bilinear intensity times D65).
     pub fn value_at(&self, uv: [f32; 2], lambda_nm: f32) -> f32 {
         let lambda = f64::from(lambda_nm);
-        let shapes: f32 = self
-            .footprint(uv)
+        let footprint = self.footprint(uv);
+        let shapes: f32 = footprint
             .iter()
             .map(|&(texel, weight)| {
-                let (Some(c), Some(&k)) = (self.sigmoid.get(texel), self.intensity.get(texel))
-                else {
+                let Some(c) = self.sigmoid.get(texel) else {
                     return 0.0;
                 };
-                if k == 0.0 {
-                    return 0.0;
-                }
                 let shape = SigmoidPolynomial {
                     coeffs: c.map(f64::from),
                 };
-                weight * k * shape.value(lambda) as f32
+                weight * shape.value(lambda) as f32
             })
             .sum();
-        shapes * self.illuminant.value(lambda_nm)
+        shapes * self.intensity_at(&footprint) * self.illuminant.value(lambda_nm)
     }
 
     /// Per-texel weights for importance sampling (module docs), row-major.
@@ -355,8 +370,10 @@ impl EnvironmentMap {
             let sin_theta = f64::from((PI * (r as f32 + 0.5) / h as f32).sin());
             let row: f64 = (0..w)
                 .map(|c| {
-                    let texel = (r * w + c) * ENVIRONMENT_COEFFS;
-                    f64::from(self.fourier.get(texel).copied().unwrap_or(0.0))
+                    let texel = r * w + c;
+                    let c0 = self.fourier.get(texel * ENVIRONMENT_COEFFS).copied();
+                    let k = self.intensity.get(texel).copied();
+                    f64::from(c0.unwrap_or(0.0) * k.unwrap_or(0.0))
                 })
                 .sum();
             sum += row * sin_theta;
