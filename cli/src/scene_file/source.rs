@@ -71,6 +71,14 @@ impl Source<'_> {
 
 /// Reads a text file of at most `limit` bytes (errors: `path: message`).
 pub(crate) fn read_text(path: &Path, limit: u64) -> Result<String, CliError> {
+    let bytes = read_bytes(path, limit)?;
+    String::from_utf8(bytes)
+        .map_err(|_| CliError::input(format!("{}: not UTF-8 text", path.display())))
+}
+
+/// Reads a file of at most `limit` bytes, refused before reading when it
+/// is missing, a directory or larger (errors: `path: message`).
+pub(crate) fn read_bytes(path: &Path, limit: u64) -> Result<Vec<u8>, CliError> {
     let shown = path.display();
     let metadata = std::fs::metadata(path).map_err(|e| {
         if e.kind() == std::io::ErrorKind::NotFound {
@@ -89,7 +97,5 @@ pub(crate) fn read_text(path: &Path, limit: u64) -> Result<String, CliError> {
             limit / (1024 * 1024)
         )));
     }
-    let bytes =
-        std::fs::read(path).map_err(|e| CliError::input(format!("{shown}: cannot read: {e}")))?;
-    String::from_utf8(bytes).map_err(|_| CliError::input(format!("{shown}: not UTF-8 text")))
+    std::fs::read(path).map_err(|e| CliError::input(format!("{shown}: cannot read: {e}")))
 }

@@ -31,12 +31,6 @@ fn departure(direction: Vec3x8, normal: Vec3x8, above: Vec3x8, below: Vec3x8) ->
 /// The largest `f32` below 1: a rescaled light number stays in [0, 1).
 const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
-/// Power heuristic `a²/(a² + b²)` of one lane (0 where both are 0).
-fn power_heuristic(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
-}
-
 /// The environment map's radiance at `uv` in the lanes of `lanes` (0
 /// elsewhere).
 fn environment_spectra<T: Transport>(
@@ -534,20 +528,20 @@ impl<S: Copy> PathState<S> {
             transport, scene, ..
         } = *context;
         let directions = Vec3x8::from_array(rays.direction).to_lanes();
-        let previous = self.previous_pdf.to_array();
         let mut uv = [[0.0f32; 2]; LANES];
-        let mut weight = [0.0f32; LANES];
+        let mut p_light = [0.0f32; LANES];
         for lane in missed.iter() {
-            uv[lane] = map.uv_of(directions[lane]);
-            weight[lane] = if previous[lane] > 0.0 {
-                let p_light = scene.light_sampler().environment_pdf(map, directions[lane]);
-                power_heuristic(previous[lane], p_light)
-            } else {
-                1.0
-            };
+            let (at, sin_theta) = map.uv_and_sin_theta(directions[lane]);
+            uv[lane] = at;
+            p_light[lane] = scene.light_sampler().environment_pdf_at(at, sin_theta);
         }
+        let weight = self.previous_pdf.simd_gt(f32x8::ZERO).select(
+            power_heuristic_x8(self.previous_pdf, f32x8::new(p_light)),
+            f32x8::ONE,
+        );
+        let weight = missed.to_simd().select(weight, f32x8::ZERO);
         let le = environment_spectra(transport, scene, wavelengths, missed, &uv);
         self.emitted
-            .add_direct(transport, &self.throughput, &le, f32x8::new(weight));
+            .add_direct(transport, &self.throughput, &le, weight);
     }
 }

@@ -315,10 +315,16 @@ impl LightSampler {
     /// samples the environment towards `direction`: the MIS weight of a
     /// BSDF sample that escapes. 0 without an environment map.
     pub fn environment_pdf(&self, map: &EnvironmentMap, direction: Vec3) -> f32 {
+        let (uv, sin_theta) = map.uv_and_sin_theta(direction);
+        self.environment_pdf_at(uv, sin_theta)
+    }
+
+    /// [`LightSampler::environment_pdf`] at map coordinates `uv` with
+    /// their `sin θ` ([`EnvironmentMap::uv_and_sin_theta`]).
+    pub fn environment_pdf_at(&self, uv: [f32; 2], sin_theta: f32) -> f32 {
         let Some(distribution) = &self.environment else {
             return 0.0;
         };
-        let (uv, sin_theta) = map.uv_and_sin_theta(direction);
         if sin_theta <= 0.0 {
             return 0.0;
         }

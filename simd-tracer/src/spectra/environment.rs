@@ -45,6 +45,10 @@ use std::f32::consts::{PI, TAU};
 /// Fourier coefficients stored per texel.
 pub const ENVIRONMENT_COEFFS: usize = 16;
 
+/// How far `Mᵀ M` may be from the identity for `M` to count as a rotation
+/// (rotations composed in `f32`, or given as a rounded matrix).
+pub const ROTATION_TOLERANCE: f32 = 1e-4;
+
 /// Largest map accepted, texels (2²⁶, as textures).
 pub const MAX_ENVIRONMENT_TEXELS: usize = 1 << 26;
 
@@ -166,11 +170,7 @@ impl EnvironmentMap {
         {
             return Err(SpectralError::NonFiniteValue { index });
         }
-        let orthonormal = (to_world.transpose() * to_world - Mat3::IDENTITY)
-            .to_cols_array()
-            .iter()
-            .all(|e| e.abs() < 1e-4);
-        if !(to_world.is_finite() && orthonormal) {
+        if !Self::is_rotation(to_world) {
             return Err(SpectralError::InvalidParameter(
                 "environment transform (a rotation)",
             ));
@@ -223,6 +223,16 @@ impl EnvironmentMap {
         Ok(map)
     }
 
+    /// Whether `m` is a rotation (or a rotation with a mirror) a map may
+    /// take: finite, `Mᵀ M` within [`ROTATION_TOLERANCE`] of the identity.
+    pub fn is_rotation(m: Mat3) -> bool {
+        m.is_finite()
+            && (m.transpose() * m - Mat3::IDENTITY)
+                .to_cols_array()
+                .iter()
+                .all(|e| e.abs() < ROTATION_TOLERANCE)
+    }
+
     /// Width and height, texels.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
@@ -238,13 +248,9 @@ impl EnvironmentMap {
     }
 
     /// The map coordinates `(u, v)` of the world direction `direction`
-    /// (any length; `(0, 0)` for a zero or non-finite one).
-    pub fn uv_of(&self, direction: Vec3) -> [f32; 2] {
-        self.uv_and_sin_theta(direction).0
-    }
-
-    /// [`EnvironmentMap::uv_of`] and `sin θ`, taken from the direction's
-    /// horizontal length (near the poles `sin(acos(y))` loses every digit).
+    /// (any length; `(0, 0)` for a zero or non-finite one) and `sin θ`,
+    /// taken from the direction's horizontal length (near the poles
+    /// `sin(acos(y))` loses every digit).
     pub fn uv_and_sin_theta(&self, direction: Vec3) -> ([f32; 2], f32) {
         let Some(d) = (self.to_local * direction).try_normalize() else {
             return ([0.0, 0.0], 0.0);
@@ -457,7 +463,7 @@ mod tests {
             let (d, sin_theta) = env.direction_of(uv);
             assert!((d.length() - 1.0).abs() < 1e-5);
             assert!((sin_theta - (PI * uv[1]).sin()).abs() < 1e-6);
-            let back = env.uv_of(d);
+            let back = env.uv_and_sin_theta(d).0;
             let du = (back[0] - uv[0]).abs();
             assert!(
                 du.min(1.0 - du) < 1e-4 && (back[1] - uv[1]).abs() < 1e-4,

@@ -12,7 +12,7 @@
 
 use super::Construction;
 use crate::error::CliError;
-use crate::scene_file::source::Spot;
+use crate::scene_file::source::{Spot, read_bytes};
 use glam::{Vec2, Vec3};
 use simd_tracer::ids::MaterialId;
 use simd_tracer::scene::mesh::MeshData;
@@ -146,30 +146,9 @@ pub(crate) enum MeshFormat {
     },
 }
 
-/// The bytes of a file, refused when missing, a directory or too large
-/// (errors: `path: message`).
-pub(crate) fn read_file(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
-    let shown = path.display();
-    match std::fs::metadata(path) {
-        Ok(m) if m.is_dir() => return Err(format!("{shown}: is a directory")),
-        Ok(m) if m.len() > limit => {
-            return Err(format!(
-                "{shown}: {} bytes, larger than the limit of {limit}",
-                m.len()
-            ));
-        }
-        Ok(_) => {}
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            return Err(format!("{shown}: no such file"));
-        }
-        Err(e) => return Err(format!("{shown}: cannot read: {e}")),
-    }
-    std::fs::read(path).map_err(|e| format!("{shown}: cannot read: {e}"))
-}
-
 /// Reads a PLY or serialized mesh (errors: `path: message`).
 pub(crate) fn load_mesh_file(path: &Path, format: MeshFormat) -> Result<MeshData, String> {
-    let bytes = read_file(path, MAX_MESH_FILE_BYTES)?;
+    let bytes = read_bytes(path, MAX_MESH_FILE_BYTES).map_err(|e| e.to_string())?;
     let mesh = match format {
         MeshFormat::Ply => parse_ply(&bytes),
         MeshFormat::Serialized { shape_index } => parse_serialized(&bytes, shape_index),

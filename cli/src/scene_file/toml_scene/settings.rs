@@ -7,11 +7,8 @@ use crate::scene_file::construction::MapSettings;
 use crate::scene_file::toml_reader::Item;
 use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults};
 use glam::{Mat3, Vec3};
-
-/// How far `Mᵀ M` may be from the identity for `M` to count as a rotation
-/// (rotations composed in `f32`, or given as a rounded matrix).
-const ROTATION_TOLERANCE: f32 = 1e-4;
 use simd_tracer::scene::camera::{Camera, CameraError};
+use simd_tracer::spectra::environment::EnvironmentMap;
 
 impl Loader<'_> {
     /// `[render]`: the defaults that command-line flags override.
@@ -104,11 +101,8 @@ impl Loader<'_> {
                     Some(t) => {
                         let affine = self.transform(&t)?.affine();
                         let linear = Mat3::from(affine.matrix3);
-                        let rotation = (linear.transpose() * linear - Mat3::IDENTITY)
-                            .to_cols_array()
-                            .iter()
-                            .all(|e| e.abs() < ROTATION_TOLERANCE);
-                        if !rotation || affine.translation.length() > 0.0 {
+                        if !EnvironmentMap::is_rotation(linear) || affine.translation.length() > 0.0
+                        {
                             return Err(t.err(
                                 &self.src,
                                 "an environment map's transform must be a rotation",
