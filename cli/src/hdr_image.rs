@@ -1,5 +1,6 @@
-//! Loading linear RGB images for environment maps: Radiance RGBE (`.hdr`),
-//! OpenEXR and PNG files as an [`RgbImage`].
+//! Loading linear RGB images for environment maps and Mitsuba `bitmap`
+//! textures: Radiance RGBE (`.hdr`), OpenEXR, PNG and JPEG files as an
+//! [`RgbImage`].
 //!
 //! # Formats
 //!
@@ -18,8 +19,11 @@
 //!   and `n` values).
 //! * **OpenEXR** (first part, values linear): channels `R`, `G`, `B`, else
 //!   `Y` as grey; samples of any type (f16, f32, u32).
-//! * **PNG** (8 or 16 bits, grey or colour, alpha ignored): values are
-//!   sRGB-encoded and decoded with [`spectral_core::color::srgb_decode`].
+//! * **PNG** (8 or 16 bits, grey or colour, alpha ignored) and **JPEG**
+//!   (baseline and progressive, grey, RGB or CMYK; `jpeg-decoder`): values
+//!   are sRGB-encoded and decoded with [`spectral_core::color::srgb_decode`],
+//!   unless the caller asks for the stored values ([`Encoding::Raw`],
+//!   Mitsuba's `raw="true"`).
 //!
 //! # RGBE conventions
 //!
@@ -407,9 +411,27 @@ pub fn parse_rgbe(bytes: &[u8]) -> Result<RgbImage, String> {
     })
 }
 
-/// Loads a linear RGB image from a Radiance RGBE, OpenEXR or PNG file,
-/// recognised by its first bytes (module docs).
+/// How the 8- and 16-bit formats (PNG, JPEG) store their values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Encoding {
+    /// sRGB-encoded: decoded to linear.
+    Srgb,
+    /// Used as stored (`v / (2^bits − 1)`).
+    Raw,
+}
+
+/// The first bytes of a JPEG file (its SOI marker and the next marker's
+/// first byte; ITU-T T.81, B.1.1.3).
+const JPEG_MAGIC: [u8; 3] = [0xff, 0xd8, 0xff];
+
+/// Loads a linear RGB image from a Radiance RGBE, OpenEXR, PNG or JPEG
+/// file, recognised by its first bytes (module docs).
 pub fn load_rgb_image(path: &Path) -> Result<RgbImage, CliError> {
+    load_rgb_image_as(path, Encoding::Srgb)
+}
+
+/// [`load_rgb_image`], with PNG and JPEG values read as `encoding` says.
+pub fn load_rgb_image_as(path: &Path, encoding: Encoding) -> Result<RgbImage, CliError> {
     let (magic, filled) = read_file_start(path)?;
     let start = magic.get(..filled).unwrap_or(&[]);
     if start.starts_with(RADIANCE_MAGIC_PREFIX) {
@@ -418,12 +440,71 @@ pub fn load_rgb_image(path: &Path) -> Result<RgbImage, CliError> {
     } else if start.starts_with(&EXR_MAGIC) {
         load_exr(path)
     } else if start == PNG_MAGIC {
-        load_png(path)
+        load_png(path, encoding)
+    } else if start.starts_with(&JPEG_MAGIC) {
+        load_jpeg(path, encoding)
     } else {
         Err(error(
             path,
-            "not a Radiance HDR (RGBE), OpenEXR or PNG file",
+            "not a Radiance HDR (RGBE), OpenEXR, PNG or JPEG file",
         ))
+    }
+}
+
+/// Values `v / 255` of a JPEG file, decoded as `encoding` says.
+fn load_jpeg(path: &Path, encoding: Encoding) -> Result<RgbImage, CliError> {
+    let file = File::open(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
+    let mut decoder = jpeg_decoder::Decoder::new(BufReader::new(file));
+    decoder
+        .read_info()
+        .map_err(|e| error(path, format!("bad JPEG: {e}")))?;
+    let info = decoder
+        .info()
+        .ok_or_else(|| error(path, "bad JPEG: no frame header"))?;
+    let (width, height) = (u32::from(info.width), u32::from(info.height));
+    crate::texture_file::check_texels(path, width as usize, height as usize)?;
+    let bytes = decoder
+        .decode()
+        .map_err(|e| error(path, format!("bad JPEG: {e}")))?;
+    let channels = match info.pixel_format {
+        jpeg_decoder::PixelFormat::L8 => 1,
+        jpeg_decoder::PixelFormat::RGB24 => 3,
+        other => {
+            return Err(error(
+                path,
+                format!("JPEG pixel format {other:?} is not supported"),
+            ));
+        }
+    };
+    let texels = width as usize * height as usize;
+    if bytes.len() != texels * channels {
+        return Err(error(
+            path,
+            "bad JPEG: the decoded size does not match its header",
+        ));
+    }
+    let value = |b: u8| decode_value(f32::from(b) / f32::from(u8::MAX), encoding);
+    let texels = bytes
+        .chunks_exact(channels)
+        .map(|t| match *t {
+            [r, g, b] => [value(r), value(g), value(b)],
+            [y, ..] => [value(y); 3],
+            [] => [0.0; 3],
+        })
+        .collect();
+    Ok(RgbImage {
+        width,
+        height,
+        texels,
+        negative_clamped: 0,
+    })
+}
+
+/// A stored value in [0, 1] as linear.
+fn decode_value(v: f32, encoding: Encoding) -> f32 {
+    match encoding {
+        Encoding::Srgb => srgb_decode(f64::from(v)) as f32,
+        Encoding::Raw => v,
     }
 }
 
@@ -497,9 +578,9 @@ fn load_exr(path: &Path) -> Result<RgbImage, CliError> {
 }
 
 /// A PNG file, sRGB-decoded to linear (grey as grey, alpha ignored).
-fn load_png(path: &Path) -> Result<RgbImage, CliError> {
+fn load_png(path: &Path, encoding: Encoding) -> Result<RgbImage, CliError> {
     let pixels = decode_png(path)?;
-    let decode = |v: f32| srgb_decode(f64::from(v)) as f32;
+    let decode = |v: f32| decode_value(v, encoding);
     let texels = pixels
         .values
         .chunks_exact(pixels.channels)

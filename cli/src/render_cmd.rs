@@ -14,10 +14,11 @@ use crate::error::CliError;
 use crate::image_out::{
     Exposure, Tone, XyzImage, write_by_extension, write_coefficients_exr, write_spectral_exr,
 };
+use crate::scene_file::{FilterChoice, MitsubaOptions};
 use crate::scene_source::{SceneDefaults, resolve_scene};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
-use simd_tracer::film::filter::Filter;
+use simd_tracer::film::filter::{Filter, GAUSSIAN_SIGMA_PX};
 use simd_tracer::film::{AlphaMode, Buffer};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{Progress, RenderResult, RenderSettings, render};
@@ -131,11 +132,20 @@ pub enum ToneKind {
 /// Arguments of `fspec render`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct RenderArgs {
-    /// A built-in scene (`fspec scenes` lists them), a TOML scene file, or a
-    /// bare .obj (its MTL colours are used; lit by a white sky if it has no
-    /// emitter).
+    /// A built-in scene (`fspec scenes` lists them), a TOML scene file, a
+    /// Mitsuba 3 scene file (.xml), or a bare .obj (its MTL colours are
+    /// used; lit by a white sky if it has no emitter).
     #[arg(default_value = "cornell")]
     pub scene: String,
+    /// A parameter of a Mitsuba scene file, `name=value`: replaces `$name`
+    /// and wins over the file's `<default>` (as Mitsuba's `-D`; repeatable).
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    pub define: Vec<String>,
+    /// Mitsuba scene files: render unsupported BSDFs as grey diffuse ones
+    /// and skip unsupported emitters and parameters, each with a warning
+    /// (default: an error naming the file and line).
+    #[arg(long)]
+    pub lenient: bool,
     /// Image width in pixels (default: the scene's, else 512).
     #[arg(long)]
     pub width: Option<u32>,
@@ -149,9 +159,10 @@ pub struct RenderArgs {
     /// directly, 2 = direct lighting, …; -1 = unlimited (default 8).
     #[arg(long, allow_hyphen_values = true)]
     pub max_depth: Option<i64>,
-    /// Depth from which Russian roulette may end paths.
-    #[arg(long, default_value_t = 5)]
-    pub rr_depth: u32,
+    /// Depth from which Russian roulette may end paths (default: the
+    /// scene's, else 5).
+    #[arg(long)]
+    pub rr_depth: Option<u32>,
     /// What a path carries.
     #[arg(long, value_enum, default_value_t = TransportKind::Fourier)]
     pub transport: TransportKind,
@@ -171,9 +182,9 @@ pub struct RenderArgs {
     /// Colour conversion once per pixel (spectral) or per sample (rgb).
     #[arg(long, value_enum, default_value_t = BufferKind::Spectral)]
     pub buffer: BufferKind,
-    /// Pixel filter.
-    #[arg(long, value_enum, default_value_t = FilterKind::Gaussian)]
-    pub filter: FilterKind,
+    /// Pixel filter (default: the scene's, else gaussian).
+    #[arg(long, value_enum)]
+    pub filter: Option<FilterKind>,
     /// Seed of every random stream (same seed, same image).
     #[arg(long)]
     pub seed: Option<u64>,
@@ -291,16 +302,38 @@ fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSe
         spp,
         integrator: IntegratorSettings {
             max_depth,
-            rr_depth: args.rr_depth,
+            rr_depth: args
+                .rr_depth
+                .or(defaults.rr_depth)
+                .unwrap_or(DEFAULT_RR_DEPTH),
             hide_emitters: args.hide_emitters || defaults.hide_emitters.unwrap_or(false),
         },
         seed: args.seed.or(defaults.seed).unwrap_or(0),
-        filter: match args.filter {
-            FilterKind::Box => Filter::Box,
-            FilterKind::Gaussian => Filter::gaussian(),
+        filter: match (args.filter, defaults.filter) {
+            (Some(FilterKind::Box), _) => Filter::Box,
+            (Some(FilterKind::Gaussian), _) | (None, None) => Filter::gaussian(),
+            (None, Some(choice)) => filter_of(choice)?,
         },
         threads: args.threads,
         time_limit,
+    })
+}
+
+/// Russian-roulette depth when neither the flag nor the scene gives one.
+const DEFAULT_RR_DEPTH: u32 = 5;
+
+/// The filter a scene file names.
+fn filter_of(choice: FilterChoice) -> Result<Filter, CliError> {
+    Ok(match choice {
+        FilterChoice::Box => Filter::Box,
+        FilterChoice::Gaussian { stddev_px } if stddev_px == GAUSSIAN_SIGMA_PX => {
+            Filter::gaussian()
+        }
+        other => {
+            return Err(CliError::input(format!(
+                "filter {other:?} is not available yet"
+            )));
+        }
     })
 }
 
@@ -786,6 +819,20 @@ fn spectral_planes(
     out
 }
 
+/// `name=value` of `-D`.
+fn parse_define(text: &str) -> Result<(String, String), CliError> {
+    match text.split_once('=') {
+        Some((name, value))
+            if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') =>
+        {
+            Ok((name.to_string(), value.to_string()))
+        }
+        _ => Err(CliError::input(format!(
+            "-D {text}: expected NAME=VALUE (NAME of letters, digits and _)"
+        ))),
+    }
+}
+
 /// Runs `fspec render`.
 pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
     let outputs = if args.out.is_empty() {
@@ -801,7 +848,15 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
             .map(crate::scene_source::illuminant_source)
             .transpose()?,
     };
-    let (builder, defaults, mut warnings) = resolve_scene(&args.scene, &options)?;
+    let mitsuba = MitsubaOptions {
+        defines: args
+            .define
+            .iter()
+            .map(|d| parse_define(d))
+            .collect::<Result<_, _>>()?,
+        lenient: args.lenient,
+    };
+    let (builder, defaults, mut warnings) = resolve_scene(&args.scene, &options, &mitsuba)?;
     if args.illuminant.is_some() && args.scene != COLORCHECKER {
         warnings.push(format!(
             "--illuminant only applies to the {COLORCHECKER} scene: ignored for {}",

@@ -1,5 +1,5 @@
 //! Resolving the scene argument of `fspec render`: a built-in name, a TOML
-//! scene file or a bare OBJ.
+//! scene file, a Mitsuba 3 XML scene file or a bare OBJ.
 
 use crate::error::CliError;
 use crate::spectrum_file::{SpectrumSource as CliSpectrum, resolve};
@@ -10,7 +10,7 @@ use spectral_core::SpectralRange;
 use std::path::Path;
 
 /// Render settings a scene file may set (CLI flags override them).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SceneDefaults {
     /// Width, pixels.
     pub width: Option<u32>,
@@ -24,6 +24,12 @@ pub struct SceneDefaults {
     pub seed: Option<u64>,
     /// Camera rays do not see emitters.
     pub hide_emitters: Option<bool>,
+    /// Depth from which Russian roulette may end paths.
+    pub rr_depth: Option<u32>,
+    /// Pixel filter.
+    pub filter: Option<crate::scene_file::FilterChoice>,
+    /// The part of the film rendered.
+    pub crop: Option<crate::scene_file::CropWindow>,
     /// Instances placed (flattened into the triangle list).
     pub instances: crate::scene_file::InstanceCount,
 }
@@ -32,6 +38,7 @@ pub struct SceneDefaults {
 pub fn resolve_scene(
     argument: &str,
     options: &SceneOptions,
+    mitsuba: &crate::scene_file::MitsubaOptions,
 ) -> Result<(SceneBuilder, SceneDefaults, Vec<String>), CliError> {
     if SCENES.iter().any(|s| s.name == argument) {
         let builder = builtin_scene(argument, SpectralRange::VISIBLE, options)
@@ -45,16 +52,17 @@ pub fn resolve_scene(
         .map(str::to_ascii_lowercase);
     let loaded = match extension.as_deref() {
         Some("toml") => crate::scene_file::load_scene_file(path)?,
+        Some("xml") => crate::scene_file::load_mitsuba_scene(path, mitsuba)?,
         Some("obj") => crate::scene_file::load_obj_scene(path)?,
         _ if path.exists() => {
             return Err(CliError::input(format!(
-                "{argument}: unknown scene format (use .toml or .obj)"
+                "{argument}: unknown scene format (use .toml, .xml or .obj)"
             )));
         }
         _ => {
             let names: Vec<&str> = SCENES.iter().map(|s| s.name).collect();
             return Err(CliError::input(format!(
-                "`{argument}` is neither a built-in scene ({}) nor a .toml/.obj file",
+                "`{argument}` is neither a built-in scene ({}) nor a .toml/.xml/.obj file",
                 names.join(", ")
             )));
         }
@@ -66,6 +74,9 @@ pub fn resolve_scene(
         max_depth: loaded.render.max_depth,
         seed: loaded.render.seed,
         hide_emitters: loaded.render.hide_emitters,
+        rr_depth: loaded.render.rr_depth,
+        filter: loaded.render.filter,
+        crop: loaded.render.crop,
         instances: loaded.instances,
     };
     Ok((loaded.builder, defaults, loaded.warnings))

@@ -43,6 +43,28 @@ fn scene_toml_seeds_are_scenes() -> TestResult {
 }
 
 #[test]
+fn scene_xml_corpus() -> TestResult {
+    let count = replay_corpus("scene_xml", fspec_cli::scene_file::fuzz_scene_xml)?;
+    assert!(count >= 4, "only {count} seeds");
+    Ok(())
+}
+
+/// The hand-written Mitsuba seeds other than `errors.xml` are complete
+/// scenes (no file references) that load and build.
+#[test]
+fn scene_xml_seeds_are_scenes() -> TestResult {
+    for seed in ["minimal.xml", "materials.xml", "textures.xml"] {
+        let loaded = fspec_cli::scene_file::load_mitsuba_scene(
+            &corpus_dir("scene_xml").join(seed),
+            &fspec_cli::scene_file::MitsubaOptions::default(),
+        )
+        .map_err(|e| format!("{seed}: {e}"))?;
+        loaded.builder.build().map_err(|e| format!("{seed}: {e}"))?;
+    }
+    Ok(())
+}
+
+#[test]
 fn coefficient_exr_corpus() -> TestResult {
     let count = replay_corpus(
         "coefficient_exr",

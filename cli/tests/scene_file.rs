@@ -173,6 +173,7 @@ fn render_defaults_are_read() -> TestResult {
             max_depth: Some(8),
             seed: Some(1),
             hide_emitters: None,
+            ..RenderDefaults::default()
         }
     );
     let dir = test_dir("defaults")?;

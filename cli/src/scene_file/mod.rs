@@ -173,6 +173,7 @@
 //! without any light.
 
 mod construction;
+mod mitsuba;
 mod source;
 mod toml_reader;
 mod toml_scene;
@@ -181,6 +182,7 @@ use crate::error::CliError;
 pub use construction::InstanceCount;
 use construction::{FaceMaterials, Mesher, Placement, load_obj_geometry};
 use glam::Vec3;
+pub use mitsuba::{MitsubaOptions, fuzz_scene_xml, load_mitsuba_scene};
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::{SceneBuilder, SceneError};
 use simd_tracer::spectra::SpectrumSource;
@@ -211,7 +213,7 @@ pub struct LoadedScene {
 }
 
 /// Render settings a scene file may preset (command-line flags override).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct RenderDefaults {
     /// Image width, pixels.
     pub width: Option<u32>,
@@ -225,6 +227,42 @@ pub struct RenderDefaults {
     pub seed: Option<u64>,
     /// Camera rays do not see emitters.
     pub hide_emitters: Option<bool>,
+    /// Depth from which Russian roulette may end paths.
+    pub rr_depth: Option<u32>,
+    /// Pixel reconstruction filter.
+    pub filter: Option<FilterChoice>,
+    /// The part of the film rendered (Mitsuba's crop window).
+    pub crop: Option<CropWindow>,
+}
+
+/// A pixel reconstruction filter named by a scene file.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FilterChoice {
+    /// One pixel wide.
+    Box,
+    /// A tent of this radius, px.
+    Tent {
+        /// Radius, px.
+        radius_px: f32,
+    },
+    /// A truncated Gaussian of this standard deviation, px.
+    Gaussian {
+        /// Standard deviation, px.
+        stddev_px: f32,
+    },
+}
+
+/// A rectangle of the film, pixels from its top-left corner.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CropWindow {
+    /// First column.
+    pub x: u32,
+    /// First row.
+    pub y: u32,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
 }
 
 /// Parses and validates a scene file (module docs); every reference is

@@ -4,13 +4,16 @@
 //! place in it: the key path a message names and the byte span whose line
 //! it gives. Every located error and warning reads `file:line: key: message`.
 //! Nothing here knows TOML or scenes, so that the TOML reader, the scene
-//! construction and any other front end (an XML importer) report the same
-//! way: a front end turns its values into spots, construction reports at
-//! them.
+//! construction and any other front end (the Mitsuba XML importer) report
+//! the same way: a front end turns its values into spots, construction
+//! reports at them. A front end whose values come from several files (XML
+//! `<include>`s) gives each spot its own file and line ([`Spot::in_file`]);
+//! an empty key is left out of the message (`file:line: message`).
 
 use crate::error::CliError;
 use std::ops::Range;
 use std::path::Path;
+use std::rc::Rc;
 
 /// A scene file's name (as given, for messages) and text.
 #[derive(Debug, Clone)]
@@ -28,6 +31,29 @@ pub(crate) struct Spot {
     pub(crate) key: String,
     /// Byte span in the source text; messages give the line of its start.
     pub(crate) span: Range<usize>,
+    /// File and 1-based line, when the spot is in another file than the
+    /// source's (they then replace the source's name and the span's line).
+    pub(crate) origin: Option<(Rc<str>, u32)>,
+}
+
+impl Spot {
+    /// A spot in the source text at `span`, called `key`.
+    pub(crate) fn in_source(key: String, span: Range<usize>) -> Self {
+        Self {
+            key,
+            span,
+            origin: None,
+        }
+    }
+
+    /// A spot at `line` of `file`, called `key` (empty: no key in messages).
+    pub(crate) fn in_file(key: String, file: Rc<str>, line: u32) -> Self {
+        Self {
+            key,
+            span: 0..0,
+            origin: Some((file, line)),
+        }
+    }
 }
 
 impl Source<'_> {
@@ -45,7 +71,7 @@ impl Source<'_> {
         key: &str,
         message: impl std::fmt::Display,
     ) -> String {
-        format!("{}:{}: {key}: {message}", self.file, self.line(span.start))
+        located(&self.file, self.line(span.start), key, message)
     }
 
     /// [`Self::located`] as an input error.
@@ -60,12 +86,29 @@ impl Source<'_> {
 
     /// An input error at `spot`.
     pub(crate) fn error_at(&self, spot: &Spot, message: impl std::fmt::Display) -> CliError {
-        self.error(&spot.span, &spot.key, message)
+        CliError::input(self.warning_at(spot, message))
     }
 
     /// A warning line at `spot`.
     pub(crate) fn warning_at(&self, spot: &Spot, message: impl std::fmt::Display) -> String {
-        self.located(&spot.span, &spot.key, message)
+        match &spot.origin {
+            Some((file, line)) => located(file, *line as usize, &spot.key, message),
+            None => self.located(&spot.span, &spot.key, message),
+        }
+    }
+}
+
+/// `file:line: key: message`, or `file:line: message` for an empty key.
+pub(crate) fn located(
+    file: &str,
+    line: usize,
+    key: &str,
+    message: impl std::fmt::Display,
+) -> String {
+    if key.is_empty() {
+        format!("{file}:{line}: {message}")
+    } else {
+        format!("{file}:{line}: {key}: {message}")
     }
 }
 

@@ -77,10 +77,7 @@ impl<'a, 'i> Item<'a, 'i> {
 
     /// The item's place, for construction that reports at it.
     pub(crate) fn spot(&self) -> Spot {
-        Spot {
-            key: self.key.clone(),
-            span: self.span(),
-        }
+        Spot::in_source(self.key.clone(), self.span())
     }
 
     /// An error at the item's line and key.
@@ -221,10 +218,7 @@ impl<'a, 'i> Table<'a, 'i> {
 
     /// The table's place, for construction that reports at it.
     pub(crate) fn spot(&self) -> Spot {
-        Spot {
-            key: self.key.clone(),
-            span: self.span.clone(),
-        }
+        Spot::in_source(self.key.clone(), self.span.clone())
     }
 
     /// `key`, if present.

@@ -23,6 +23,19 @@ pub struct Camera {
     tan_half_fov: f32,
 }
 
+/// A camera's position and axes ([`Camera::from_axes`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraAxes {
+    /// Centre of projection.
+    pub position: Vec3,
+    /// Viewing direction.
+    pub forward: Vec3,
+    /// Image right.
+    pub right: Vec3,
+    /// Image up.
+    pub up: Vec3,
+}
+
 /// Why a camera is invalid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CameraError {
@@ -67,6 +80,40 @@ impl Camera {
         }
         let right = right.normalize();
         let up = right.cross(forward);
+        Ok(Self {
+            position,
+            forward,
+            right,
+            up,
+            fov_deg,
+            tan_half_fov: (0.5 * fov_deg.to_radians()).tan(),
+        })
+    }
+
+    /// A camera at `position` with the given axes (Mitsuba's sensor
+    /// `to_world`: `forward` its local `+z`, `up` its `+y`, `right` its
+    /// `−x`). The axes are normalised but kept otherwise, so a mirroring
+    /// `to_world` mirrors the image; they must be finite and non-zero.
+    pub fn from_axes(axes: CameraAxes, fov_deg: f32) -> Result<Self, CameraError> {
+        let CameraAxes {
+            position,
+            forward,
+            right,
+            up,
+        } = axes;
+        let (Some(forward), Some(right), Some(up)) = (
+            forward.try_normalize(),
+            right.try_normalize(),
+            up.try_normalize(),
+        ) else {
+            return Err(CameraError::Degenerate);
+        };
+        if !position.is_finite() {
+            return Err(CameraError::Degenerate);
+        }
+        if !(fov_deg > 0.0 && fov_deg < 180.0) {
+            return Err(CameraError::FieldOfView);
+        }
         Ok(Self {
             position,
             forward,

@@ -137,6 +137,9 @@ pub(crate) const MAX_MESH_FILE_BYTES: u64 = 4 << 30;
 /// Which format a mesh file is in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum MeshFormat {
+    /// Wavefront OBJ, every object and group merged into one mesh, the MTL
+    /// ignored (Mitsuba's `obj` shape).
+    Obj,
     /// Stanford PLY.
     Ply,
     /// Mitsuba's `serialized`, one shape of the file.
@@ -150,10 +153,57 @@ pub(crate) enum MeshFormat {
 pub(crate) fn load_mesh_file(path: &Path, format: MeshFormat) -> Result<MeshData, String> {
     let bytes = read_bytes(path, MAX_MESH_FILE_BYTES).map_err(|e| e.to_string())?;
     let mesh = match format {
+        MeshFormat::Obj => return merged_obj_mesh(path, &bytes),
         MeshFormat::Ply => parse_ply(&bytes),
         MeshFormat::Serialized { shape_index } => parse_serialized(&bytes, shape_index),
     };
     mesh.map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Every object of the OBJ file `path` (read as `bytes`) as one mesh (its MTL ignored);
+/// triangles with non-finite values are dropped (errors: `path: message`).
+fn merged_obj_mesh(path: &Path, bytes: &[u8]) -> Result<MeshData, String> {
+    let shown = path.display();
+    // The MTL is not read: Mitsuba ignores it.
+    let (models, _) = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &load_options(), |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| format!("{shown}: {e} (OBJ syntax)"))?;
+    let mut merged = MeshData::default();
+    for model in &models {
+        let (data, _dropped) = obj_mesh(&model.mesh).map_err(|e| format!("{shown}: {e}"))?;
+        let base = u32::try_from(merged.positions.len())
+            .map_err(|_| format!("{shown}: too many vertices"))?;
+        let with_normals = !data.normals.is_empty();
+        let with_uvs = !data.uvs.is_empty();
+        // Keep per-vertex arrays aligned when models differ in what they carry.
+        if with_normals && merged.normals.len() < merged.positions.len() {
+            merged.normals.resize(merged.positions.len(), Vec3::ZERO);
+        }
+        if with_uvs && merged.uvs.len() < merged.positions.len() {
+            merged.uvs.resize(merged.positions.len(), Vec2::ZERO);
+        }
+        merged.positions.extend_from_slice(&data.positions);
+        if with_normals || !merged.normals.is_empty() {
+            if with_normals {
+                merged.normals.extend_from_slice(&data.normals);
+            } else {
+                merged.normals.resize(merged.positions.len(), Vec3::ZERO);
+            }
+        }
+        if with_uvs || !merged.uvs.is_empty() {
+            if with_uvs {
+                merged.uvs.extend_from_slice(&data.uvs);
+            } else {
+                merged.uvs.resize(merged.positions.len(), Vec2::ZERO);
+            }
+        }
+        merged
+            .triangles
+            .extend(data.triangles.iter().map(|t| t.map(|i| i + base)));
+    }
+    merged.validate().map_err(|e| format!("{shown}: {e}"))?;
+    Ok(merged)
 }
 
 /// Which material the faces of an OBJ get.

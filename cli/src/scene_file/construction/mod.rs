@@ -118,6 +118,11 @@ impl<'s> Construction<'s> {
         self.warnings.push(warning);
     }
 
+    /// Adds a warning line as it is (a front end's own, already located).
+    pub(crate) fn push_warning(&mut self, warning: String) {
+        self.warnings.push(warning);
+    }
+
     /// The path of the file reference `name` made at `at` (relative to the
     /// scene file's directory).
     pub(crate) fn resolve_file(&self, at: &Spot, name: &str) -> Result<PathBuf, CliError> {

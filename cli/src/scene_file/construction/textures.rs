@@ -55,6 +55,11 @@ impl Construction<'_> {
         Ok(id)
     }
 
+    /// Adds a texture made by the front end (no file cache).
+    pub(crate) fn add_texture(&mut self, texture: Texture) -> TextureId {
+        self.builder.add_texture(texture)
+    }
+
     /// A checkerboard (Mitsuba 3's `checkerboard`: `colors[0]` where the
     /// halves of the unit cell agree) of two spectra added before, each
     /// with the spot it was given at, for the texture at `at`. As an albedo

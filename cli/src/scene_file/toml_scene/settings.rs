@@ -41,6 +41,7 @@ impl Loader<'_> {
                 .get("hide_emitters")
                 .map(|i| i.boolean(src))
                 .transpose()?,
+            ..RenderDefaults::default()
         })
     }
 

@@ -1,0 +1,443 @@
+//! BSDFs as Mitsuba 3.9.1 defines them (`src/bsdfs/*.cpp`).
+//!
+//! | plugin | parameters (defaults) | built as |
+//! | --- | --- | --- |
+//! | `diffuse` | `reflectance` (0.5; spectrum or texture) | Lambert, one-sided |
+//! | `conductor`, `roughconductor` | `material` (`none`: a perfect mirror) or `eta` and `k`; `alpha` (0.1) or `alpha_u`/`alpha_v`; `distribution` (`beckmann`) | conductor, one-sided |
+//! | `dielectric`, `roughdielectric` | `int_ior` (`bk7`), `ext_ior` (`air`): numbers or names (`named_ior`); `alpha`, `distribution` as above | dielectric interface of index `int/ext`, two-sided |
+//! | `thindielectric` | `int_ior`, `ext_ior` | thin slab, two-sided |
+//! | `plastic`, `roughplastic` | `diffuse_reflectance` (0.5), `int_ior` (`polypropylene`), `ext_ior` (`air`), `nonlinear` (false); `alpha` (0.1), `distribution` (`beckmann`) | dielectric coat over a diffuse base, one-sided |
+//! | `twosided` | one nested BSDF | that BSDF on both faces |
+//!
+//! * One-sided (Mitsuba's reflective BSDFs): a ray that reaches the back
+//!   face (against the shading normal) scatters nothing; `twosided` lifts
+//!   that. Dielectrics are two-sided by nature.
+//! * `specular_reflectance` and `specular_transmittance` must be 1 (their
+//!   default): other values are refused rather than rendered wrongly.
+//! * Anisotropic roughness (`alpha_u ≠ alpha_v`) is approximated by the
+//!   isotropic `α = √(α_u α_v)`, with a warning.
+//! * `sample_visible` changes only the sampling, not the image: accepted.
+//! * An unsupported BSDF is an error; `--lenient` renders it as a grey
+//!   (0.5) diffuse BSDF, two-sided, with a warning.
+
+use super::Importer;
+use super::conductors::{preset, preset_names};
+use super::document::Element;
+use super::named_ior::{named_ior, names};
+use super::properties::{Object, Value};
+use super::spectra::{SpectrumUse, zero_outside};
+use crate::error::CliError;
+use crate::scene_file::construction::coated;
+use simd_tracer::ids::SpectrumId;
+use simd_tracer::shading::material::{Albedo, Bsdf, Material};
+use simd_tracer::spectra::SpectrumSource;
+use simd_tracer::spectra::angular::Ior;
+
+/// Cache keys of the built-in BSDFs (no element has address 0 or 1).
+const DEFAULT_BSDF_KEY: usize = 0;
+/// Cache key of the black diffuse BSDF of emitters without a BSDF.
+const BLACK_BSDF_KEY: usize = 1;
+/// Mitsuba's default reflectance of `diffuse` and `plastic`.
+const DEFAULT_REFLECTANCE: f64 = 0.5;
+/// Mitsuba's default roughness of the rough BSDFs.
+const DEFAULT_ALPHA: f64 = 0.1;
+/// Mitsuba's default interior of dielectrics.
+const DEFAULT_DIELECTRIC_INT_IOR: &str = "bk7";
+/// Mitsuba's default interior of plastics.
+const DEFAULT_PLASTIC_INT_IOR: &str = "polypropylene";
+/// Mitsuba's default exterior.
+const DEFAULT_EXT_IOR: &str = "air";
+
+/// A BSDF built for the scene, before it becomes a material (with or
+/// without an emitter).
+#[derive(Debug, Clone)]
+pub(crate) struct BuiltBsdf {
+    name: String,
+    bsdf: Bsdf,
+    one_sided: bool,
+}
+
+impl BuiltBsdf {
+    /// The material of this BSDF with `emission` (front face only, as
+    /// Mitsuba's area emitters).
+    pub(crate) fn material(&self, emission: Option<SpectrumId>) -> Material {
+        let mut material = Material::new(&self.name, self.bsdf.clone());
+        material.emission = emission;
+        let _ = self.one_sided;
+        material
+    }
+}
+
+/// A microfacet roughness: GGX or Beckmann `α`.
+#[derive(Debug, Clone, Copy)]
+struct Roughness {
+    alpha: f32,
+    distribution: Distribution,
+}
+
+impl<'e> Importer<'e, '_> {
+    /// The BSDF of `e` (`None`: Mitsuba's default diffuse), built once per
+    /// element.
+    pub(crate) fn bsdf(&mut self, e: Option<&'e Element>) -> Result<BuiltBsdf, CliError> {
+        let Some(e) = e else {
+            return self.default_bsdf();
+        };
+        let key = super::address(e);
+        if let Some(built) = self.bsdfs.get(&key) {
+            return Ok(built.clone());
+        }
+        let built = self.build_bsdf(e)?;
+        self.bsdfs.insert(key, built.clone());
+        Ok(built)
+    }
+
+    /// Mitsuba's default BSDF: a one-sided diffuse of reflectance 0.5.
+    fn default_bsdf(&mut self) -> Result<BuiltBsdf, CliError> {
+        self.plain_diffuse(DEFAULT_REFLECTANCE, DEFAULT_BSDF_KEY)
+    }
+
+    /// The BSDF of a shape that emits and has none: black diffuse.
+    pub(crate) fn black_bsdf(&mut self) -> Result<BuiltBsdf, CliError> {
+        self.plain_diffuse(0.0, BLACK_BSDF_KEY)
+    }
+
+    fn plain_diffuse(&mut self, reflectance: f64, key: usize) -> Result<BuiltBsdf, CliError> {
+        if let Some(built) = self.bsdfs.get(&key) {
+            return Ok(built.clone());
+        }
+        let spot = self.root_spot.clone();
+        let id = self
+            .cx
+            .add_spectrum(&spot, SpectrumSource::Constant(reflectance))?;
+        let built = BuiltBsdf {
+            name: format!("default diffuse {reflectance}"),
+            bsdf: Bsdf::Lambert {
+                albedo: Albedo::Spectrum(id),
+            },
+            one_sided: true,
+        };
+        self.bsdfs.insert(key, built.clone());
+        Ok(built)
+    }
+
+    fn build_bsdf(&mut self, e: &'e Element) -> Result<BuiltBsdf, CliError> {
+        let object = Object::new(e)?;
+        let name = match e.attr("id") {
+            Some(id) => format!("{} \"{id}\"", object.plugin),
+            None => object.plugin.to_string(),
+        };
+        let spot = Self::spot(e, object.describe());
+        let (bsdf, one_sided) = match object.plugin {
+            "diffuse" => {
+                let albedo = self.albedo(&object, "reflectance")?;
+                (Bsdf::Lambert { albedo }, true)
+            }
+            "conductor" | "roughconductor" => {
+                let rough = self.roughness(&object)?;
+                self.unit_factor(&object, "specular_reflectance")?;
+                let (n, k) = self.conductor_index(&object)?;
+                let fresnel = self.cx.conductor_fresnel(&spot, &spot, n, k)?;
+                (conductor(fresnel, rough), true)
+            }
+            "dielectric" | "roughdielectric" => {
+                let rough = self.roughness(&object)?;
+                self.unit_factor(&object, "specular_reflectance")?;
+                self.unit_factor(&object, "specular_transmittance")?;
+                let eta = self.relative_ior(&object, DEFAULT_DIELECTRIC_INT_IOR)?;
+                (dielectric(self, &spot, eta, rough)?, false)
+            }
+            "thindielectric" => {
+                self.unit_factor(&object, "specular_reflectance")?;
+                self.unit_factor(&object, "specular_transmittance")?;
+                let eta = self.relative_ior(&object, DEFAULT_DIELECTRIC_INT_IOR)?;
+                {
+                    let _ = eta;
+                    self.unsupported(e, "rendered as grey diffuse")?;
+                    return self.default_bsdf();
+                }
+            }
+            "plastic" | "roughplastic" => {
+                let rough = self.roughness(&object)?;
+                self.unit_factor(&object, "specular_reflectance")?;
+                let eta = self.relative_ior(&object, DEFAULT_PLASTIC_INT_IOR)?;
+                let nonlinear = object.boolean("nonlinear", false)?;
+                let albedo = self.albedo(&object, "diffuse_reflectance")?;
+                (plastic(albedo, eta, rough, nonlinear), true)
+            }
+            "twosided" => {
+                let nested = object.objects();
+                let inner = match nested.as_slice() {
+                    [one] => self.object_of(one, &["bsdf"])?,
+                    [front, back] => {
+                        let (f, b) = (
+                            self.object_of(front, &["bsdf"])?,
+                            self.object_of(back, &["bsdf"])?,
+                        );
+                        if !std::ptr::eq(f, b) {
+                            return Err(object.error(
+                                "different BSDFs on the two faces are not supported (one nested BSDF)",
+                            ));
+                        }
+                        f
+                    }
+                    _ => return Err(object.error("needs one nested BSDF")),
+                };
+                self.check_unused(&object)?;
+                let mut built = self.bsdf(Some(inner))?;
+                built.one_sided = false;
+                built.name = name;
+                return Ok(built);
+            }
+            _ => {
+                self.unsupported(e, "rendered as a grey diffuse BSDF")?;
+                let id = self
+                    .cx
+                    .add_spectrum(&spot, SpectrumSource::Constant(DEFAULT_REFLECTANCE))?;
+                return Ok(BuiltBsdf {
+                    name,
+                    bsdf: Bsdf::Lambert {
+                        albedo: Albedo::Spectrum(id),
+                    },
+                    one_sided: false,
+                });
+            }
+        };
+        object.ignore(&["sample_visible"]);
+        self.check_unused(&object)?;
+        Ok(BuiltBsdf {
+            name,
+            bsdf,
+            one_sided,
+        })
+    }
+
+    /// `alpha` (or `alpha_u`/`alpha_v`) and `distribution` of a rough BSDF;
+    /// smooth (α = 0) for the smooth plugins.
+    fn roughness(&mut self, object: &Object<'e>) -> Result<Roughness, CliError> {
+        if !object.plugin.starts_with("rough") {
+            return Ok(Roughness {
+                alpha: 0.0,
+                distribution: Distribution::Ggx,
+            });
+        }
+        let distribution = match object.string("distribution")?.unwrap_or("beckmann") {
+            "beckmann" => Distribution::Beckmann,
+            "ggx" => Distribution::Ggx,
+            other => {
+                return Err(object.error(format!(
+                    "distribution \"{other}\" is not one of beckmann, ggx"
+                )));
+            }
+        };
+        let alpha = match (
+            object.get("alpha").is_some(),
+            object.float_opt("alpha_u")?,
+            object.float_opt("alpha_v")?,
+        ) {
+            (_, None, None) => self.scalar(object, "alpha", DEFAULT_ALPHA)?,
+            (false, Some(u), Some(v)) => {
+                if u < 0.0 || v < 0.0 {
+                    return Err(object.error("alpha_u and alpha_v must be >= 0"));
+                }
+                if u != v {
+                    let spot = Self::spot(object.element, String::new());
+                    self.cx.warn(
+                        &spot,
+                        format!(
+                            "{}: anisotropic roughness (alpha_u {u}, alpha_v {v}) is approximated by the isotropic alpha {:.4}",
+                            object.describe(),
+                            (u * v).sqrt()
+                        ),
+                    );
+                }
+                (u * v).sqrt()
+            }
+            _ => return Err(object.error("give `alpha`, or both `alpha_u` and `alpha_v`")),
+        };
+        if !(0.0..=f64::from(u16::MAX)).contains(&alpha) {
+            return Err(object.error(format!("alpha {alpha}: must be >= 0")));
+        }
+        Ok(Roughness {
+            alpha: alpha as f32,
+            distribution,
+        })
+    }
+
+    /// A property that must be a plain number (a texture is refused).
+    fn scalar(&mut self, object: &Object<'e>, name: &str, default: f64) -> Result<f64, CliError> {
+        match object.get(name) {
+            None => Ok(default),
+            Some(p) => match p.value {
+                Value::Float(v) => Ok(v),
+                Value::Integer(v) => Ok(v as f64),
+                Value::SpectrumText(text) if !text.contains(':') => {
+                    super::properties::parse_number(p.element, text)
+                }
+                _ => Err(p.error("must be a number here (textured values are not supported)")),
+            },
+        }
+    }
+
+    /// Refuses a `specular_reflectance`/`…transmittance` other than 1.
+    fn unit_factor(&mut self, object: &Object<'e>, name: &str) -> Result<(), CliError> {
+        let Some(p) = object.get(name) else {
+            return Ok(());
+        };
+        let unit = match p.value {
+            Value::Float(v) => v == 1.0,
+            Value::Integer(v) => v == 1,
+            Value::Rgb(rgb) => rgb == [1.0; 3],
+            Value::SpectrumText(text) => text.trim() == "1" || text.trim() == "1.0",
+            _ => false,
+        };
+        if unit {
+            Ok(())
+        } else {
+            Err(p.error("values other than 1 are not supported"))
+        }
+    }
+
+    /// An index of refraction property: a number or a Mitsuba name.
+    fn ior_value(
+        &mut self,
+        object: &Object<'e>,
+        name: &str,
+        default: &str,
+    ) -> Result<f64, CliError> {
+        let value = match object.get(name) {
+            None => named_ior(default).unwrap_or(1.0),
+            Some(p) => match p.value {
+                Value::Float(v) => v,
+                Value::Integer(v) => v as f64,
+                Value::String(s) => named_ior(s).ok_or_else(|| {
+                    p.error(format!(
+                        "unknown index of refraction \"{s}\" (a number, or one of: {})",
+                        names()
+                    ))
+                })?,
+                ref other => return Err(p.wrong_type("a number or a material name", other)),
+            },
+        };
+        if value <= 0.0 {
+            return Err(object.error(format!("{name} {value}: must be > 0")));
+        }
+        Ok(value)
+    }
+
+    /// `int_ior / ext_ior`.
+    fn relative_ior(&mut self, object: &Object<'e>, default_int: &str) -> Result<f64, CliError> {
+        let int = self.ior_value(object, "int_ior", default_int)?;
+        let ext = self.ior_value(object, "ext_ior", DEFAULT_EXT_IOR)?;
+        Ok(int / ext)
+    }
+
+    /// The complex index of a conductor: a `material` preset, or `eta` and
+    /// `k` (Mitsuba's default material `none`: a perfect mirror).
+    fn conductor_index(
+        &mut self,
+        object: &Object<'e>,
+    ) -> Result<(SpectrumId, SpectrumId), CliError> {
+        let material = object.string("material")?;
+        let given = (object.get("eta"), object.get("k"));
+        let spot = Self::spot(object.element, object.describe());
+        match (material, given) {
+            (Some(_), (Some(_), _) | (_, Some(_))) => {
+                Err(object.error("give `material` or `eta` and `k`, not both"))
+            }
+            (None, (Some(_), Some(_))) => {
+                let n = self.spectrum_id(
+                    object,
+                    "eta",
+                    SpectrumUse::Unbounded,
+                    SpectrumSource::Constant(0.0),
+                )?;
+                let k = self.spectrum_id(
+                    object,
+                    "k",
+                    SpectrumUse::Unbounded,
+                    SpectrumSource::Constant(1.0),
+                )?;
+                Ok((n, k))
+            }
+            (None, (Some(_), None) | (None, Some(_))) => {
+                Err(object.error("give both `eta` and `k`"))
+            }
+            (Some("none") | None, _) => {
+                let n = self.cx.add_spectrum(&spot, SpectrumSource::Constant(0.0))?;
+                let k = self.cx.add_spectrum(&spot, SpectrumSource::Constant(1.0))?;
+                Ok((n, k))
+            }
+            (Some(name), _) => {
+                let Some([(ln, vn), (lk, vk)]) = preset(object.element, name)? else {
+                    let known: Vec<&str> = preset_names().collect();
+                    return Err(object.error(format!(
+                        "unknown conductor material \"{name}\" (none, {})",
+                        known.join(", ")
+                    )));
+                };
+                // Zero outside the table, as Mitsuba's irregular spectra.
+                let range = spectral_core::SpectralRange::VISIBLE;
+                let n = self.cx.add_spectrum(&spot, zero_outside(ln, vn, &range))?;
+                let k = self.cx.add_spectrum(&spot, zero_outside(lk, vk, &range))?;
+                Ok((n, k))
+            }
+        }
+    }
+
+    /// A reflectance: a spectrum or a texture (nested or referenced), with
+    /// Mitsuba's default 0.5.
+    pub(crate) fn albedo(&mut self, object: &Object<'e>, name: &str) -> Result<Albedo, CliError> {
+        if let Some(p) = object.get(name) {
+            let texture = match p.value {
+                Value::Object(e) if e.tag == "texture" => Some(e),
+                Value::Ref(id) => {
+                    let target = self.resolve_ref(p.element, id)?;
+                    (target.tag == "texture").then_some(target)
+                }
+                _ => None,
+            };
+            if let Some(texture) = texture {
+                return self.texture_albedo(texture);
+            }
+        }
+        let id = self.spectrum_id(
+            object,
+            name,
+            SpectrumUse::Reflectance,
+            SpectrumSource::Constant(DEFAULT_REFLECTANCE),
+        )?;
+        let spot = Self::spot(object.element, object.describe());
+        Ok(self.cx.albedo_spectrum(&spot, id))
+    }
+}
+
+/// The microfacet distribution of a rough BSDF.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Distribution {
+    Ggx,
+    Beckmann,
+}
+
+fn conductor(fresnel: simd_tracer::ids::AngularId, rough: Roughness) -> Bsdf {
+    let _ = rough.distribution;
+    Bsdf::Conductor {
+        fresnel,
+        roughness: rough.alpha,
+    }
+}
+
+fn dielectric(
+    importer: &mut Importer<'_, '_>,
+    spot: &crate::scene_file::source::Spot,
+    eta: f64,
+    rough: Roughness,
+) -> Result<Bsdf, CliError> {
+    importer
+        .cx
+        .dielectric(spot, Ior::Constant(eta), rough.alpha)
+}
+
+fn plastic(albedo: Albedo, eta: f64, rough: Roughness, nonlinear: bool) -> Bsdf {
+    let _ = nonlinear;
+    coated(albedo, Ior::Constant(eta), rough.alpha)
+}

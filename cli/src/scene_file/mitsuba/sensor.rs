@@ -1,0 +1,356 @@
+//! The sensor (camera, film, reconstruction filter, sampler) and the
+//! integrator, as Mitsuba 3.9.1 reads them.
+//!
+//! * `perspective`: `to_world` (local `+z` is the viewing direction, `+y`
+//!   up and `+x` the image's left: `src/sensors/perspective.cpp` maps the
+//!   film's `x` to local `−x`), `fov` in degrees along `fov_axis` (`x`, the
+//!   default, `y`, `diagonal`, `smaller`, `larger`), or `focal_length`
+//!   (a string, default `"50mm"`: the diagonal field of view of a
+//!   36 × 24 mm film, `2 atan(√(36² + 24²) / 2f)`, applied to the image's
+//!   diagonal whatever `fov_axis` says, as Mitsuba's `parse_fov` does). Our camera holds the field
+//!   of view along the smaller image axis: `tan(fov_smaller/2) =
+//!   tan(fov_axis/2) · min(w, h) / L_axis` with `L_axis` the axis' length
+//!   in pixels (`w`, `h` or `√(w² + h²)`). `near_clip` and `far_clip` are
+//!   accepted; the near clip is not applied (geometry within it is seen),
+//!   a warning says so when it differs from Mitsuba's default.
+//! * `hdrfilm`: `width` (default 768), `height` (576), `crop_offset_x/y`,
+//!   `crop_width/height` (the rendered window), `rfilter` (default
+//!   `gaussian`); `pixel_format`, `component_format`, `sample_border` and
+//!   `banner` do not change the rendered radiance and are accepted.
+//! * `rfilter`: `box`, `tent` (`radius`, default 1 px), `gaussian`
+//!   (`stddev`, default 0.5 px, truncated at 4 σ).
+//! * `sampler`: `independent` (`sample_count`, default 4; `seed`, default
+//!   0). Other samplers render with independent samples and the same count
+//!   (a warning): the image converges to the same result.
+//! * integrators: `path` (`max_depth`, default −1 = unlimited, as Mitsuba:
+//!   1 shows only emitters, 2 adds direct light; `rr_depth`, default 5;
+//!   `hide_emitters`), `direct` (direct lighting only: a path of at most 2
+//!   segments with light sampling and BSDF sampling combined by MIS, which
+//!   is Mitsuba's `direct` with one emitter and one BSDF sample — the
+//!   counts `emitter_samples` and `bsdf_samples` change the noise, not the
+//!   image), `volpath`/`volpathmis` on scenes without media render as
+//!   `path` (a warning). A scene without an integrator (which Mitsuba
+//!   refuses to render) renders with `path`'s defaults, with a warning.
+
+use super::Importer;
+use super::document::Element;
+use super::properties::Object;
+use crate::error::CliError;
+use crate::scene_file::{CropWindow, FilterChoice, MAX_IMAGE_EDGE};
+use glam::Vec3;
+use simd_tracer::scene::camera::{Camera, CameraAxes};
+
+/// Mitsuba's film defaults, px (`src/films/hdrfilm.cpp`).
+const DEFAULT_FILM_WIDTH: i64 = 768;
+/// Mitsuba's film height default, px.
+const DEFAULT_FILM_HEIGHT: i64 = 576;
+/// Mitsuba's default focal length, mm, on a 36 × 24 mm film.
+const DEFAULT_FOCAL_LENGTH_MM: f64 = 50.0;
+/// Width of the 35 mm film that focal lengths refer to, mm.
+const FILM_35MM_WIDTH_MM: f64 = 36.0;
+/// Height of the 35 mm film, mm.
+const FILM_35MM_HEIGHT_MM: f64 = 24.0;
+/// Mitsuba's default near clip distance.
+const DEFAULT_NEAR_CLIP: f64 = 1e-2;
+/// Mitsuba's default tent radius, px.
+const DEFAULT_TENT_RADIUS_PX: f64 = 1.0;
+/// Mitsuba's default Gaussian standard deviation, px.
+const DEFAULT_GAUSSIAN_STDDEV_PX: f64 = 0.5;
+/// Mitsuba's default samples per pixel (`independent`).
+const DEFAULT_SAMPLE_COUNT: i64 = 4;
+/// Mitsuba's default Russian-roulette depth.
+const DEFAULT_RR_DEPTH: i64 = 5;
+/// Path length of Mitsuba's `direct` integrator in our depth convention.
+const DIRECT_MAX_DEPTH: u32 = 2;
+
+/// Mitsuba's `path` defaults, for a scene without an integrator.
+pub(super) fn path_defaults(render: &mut crate::scene_file::RenderDefaults) {
+    render.max_depth = Some(u32::MAX);
+    render.rr_depth = Some(DEFAULT_RR_DEPTH as u32);
+}
+
+impl<'e> Importer<'e, '_> {
+    /// The `<sensor>`: camera and render defaults.
+    pub(super) fn sensor(&mut self, e: &'e Element) -> Result<(), CliError> {
+        let object = Object::new(e)?;
+        if object.plugin != "perspective" {
+            return Err(object.error("is not supported (perspective)"));
+        }
+        // The film first: the field of view depends on its aspect.
+        let mut width = DEFAULT_FILM_WIDTH;
+        let mut height = DEFAULT_FILM_HEIGHT;
+        let films = object.nested("film");
+        if films.len() > 1 {
+            return Err(object.error("has more than one <film>"));
+        }
+        let mut filter = FilterChoice::Gaussian {
+            stddev_px: DEFAULT_GAUSSIAN_STDDEV_PX as f32,
+        };
+        if let Some(film) = films.first() {
+            let film = self.object_of(film, &["film"])?;
+            (width, height, filter) = self.film(film)?;
+        }
+        let samplers = object.nested("sampler");
+        if let Some(sampler) = samplers.first() {
+            let sampler = self.object_of(sampler, &["sampler"])?;
+            self.sampler(sampler)?;
+        }
+        let to_world = object.transform("to_world")?;
+        let (w, h) = (width as f64, height as f64);
+        let fov_given = object.float_opt("fov")?;
+        let focal = object.string("focal_length")?;
+        let axis = object.string("fov_axis")?.unwrap_or("x");
+        let axis_px = match axis {
+            "x" => w,
+            "y" => h,
+            "diagonal" => w.hypot(h),
+            "smaller" => w.min(h),
+            "larger" => w.max(h),
+            other => {
+                return Err(object.error(format!(
+                    "fov_axis \"{other}\" is not one of x, y, diagonal, smaller, larger"
+                )));
+            }
+        };
+        let tan_half_axis = match (fov_given, focal) {
+            (Some(_), Some(_)) => {
+                return Err(object.error("give `fov` or `focal_length`, not both"));
+            }
+            (Some(fov), None) => {
+                if !(fov > 0.0 && fov < 180.0) {
+                    return Err(
+                        object.error(format!("fov {fov}: must be between 0 and 180 degrees"))
+                    );
+                }
+                (0.5 * fov.to_radians()).tan()
+            }
+            (None, focal) => {
+                let mm = match focal {
+                    Some(text) => parse_millimetres(text).ok_or_else(|| {
+                        object.error(format!("focal_length \"{text}\": expected e.g. \"50mm\""))
+                    })?,
+                    None => DEFAULT_FOCAL_LENGTH_MM,
+                };
+                // The 35 mm film's diagonal, on the image's diagonal.
+                FILM_35MM_WIDTH_MM.hypot(FILM_35MM_HEIGHT_MM) / (2.0 * mm)
+            }
+        };
+        let axis_px = if fov_given.is_some() {
+            axis_px
+        } else {
+            w.hypot(h)
+        };
+        let tan_half_smaller = tan_half_axis * w.min(h) / axis_px;
+        let fov_smaller_deg = (2.0 * tan_half_smaller.atan()).to_degrees();
+        let near_clip = object.float("near_clip", DEFAULT_NEAR_CLIP)?;
+        let far_clip = object.float_opt("far_clip")?;
+        if near_clip != DEFAULT_NEAR_CLIP || far_clip.is_some() {
+            let spot = Self::spot(e, String::new());
+            self.cx.warn(
+                &spot,
+                "near_clip/far_clip are not applied (all geometry in front of the camera is seen)",
+            );
+        }
+        // A pinhole has no focus; Mitsuba reads the value and ignores it.
+        object.ignore(&[
+            "principal_point_offset_x",
+            "principal_point_offset_y",
+            "focus_distance",
+        ]);
+        for name in ["principal_point_offset_x", "principal_point_offset_y"] {
+            if object.float(name, 0.0)? != 0.0 {
+                return Err(object.error(format!("{name} other than 0 is not supported")));
+            }
+        }
+        let axes = CameraAxes {
+            position: to_world.point(Vec3::ZERO),
+            forward: to_world.vector(Vec3::Z),
+            right: -to_world.vector(Vec3::X),
+            up: to_world.vector(Vec3::Y),
+        };
+        let camera = Camera::from_axes(axes, fov_smaller_deg as f32)
+            .map_err(|err| object.error(format!("to_world: {err}")))?;
+        self.cx.set_camera(camera);
+        self.camera_set = true;
+        self.render.width = Some(width as u32);
+        self.render.height = Some(height as u32);
+        self.render.filter = Some(filter);
+        self.check_unused(&object)
+    }
+
+    /// `hdrfilm`: size, crop window and filter.
+    fn film(&mut self, e: &'e Element) -> Result<(i64, i64, FilterChoice), CliError> {
+        let object = Object::new(e)?;
+        if object.plugin != "hdrfilm" {
+            if !self.options.lenient {
+                return Err(object.error("is not supported (hdrfilm; --lenient renders it as one)"));
+            }
+            let spot = Self::spot(e, String::new());
+            self.cx.warn(
+                &spot,
+                format!(
+                    "film \"{}\" rendered as an hdrfilm (--lenient)",
+                    object.plugin
+                ),
+            );
+        }
+        let edge = |name: &str, default: i64| -> Result<i64, CliError> {
+            let v = object.integer(name, default)?;
+            if !(1..=MAX_IMAGE_EDGE).contains(&v) {
+                return Err(object.error(format!("{name} {v}: must be 1 … {MAX_IMAGE_EDGE}")));
+            }
+            Ok(v)
+        };
+        let width = edge("width", DEFAULT_FILM_WIDTH)?;
+        let height = edge("height", DEFAULT_FILM_HEIGHT)?;
+        let crop_x = object.integer("crop_offset_x", 0)?;
+        let crop_y = object.integer("crop_offset_y", 0)?;
+        let crop_w = object.integer("crop_width", width - crop_x)?;
+        let crop_h = object.integer("crop_height", height - crop_y)?;
+        let inside = crop_x >= 0
+            && crop_y >= 0
+            && crop_w >= 1
+            && crop_h >= 1
+            && crop_x + crop_w <= width
+            && crop_y + crop_h <= height;
+        if !inside {
+            return Err(object.error(format!(
+                "crop window ({crop_x}, {crop_y}) + {crop_w} × {crop_h} does not lie inside the {width} × {height} film"
+            )));
+        }
+        if (crop_x, crop_y, crop_w, crop_h) != (0, 0, width, height) {
+            self.render.crop = Some(CropWindow {
+                x: crop_x as u32,
+                y: crop_y as u32,
+                width: crop_w as u32,
+                height: crop_h as u32,
+            });
+        }
+        object.ignore(&[
+            "pixel_format",
+            "component_format",
+            "sample_border",
+            "banner",
+            "compensate",
+            "file_format",
+        ]);
+        let mut filter = FilterChoice::Gaussian {
+            stddev_px: DEFAULT_GAUSSIAN_STDDEV_PX as f32,
+        };
+        if let Some(rfilter) = object.nested("rfilter").first() {
+            let rfilter = self.object_of(rfilter, &["rfilter"])?;
+            filter = self.rfilter(rfilter)?;
+        }
+        self.check_unused(&object)?;
+        Ok((width, height, filter))
+    }
+
+    fn rfilter(&mut self, e: &'e Element) -> Result<FilterChoice, CliError> {
+        let object = Object::new(e)?;
+        let positive = |name: &str, default: f64| -> Result<f32, CliError> {
+            let v = object.float(name, default)?;
+            if !(v > 0.0 && v <= f64::from(u16::MAX)) {
+                return Err(object.error(format!("{name} {v}: must be > 0")));
+            }
+            Ok(v as f32)
+        };
+        let filter = match object.plugin {
+            "box" => FilterChoice::Box,
+            "tent" => FilterChoice::Tent {
+                radius_px: positive("radius", DEFAULT_TENT_RADIUS_PX)?,
+            },
+            "gaussian" => FilterChoice::Gaussian {
+                stddev_px: positive("stddev", DEFAULT_GAUSSIAN_STDDEV_PX)?,
+            },
+            _ => {
+                self.unsupported(e, "a Gaussian filter is used")?;
+                return Ok(FilterChoice::Gaussian {
+                    stddev_px: DEFAULT_GAUSSIAN_STDDEV_PX as f32,
+                });
+            }
+        };
+        self.check_unused(&object)?;
+        Ok(filter)
+    }
+
+    fn sampler(&mut self, e: &'e Element) -> Result<(), CliError> {
+        let object = Object::new(e)?;
+        let count = object.integer("sample_count", DEFAULT_SAMPLE_COUNT)?;
+        if !(1..=i64::from(u32::MAX)).contains(&count) {
+            return Err(object.error(format!("sample_count {count}: must be >= 1")));
+        }
+        let seed = object.integer("seed", 0)?;
+        if seed < 0 {
+            return Err(object.error(format!("seed {seed}: must be >= 0")));
+        }
+        if object.plugin != "independent" {
+            let spot = Self::spot(e, String::new());
+            self.cx.warn(
+                &spot,
+                format!(
+                    "sampler \"{}\": rendered with independent samples, the same count",
+                    object.plugin
+                ),
+            );
+            object.ignore(&[
+                "jitter",
+                "dimension",
+                "scramble_seed",
+                "strength",
+                "scramble",
+            ]);
+        }
+        self.render.spp = Some(count as u32);
+        self.render.seed = Some(seed as u64);
+        self.check_unused(&object)
+    }
+
+    /// `<integrator>`: depth, roulette, hidden emitters.
+    pub(super) fn integrator(&mut self, e: &'e Element) -> Result<(), CliError> {
+        let object = Object::new(e)?;
+        match object.plugin {
+            "path" | "volpath" | "volpathmis" => {
+                if object.plugin != "path" {
+                    let spot = Self::spot(e, String::new());
+                    self.cx.warn(
+                        &spot,
+                        format!(
+                            "integrator \"{}\" renders as \"path\" (the scene has no media)",
+                            object.plugin
+                        ),
+                    );
+                }
+                let depth = object.integer("max_depth", -1)?;
+                self.render.max_depth = Some(match depth {
+                    -1 => u32::MAX,
+                    d if d >= 1 && d <= i64::from(u32::MAX) => d as u32,
+                    d => {
+                        return Err(object
+                            .error(format!("max_depth {d}: use -1 (unlimited) or a depth >= 1")));
+                    }
+                });
+                let rr = object.integer("rr_depth", DEFAULT_RR_DEPTH)?;
+                if !(1..=i64::from(u32::MAX)).contains(&rr) {
+                    return Err(object.error(format!("rr_depth {rr}: must be >= 1")));
+                }
+                self.render.rr_depth = Some(rr as u32);
+            }
+            "direct" => {
+                self.render.max_depth = Some(DIRECT_MAX_DEPTH);
+                object.ignore(&["emitter_samples", "bsdf_samples", "shading_samples"]);
+            }
+            _ => {
+                return Err(object.error("is not supported (path, direct)"));
+            }
+        }
+        self.render.hide_emitters = Some(object.boolean("hide_emitters", false)?);
+        self.check_unused(&object)
+    }
+}
+
+/// `"50mm"` or `"50"` as millimetres (> 0).
+fn parse_millimetres(text: &str) -> Option<f64> {
+    let t = text.trim();
+    let t = t.strip_suffix("mm").unwrap_or(t).trim();
+    t.parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0)
+}

@@ -1,0 +1,156 @@
+//! Textures as Mitsuba 3.9.1 defines them (`src/textures/*.cpp`), for
+//! reflectances.
+//!
+//! * `bitmap`: `filename` (PNG, JPEG, OpenEXR, Radiance RGBE; recognised by
+//!   content), `raw` (false: PNG and JPEG values are sRGB-decoded; EXR and
+//!   RGBE are linear either way), `filter_type` (`bilinear` | `nearest`),
+//!   `wrap_mode` (`repeat` | `mirror` | `clamp`), `to_uv`. Each texel is
+//!   upsampled as an sRGB reflectance, clamped to [0, 1] as Mitsuba's
+//!   `srgb_model_fetch` clamps it.
+//! * `checkerboard`: `color0` (0.4), `color1` (0.2), `to_uv`.
+//!
+//! # Coordinates
+//!
+//! A Mitsuba scene's meshes keep Mitsuba's texture coordinates (`shapes`):
+//! `v = 0` is an image's top row. Our image lookups put `v = 1` at the top
+//! (OBJ's convention, `simd_tracer::spectra::texture`), so an image's UV
+//! transform is Mitsuba's `to_uv` followed by `v ↦ 1 − v`:
+//! `M = F · to_uv` with `F(u, v) = (u, 1 − v)`. The checkerboard is
+//! evaluated on the coordinates as they are (`M = to_uv`), where ours and
+//! Mitsuba's agree. `to_uv` is a `<transform>`; its 2-D part is the 4 × 4
+//! matrix's rows and columns 0, 1 and 3, as Mitsuba extracts it.
+
+use super::Importer;
+use super::document::Element;
+use super::properties::Object;
+use super::spectra::SpectrumUse;
+use crate::error::CliError;
+use crate::hdr_image::{Encoding, load_rgb_image_as};
+use simd_tracer::scene::transform::Transform;
+use simd_tracer::shading::material::Albedo;
+use simd_tracer::spectra::SpectrumSource;
+use simd_tracer::spectra::texture::{FilterMode, Texture, TextureSampling, UvTransform, WrapMode};
+use spectral_core::SpectralRange;
+
+/// Mitsuba's checkerboard defaults.
+const DEFAULT_COLOR0: f64 = 0.4;
+/// Mitsuba's checkerboard default of the second colour.
+const DEFAULT_COLOR1: f64 = 0.2;
+
+/// The 2-D part of `to_uv` (module docs), then `flip_v` turning `v` over.
+fn uv_matrix(to_uv: &Transform, flip_v: bool) -> [[f32; 3]; 2] {
+    let m = to_uv.affine();
+    let (c0, c1, t) = (m.matrix3.x_axis, m.matrix3.y_axis, m.translation);
+    let rows = [[c0.x, c1.x, t.x], [c0.y, c1.y, t.y]];
+    if flip_v {
+        [rows[0], [-rows[1][0], -rows[1][1], 1.0 - rows[1][2]]]
+    } else {
+        rows
+    }
+}
+
+impl<'e> Importer<'e, '_> {
+    /// A reflectance texture (built once per element).
+    pub(crate) fn texture_albedo(&mut self, e: &'e Element) -> Result<Albedo, CliError> {
+        let key = super::address(e);
+        if let Some(&id) = self.textures.get(&key) {
+            return Ok(Albedo::Texture(id));
+        }
+        let object = Object::new(e)?;
+        let to_uv = object.transform("to_uv")?;
+        let spot = Self::spot(e, object.describe());
+        let id = match object.plugin {
+            "bitmap" => {
+                let name = object
+                    .string("filename")?
+                    .ok_or_else(|| object.error("needs `filename`"))?;
+                let path = e.place.resolve(name).ok_or_else(|| {
+                    object.error(format!(
+                        "\"{name}\": file references are not available here"
+                    ))
+                })?;
+                let encoding = if object.boolean("raw", false)? {
+                    Encoding::Raw
+                } else {
+                    Encoding::Srgb
+                };
+                let filter = match object.string("filter_type")?.unwrap_or("bilinear") {
+                    "bilinear" => FilterMode::Bilinear,
+                    "nearest" => FilterMode::Nearest,
+                    other => {
+                        return Err(object.error(format!(
+                            "filter_type \"{other}\" is not one of bilinear, nearest"
+                        )));
+                    }
+                };
+                let wrap = match object.string("wrap_mode")?.unwrap_or("repeat") {
+                    "repeat" => WrapMode::Repeat,
+                    "mirror" => WrapMode::Mirror,
+                    "clamp" => WrapMode::Clamp,
+                    other => {
+                        return Err(object.error(format!(
+                            "wrap_mode \"{other}\" is not one of repeat, mirror, clamp"
+                        )));
+                    }
+                };
+                let uv = UvTransform::from_matrix(uv_matrix(&to_uv, true))
+                    .map_err(|err| object.error(format!("to_uv: {err}")))?;
+                let image = load_rgb_image_as(&path, encoding).map_err(|err| object.error(err))?;
+                let clamped = image.texels.iter().flatten().filter(|v| **v > 1.0).count();
+                if clamped > 0 {
+                    self.cx.warn(
+                        &spot,
+                        format!(
+                            "{}: {clamped} texel value(s) above 1 are clamped to 1 (a reflectance; Mitsuba clamps them too)",
+                            path.display()
+                        ),
+                    );
+                }
+                let texels: Vec<[f32; 3]> = image
+                    .texels
+                    .iter()
+                    .map(|t| t.map(|v| v.clamp(0.0, 1.0)))
+                    .collect();
+                let texture =
+                    Texture::rgb(image.width, image.height, &texels, SpectralRange::VISIBLE)
+                        .map_err(|err| object.error(format!("{}: {err}", path.display())))?;
+                object.ignore(&["format", "accel"]);
+                self.cx
+                    .add_texture(texture.with_sampling(TextureSampling { wrap, filter, uv }))
+            }
+            "checkerboard" => {
+                let uv = UvTransform::from_matrix(uv_matrix(&to_uv, false))
+                    .map_err(|err| object.error(format!("to_uv: {err}")))?;
+                let mut colors = Vec::with_capacity(2);
+                for (name, default) in [("color0", DEFAULT_COLOR0), ("color1", DEFAULT_COLOR1)] {
+                    let at = object.get(name).map_or(e, |p| p.element);
+                    let id = self.spectrum_id(
+                        &object,
+                        name,
+                        SpectrumUse::Reflectance,
+                        SpectrumSource::Constant(default),
+                    )?;
+                    colors.push((Self::spot(at, format!("{} {name}", object.describe())), id));
+                }
+                let [c0, c1]: [_; 2] = colors
+                    .try_into()
+                    .map_err(|_| object.error("needs two colours"))?;
+                self.cx.checkerboard(
+                    &spot,
+                    [c0, c1],
+                    crate::texture_file::TextureUse::Albedo,
+                    TextureSampling {
+                        uv,
+                        ..TextureSampling::default()
+                    },
+                )?
+            }
+            _ => {
+                return Err(object.error("is not supported (bitmap, checkerboard)"));
+            }
+        };
+        self.check_unused(&object)?;
+        self.textures.insert(key, id);
+        Ok(Albedo::Texture(id))
+    }
+}
