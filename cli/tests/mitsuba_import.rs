@@ -1,0 +1,311 @@
+//! The Mitsuba 3 importer's file handling: `<include>`, `<default>` and
+//! `-D`, `<path>`, references, unused and unsupported parts, `--lenient`,
+//! and every kind of bad input giving one line `file:line: …` with exit
+//! code 2 (`docs/bad-inputs.md`). How the imported scenes render against
+//! Mitsuba is `mitsuba_conformance.rs`.
+
+mod common;
+
+use assert_cmd::Command;
+use common::TestResult;
+use fspec_cli::scene_file::{LoadedScene, MitsubaOptions, load_mitsuba_scene};
+use std::fs;
+use std::path::{Path, PathBuf};
+
+fn fspec() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_fspec"))
+}
+
+fn test_dir(name: &str) -> TestResult<PathBuf> {
+    common::test_dir("mitsuba-import", name)
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> TestResult<PathBuf> {
+    let path = dir.join(name);
+    fs::write(&path, text)?;
+    Ok(path)
+}
+
+/// A scene around `body`: a small camera and film, and whatever `body` adds.
+fn scene(body: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+    <integrator type="path"/>
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+    </sensor>
+{body}
+</scene>
+"#
+    )
+}
+
+/// A lit quad.
+const LIT_QUAD: &str = r#"    <shape type="rectangle"><bsdf type="diffuse"/></shape>
+    <emitter type="constant"/>"#;
+
+fn load(path: &Path, defines: &[(&str, &str)], lenient: bool) -> Result<LoadedScene, String> {
+    let options = MitsubaOptions {
+        defines: defines
+            .iter()
+            .map(|(n, v)| (n.to_string(), v.to_string()))
+            .collect(),
+        lenient,
+    };
+    load_mitsuba_scene(path, &options).map_err(|e| e.to_string())
+}
+
+/// Loads `text` as `name` in a fresh folder and expects an error that starts
+/// with `file:line:` and contains every needle, on one line.
+fn refused(test: &str, text: &str, line: usize, needles: &[&str]) -> TestResult {
+    let dir = test_dir(test)?;
+    let path = write(&dir, "s.xml", text)?;
+    let message = match load(&path, &[], false) {
+        Ok(_) => return Err(format!("{test}: accepted").into()),
+        Err(message) => message,
+    };
+    let prefix = format!("{}:{line}:", path.display());
+    assert!(
+        message.starts_with(&prefix),
+        "{test}: {message:?} should start with {prefix:?}"
+    );
+    assert!(!message.contains('\n'), "{test}: {message:?}");
+    for needle in needles {
+        assert!(
+            message.contains(needle),
+            "{test}: {needle:?} not in {message:?}"
+        );
+    }
+    Ok(())
+}
+
+#[test]
+fn malformed_files_name_their_line() -> TestResult {
+    refused(
+        "xml",
+        "<scene version=\"3.0.0\">\n<shape type=\"sphere\">\n</scene>\n",
+        3,
+        &["malformed XML"],
+    )?;
+    refused(
+        "root",
+        "<bsdf version=\"3.0.0\" type=\"diffuse\"/>\n",
+        1,
+        &["expected <scene>"],
+    )?;
+    refused(
+        "version",
+        "<scene version=\"0.6.0\">\n</scene>\n",
+        1,
+        &["Mitsuba 0.x"],
+    )?;
+    refused("no-version", "<scene>\n</scene>\n", 1, &["version"])?;
+    let text = scene("    <shape type=\"sphere\"><float name=\"radius\" value=\"$r\"/></shape>");
+    refused("undefined", &text, 8, &["`$r` has no value", "-D r="])?;
+    let text = scene("    <shape type=\"sphere\"><ref id=\"nothing\"/></shape>");
+    refused(
+        "ref",
+        &text,
+        8,
+        &["<ref id=\"nothing\">", "no object has this id"],
+    )?;
+    let text =
+        scene("    <bsdf type=\"diffuse\" id=\"a\"/>\n    <bsdf type=\"diffuse\" id=\"a\"/>");
+    refused(
+        "duplicate",
+        &text,
+        9,
+        &["id \"a\" is defined twice", "line 8"],
+    )?;
+    let text = scene("    <shape type=\"sphere\"><float name=\"radius\" value=\"big\"/></shape>");
+    refused("number", &text, 8, &["\"big\" is not a finite number"])?;
+    let text = scene("    <shape type=\"sphere\"><float name=\"radius\" value=\"nan\"/></shape>");
+    refused("nan", &text, 8, &["not a finite number"])?;
+    let text = scene("    <shape type=\"sphere\"><string name=\"radius\" value=\"1\"/></shape>");
+    refused(
+        "type",
+        &text,
+        8,
+        &["property \"radius\"", "expected a float, got a string"],
+    )?;
+    let text = scene("    <shape type=\"sphere\"><bsdf type=\"hair\"/></shape>");
+    refused(
+        "plugin",
+        &text,
+        8,
+        &["bsdf type \"hair\" is not supported", "--lenient"],
+    )?;
+    let text = scene("    <shape type=\"sphere\"><float name=\"radiuss\" value=\"1\"/></shape>");
+    refused(
+        "unknown-parameter",
+        &text,
+        8,
+        &["parameter \"radiuss\" is not supported"],
+    )?;
+    let text =
+        scene("    <shape type=\"obj\"><string name=\"filename\" value=\"missing.obj\"/></shape>");
+    refused("missing-file", &text, 8, &["missing.obj", "no such file"])?;
+    let text = scene(LIT_QUAD).replace(
+        "value=\"8\"/><integer name=\"height\"",
+        "value=\"100000000\"/><integer name=\"height\"",
+    );
+    refused(
+        "absurd-size",
+        &text,
+        6,
+        &["width 100000000", "must be 1 … 65536"],
+    )?;
+    let text = scene("    <shape type=\"sphere\"><rgb name=\"radius\" value=\"1, 2\"/></shape>");
+    refused("rgb", &text, 8, &["<rgb> needs 1 or 3 values"])?;
+    let text = scene(
+        "    <shape type=\"sphere\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"2, 0, 0\"/></bsdf></shape>",
+    );
+    refused("reflectance", &text, 8, &["outside [0, 1]"])?;
+    Ok(())
+}
+
+#[test]
+fn includes_defaults_and_defines() -> TestResult {
+    let dir = test_dir("include")?;
+    fs::create_dir_all(dir.join("parts"))?;
+    // An included file's defaults are visible after it; plugin file names
+    // in it resolve against the main scene's folder (as in Mitsuba).
+    write(
+        &dir.join("parts"),
+        "geometry.xml",
+        r#"<scene version="3.0.0">
+    <default name="radius" value="0.5"/>
+    <shape type="ply"><string name="filename" value="mesh.ply"/></shape>
+</scene>"#,
+    )?;
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    write(&dir, "mesh.ply", ply)?;
+    let text = scene(
+        r#"    <default name="emission" value="2"/>
+    <include filename="parts/geometry.xml"/>
+    <shape type="sphere"><float name="radius" value="$radius"/></shape>
+    <emitter type="constant"><float name="radiance" value="$emission"/></emitter>"#,
+    );
+    let path = write(&dir, "s.xml", &text)?;
+    let loaded = load(&path, &[], false)?;
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    loaded.builder.build()?;
+    // -D wins over <default>; an unused -D is a warning.
+    let loaded = load(&path, &[("radius", "2"), ("unused", "1")], false)?;
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    assert!(
+        loaded.warnings[0].contains("-D unused=…"),
+        "{:?}",
+        loaded.warnings
+    );
+    let err = load(&path, &[("radius", "-1")], false)
+        .err()
+        .unwrap_or_default();
+    assert!(err.contains("radius -1: must be > 0"), "{err}");
+    // A cycle.
+    write(
+        &dir,
+        "a.xml",
+        "<scene version=\"3.0.0\"><include filename=\"b.xml\"/></scene>",
+    )?;
+    write(
+        &dir,
+        "b.xml",
+        "<scene version=\"3.0.0\">\n<include filename=\"a.xml\"/></scene>",
+    )?;
+    let err = load(&dir.join("a.xml"), &[], false)
+        .err()
+        .unwrap_or_default();
+    assert!(
+        err.contains("b.xml:2:") && err.contains("cyclic include"),
+        "{err}"
+    );
+    // A missing include names the including line.
+    let text = scene("    <include filename=\"nope.xml\"/>");
+    let err = load(&write(&dir, "m.xml", &text)?, &[], false)
+        .err()
+        .unwrap_or_default();
+    assert!(
+        err.contains("m.xml:8:") && err.contains("nope.xml: no such file"),
+        "{err}"
+    );
+    Ok(())
+}
+
+#[test]
+fn unused_definitions_warn_and_lenient_substitutes() -> TestResult {
+    let dir = test_dir("lenient")?;
+    let text = scene(
+        r#"    <bsdf type="diffuse" id="unused"/>
+    <texture type="checkerboard" id="also-unused"/>
+    <shape type="rectangle"><bsdf type="hair"><float name="eumelanin" value="1"/></bsdf></shape>
+    <shape type="sphere"><float name="radius" value="0.5"/><float name="wobble" value="1"/></shape>
+    <emitter type="spot"/>
+    <emitter type="constant"/>"#,
+    );
+    let path = write(&dir, "s.xml", &text)?;
+    let strict = load(&path, &[], false).err().unwrap_or_default();
+    assert!(
+        strict.contains("bsdf type \"hair\" is not supported"),
+        "{strict}"
+    );
+    let loaded = load(&path, &[], true)?;
+    let warnings = loaded.warnings.join("\n");
+    for needle in [
+        "s.xml:8: <bsdf id=\"unused\"> is defined but never used",
+        "s.xml:9: <texture id=\"also-unused\"> is defined but never used",
+        "s.xml:10: bsdf type \"hair\" is not supported; rendered as a grey diffuse BSDF",
+        "s.xml:11: shape \"sphere\": parameter \"wobble\" is not supported; ignored",
+        "s.xml:12: emitter type \"spot\" is not supported; the emitter is skipped",
+    ] {
+        assert!(warnings.contains(needle), "{needle:?} not in\n{warnings}");
+    }
+    assert_eq!(loaded.warnings.len(), 5, "{warnings}");
+    loaded.builder.build()?;
+    Ok(())
+}
+
+#[test]
+fn the_command_line_takes_defines_and_reports_one_line() -> TestResult {
+    let dir = test_dir("cli")?;
+    let text = scene(
+        r#"    <default name="r" value="0.5"/>
+    <shape type="sphere"><float name="radius" value="$r"/></shape>
+    <emitter type="constant"/>"#,
+    );
+    let path = write(&dir, "s.xml", &text)?;
+    let out = dir.join("o.exr");
+    let ok = fspec()
+        .args(["render", "--quiet", "--spp", "1", "-D", "r=0.25"])
+        .arg(&path)
+        .arg("--out")
+        .arg(&out)
+        .output()?;
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    assert!(out.exists());
+    let bad = fspec()
+        .args(["render", "--quiet", "--spp", "1", "-D", "r=-3"])
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.join("p.exr"))
+        .output()?;
+    let stderr = String::from_utf8(bad.stderr)?;
+    assert_eq!(bad.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("s.xml:9:") && stderr.contains("radius -3"),
+        "{stderr}"
+    );
+    let bad_define = fspec()
+        .args(["render", "-D", "noequals"])
+        .arg(&path)
+        .output()?;
+    assert_eq!(bad_define.status.code(), Some(2));
+    Ok(())
+}
