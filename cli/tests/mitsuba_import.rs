@@ -7,7 +7,7 @@
 mod common;
 
 use assert_cmd::Command;
-use common::TestResult;
+use common::{TestResult, entries};
 use fspec_cli::scene_file::{LoadedScene, MitsubaOptions, load_mitsuba_scene};
 use std::fs;
 use std::path::{Path, PathBuf};
