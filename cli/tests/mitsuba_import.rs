@@ -302,7 +302,11 @@ fn the_command_line_takes_defines_and_reports_one_line() -> TestResult {
         stderr.contains("s.xml:9:") && stderr.contains("radius -3"),
         "{stderr}"
     );
-    assert_eq!(entries(&dir)?, ["o.exr", "s.xml"], "a refused render left a file");
+    assert_eq!(
+        entries(&dir)?,
+        ["o.exr", "s.xml"],
+        "a refused render left a file"
+    );
     let bad_define = fspec()
         .args(["render", "-D", "noequals"])
         .arg(&path)
