@@ -108,6 +108,7 @@ fn small_settings() -> RenderSettings {
         filter: Filter::Box,
         threads: Some(2),
         time_limit: None,
+        window: None,
     }
 }
 

@@ -144,6 +144,7 @@ fn an_empty_image_is_an_error() -> TestResult {
             filter: Filter::Box,
             threads: Some(1),
             time_limit: None,
+            window: None,
         };
         let error = render(&transport, &scene, &settings, &mut |_| true)
             .err()
