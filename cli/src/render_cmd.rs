@@ -18,10 +18,10 @@ use crate::scene_file::{FilterChoice, MitsubaOptions};
 use crate::scene_source::{SceneDefaults, resolve_scene};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
-use simd_tracer::film::filter::{Filter, GAUSSIAN_SIGMA_PX};
+use simd_tracer::film::filter::{Filter, GAUSSIAN_SIGMA_PX, TENT_RADIUS_PX};
 use simd_tracer::film::{AlphaMode, Buffer};
 use simd_tracer::integrator::IntegratorSettings;
-use simd_tracer::render::{Progress, RenderResult, RenderSettings, render};
+use simd_tracer::render::{PixelWindow, Progress, RenderResult, RenderSettings, render};
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::SceneOptions;
 use simd_tracer::transport::{
@@ -116,6 +116,8 @@ pub enum BufferKind {
 pub enum FilterKind {
     /// One-pixel box.
     Box,
+    /// Tent, radius 1 px (Mitsuba's `tent` default).
+    Tent,
     /// Gaussian, σ = 0.5 px, radius 2 px (Mitsuba's default).
     Gaussian,
 }
@@ -193,6 +195,14 @@ pub struct RenderArgs {
     /// default: the scene's `[render] hide_emitters`, else off).
     #[arg(long)]
     pub hide_emitters: bool,
+    /// Render only the window X,Y,W,H of the film: W × H pixels from
+    /// column X, row Y (0,0 is the top-left), as Mitsuba's crop_offset_x,
+    /// crop_offset_y, crop_width, crop_height. The outputs are W × H; each
+    /// pixel equals the full render's at the same seed bit for bit (with
+    /// --transport cv the pooled α pools the window only; use
+    /// --cv-alpha-per-pixel for exact crops).
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_window)]
+    pub crop: Option<PixelWindow>,
     /// Worker threads (default: all cores; the image does not depend on it).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -233,6 +243,27 @@ pub struct RenderArgs {
     /// Do not print progress (a one-line summary only).
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// `X,Y,W,H` as a [`PixelWindow`] (whether it fits the film is checked
+/// once the film's size is known).
+fn parse_window(text: &str) -> Result<PixelWindow, String> {
+    let numbers: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [x, y, width, height] = numbers.as_slice() else {
+        return Err(format!(
+            "{text}: expected four whole numbers X,Y,W,H (offset and size in pixels)"
+        ));
+    };
+    let number = |part: &str| {
+        part.parse::<u32>()
+            .map_err(|_| format!("{text}: {part} is not a whole number of pixels"))
+    };
+    Ok(PixelWindow {
+        x: number(x)?,
+        y: number(y)?,
+        width: number(width)?,
+        height: number(height)?,
+    })
 }
 
 /// The built-in scene that `--illuminant` lights.
@@ -296,6 +327,24 @@ fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSe
     if args.threads == Some(0) {
         return Err(CliError::input("--threads must be at least 1"));
     }
+    // The flag wins over the scene's crop window (Mitsuba's film crop).
+    let scene_crop = defaults.crop.map(|c| PixelWindow {
+        x: c.x,
+        y: c.y,
+        width: c.width,
+        height: c.height,
+    });
+    let window = match args.crop {
+        Some(window) => Some(
+            window
+                .validate(width, height)
+                .map_err(|e| CliError::input(format!("--crop: {e}")))?,
+        ),
+        None => scene_crop
+            .map(|window| window.validate(width, height))
+            .transpose()
+            .map_err(|e| CliError::input(format!("the scene's crop window: {e}")))?,
+    };
     Ok(RenderSettings {
         width,
         height,
@@ -311,30 +360,33 @@ fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSe
         seed: args.seed.or(defaults.seed).unwrap_or(0),
         filter: match (args.filter, defaults.filter) {
             (Some(FilterKind::Box), _) => Filter::Box,
+            (Some(FilterKind::Tent), _) => Filter::Tent {
+                radius_px: TENT_RADIUS_PX,
+            },
             (Some(FilterKind::Gaussian), _) | (None, None) => Filter::gaussian(),
             (None, Some(choice)) => filter_of(choice)?,
         },
         threads: args.threads,
         time_limit,
+        window,
     })
 }
 
 /// Russian-roulette depth when neither the flag nor the scene gives one.
 const DEFAULT_RR_DEPTH: u32 = 5;
 
-/// The filter a scene file names.
+/// The filter a scene file names (Mitsuba's Gaussian of σ 0.5 px is our
+/// tabulated default, bit for bit).
 fn filter_of(choice: FilterChoice) -> Result<Filter, CliError> {
-    Ok(match choice {
-        FilterChoice::Box => Filter::Box,
+    match choice {
+        FilterChoice::Box => Ok(Filter::Box),
+        FilterChoice::Tent { radius_px } => Filter::tent(radius_px),
         FilterChoice::Gaussian { stddev_px } if stddev_px == GAUSSIAN_SIGMA_PX => {
-            Filter::gaussian()
+            Ok(Filter::gaussian())
         }
-        other => {
-            return Err(CliError::input(format!(
-                "filter {other:?} is not available yet"
-            )));
-        }
-    })
+        FilterChoice::Gaussian { stddev_px } => Filter::gaussian_with_stddev(stddev_px),
+    }
+    .map_err(|e| CliError::input(format!("the scene's filter: {e}")))
 }
 
 /// Bytes of one `f32` sample in the image buffers and the EXR writers.
@@ -441,7 +493,8 @@ pub fn predict_memory(
     scene_bytes: u64,
     spectral_wavelengths: u64,
 ) -> MemoryPrediction {
-    let pixels = u64::from(settings.width) * u64::from(settings.height);
+    let window = settings.film_window();
+    let pixels = window.pixel_count();
     let per_pixel = |bytes: u64| pixels.saturating_mul(bytes);
     let xyz = per_pixel(size_of::<Xyz>() as u64);
     let coefficients = args.coeffs as u64;
@@ -465,8 +518,8 @@ pub fn predict_memory(
     // core: the channel planes plus the blocks in flight.
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get() as u64);
     let rows_in_flight = ((cores + EXR_EXTRA_THREADS) * EXR_BLOCKS_PER_THREAD * EXR_ROWS_PER_BLOCK)
-        .min(u64::from(settings.height));
-    let pixels_in_flight = rows_in_flight * u64::from(settings.width);
+        .min(u64::from(window.height));
+    let pixels_in_flight = rows_in_flight * u64::from(window.width);
     let exr = |channels: u64| {
         let bytes_per_pixel = channels * F32_BYTES;
         per_pixel(bytes_per_pixel)
@@ -525,10 +578,11 @@ pub fn check_memory(
 ) -> Result<(), CliError> {
     let peak = prediction.peak_bytes();
     if peak > limit_bytes {
+        let window = settings.film_window();
         return Err(CliError::input(format!(
             "{}×{} pixels would need about {} at the peak (film {}, outputs {}, scene {}; limit {}, half the memory): use a smaller image or fewer outputs",
-            settings.width,
-            settings.height,
+            window.width,
+            window.height,
             format_bytes(peak),
             format_bytes(prediction.render_bytes),
             format_bytes(prediction.output_bytes),

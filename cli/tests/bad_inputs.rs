@@ -346,6 +346,7 @@ fn settings(width: u32, height: u32) -> RenderSettings {
         filter: Filter::Box,
         threads: None,
         time_limit: None,
+        window: None,
     }
 }
 

@@ -65,6 +65,7 @@ fn ours(scene: &Scene, seed: u64) -> TestResult<Vec<f64>> {
         filter: Filter::Box,
         threads: Some(2),
         time_limit: None,
+        window: None,
     };
     let result = render(&transport, scene, &settings, &mut |_| true)?;
     Ok(result

@@ -57,6 +57,7 @@ fn render_xyz<T: Transport>(
         filter: Filter::Box,
         threads: Some(2),
         time_limit: None,
+        window: None,
     };
     Ok(render(transport, scene, &settings, &mut |_| true)?.xyz)
 }

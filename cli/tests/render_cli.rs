@@ -306,6 +306,82 @@ fn same_seed_gives_identical_files_with_one_and_two_threads() -> TestResult {
     Ok(())
 }
 
+/// `--crop X,Y,W,H` writes W × H images whose pixels are the full
+/// render's at the same seed, float for float; a window outside the film
+/// and a malformed one are refused.
+#[test]
+fn crop_renders_the_window_of_the_full_image() -> TestResult {
+    let dir = test_dir("crop")?;
+    let common = [
+        "materials",
+        "--width",
+        "30",
+        "--height",
+        "20",
+        "--spp",
+        "2",
+        "--seed",
+        "3",
+    ];
+    let mut full = common.to_vec();
+    full.extend(["--out", "full.exr"]);
+    render_ok(&dir, &full)?;
+    let (x0, y0, w, h) = (7usize, 5usize, 13usize, 9usize);
+    let mut crop = common.to_vec();
+    crop.extend([
+        "--crop", "7,5,13,9", "--out", "crop.exr", "--out", "crop.png",
+    ]);
+    render_ok(&dir, &crop)?;
+    let (full, crop) = (
+        read_exr(&dir.join("full.exr"))?,
+        read_exr(&dir.join("crop.exr"))?,
+    );
+    assert_eq!(exr_size(&crop), (w, h));
+    assert_eq!(png_info(&dir.join("crop.png"))?.0, w as u32);
+    for name in ["R", "G", "B"] {
+        let (f, c) = (channel(&full, name)?, channel(&crop, name)?);
+        for y in 0..h {
+            for x in 0..w {
+                assert_eq!(
+                    c[y * w + x].to_bits(),
+                    f[(y0 + y) * 30 + x0 + x].to_bits(),
+                    "{name} ({x}, {y})"
+                );
+            }
+        }
+    }
+    refused(
+        &dir,
+        &[
+            "render",
+            "--width",
+            "30",
+            "--height",
+            "20",
+            "--crop",
+            "20,0,11,4",
+        ],
+        &["--crop", "11×4 at (20, 0)", "30×20"],
+    )?;
+    refused(
+        &dir,
+        &[
+            "render", "--width", "30", "--height", "20", "--crop", "0,0,0,4",
+        ],
+        &["--crop", "non-empty"],
+    )?;
+    let before = entries(&dir)?;
+    let output = fspec()
+        .current_dir(&dir)
+        .args(["render", "--crop", "1,2,3"])
+        .output()?;
+    let stderr = String::from_utf8(output.stderr)?;
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("X,Y,W,H"), "{stderr}");
+    assert_eq!(entries(&dir)?, before);
+    Ok(())
+}
+
 #[test]
 fn time_limit_stops_after_a_pass_and_writes_the_image() -> TestResult {
     let dir = test_dir("time-limit")?;

@@ -13,6 +13,7 @@ use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderSettings, render};
 use simd_tracer::scene::Scene;
+use simd_tracer::shading::material::{Bsdf, Sides};
 use simd_tracer::transport::FourierTransport;
 use spectral_core::Spectrum;
 use spectral_core::color::Xyz;
@@ -108,6 +109,7 @@ fn small_settings() -> RenderSettings {
         filter: Filter::Box,
         threads: Some(2),
         time_limit: None,
+        window: None,
     }
 }
 
@@ -733,6 +735,68 @@ fn bad_ior() -> TestResult {
     let text = format!("{BASE}\n[materials.c]\ntype = \"coated\"\nalbedo = \"e\"\nior = \"bk7\"\n");
     let (path, message) = scene_error("ior-coat", &text)?;
     assert_at(&message, &path, &text, "bk7", "materials.c.ior")?;
+    Ok(())
+}
+
+/// `thin-dielectric` takes `ior` (a number > 0, slab over outside, below 1
+/// allowed); `sides = "front"` makes a reflective material one-sided
+/// (default `both`).
+#[test]
+fn thin_dielectric_and_sides_load() -> TestResult {
+    let dir = test_dir("thin-dielectric")?;
+    let text = format!(
+        "{BASE}\n[materials.pane]\ntype = \"thin-dielectric\"\nior = 1.5\nsides = \"front\"\n\
+         [materials.bubble]\ntype = \"thin-dielectric\"\nior = 0.75\n\
+         [materials.matte]\ntype = \"lambert\"\nalbedo = {{ constant = 0.5 }}\nsides = \"front\"\n\
+         [[quads]]\nvertices = [[-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]]\nmaterial = \"pane\"\n\
+         [[quads]]\nvertices = [[-1, -1, 2], [1, -1, 2], [1, 1, 2], [-1, 1, 2]]\nmaterial = \"bubble\"\n\
+         [[quads]]\nvertices = [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1]]\nmaterial = \"matte\"\n"
+    );
+    let scene = load_scene_file(&write(&dir, "scene.toml", &text)?)?
+        .builder
+        .build()?;
+    let material = |name: &str| {
+        scene
+            .materials()
+            .iter()
+            .find(|m| m.name == name)
+            .ok_or(format!("no {name}"))
+    };
+    assert_eq!(material("pane")?.bsdf, Bsdf::ThinDielectric { eta: 1.5 });
+    assert_eq!(material("bubble")?.bsdf, Bsdf::ThinDielectric { eta: 0.75 });
+    assert_eq!(material("pane")?.sides, Sides::Front);
+    assert!(!material("pane")?.front_only(), "a transmitting BSDF");
+    assert!(material("matte")?.front_only());
+    assert_eq!(material("white")?.sides, Sides::Both);
+    Ok(())
+}
+
+#[test]
+fn bad_thin_dielectrics_and_sides() -> TestResult {
+    for (test, body, needle, key) in [
+        ("thin-zero", "ior = 0", "ior = 0", "materials.pane.ior"),
+        ("thin-name", "ior = \"bk7\"", "bk7", "materials.pane.ior"),
+        (
+            "thin-rough",
+            "ior = 1.5\nroughness = 0.1",
+            "roughness",
+            "materials.pane.roughness",
+        ),
+        ("thin-missing", "", "[materials.pane]", "materials.pane.ior"),
+        (
+            "sides",
+            "ior = 1.5\nsides = \"back\"",
+            "sides",
+            "materials.pane.sides",
+        ),
+    ] {
+        let text = format!("{BASE}\n[materials.pane]\ntype = \"thin-dielectric\"\n{body}\n");
+        let (path, message) = scene_error(test, &text)?;
+        assert_at(&message, &path, &text, needle, key)?;
+    }
+    let text = format!("{BASE}\n[materials.pane]\ntype = \"thin-dielectric\"\nior = -2\n");
+    let (_, message) = scene_error("thin-negative", &text)?;
+    assert!(message.contains("must be a finite number > 0"), "{message}");
     Ok(())
 }
 

@@ -130,6 +130,7 @@ fn small_render(scene: &Scene) -> TestResult<f64> {
         filter: Filter::Box,
         threads: Some(2),
         time_limit: None,
+        window: None,
     };
     let transport = FourierTransport::<8>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
     let image = render(&transport, scene, &settings, &mut |_| true)?.xyz;

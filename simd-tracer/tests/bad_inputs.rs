@@ -11,7 +11,7 @@ use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderError, RenderSettings, render};
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::{SceneBuilder, SceneError};
-use simd_tracer::shading::material::{Albedo, Bsdf, Material};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material, Sides};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::texture::Texture;
 use simd_tracer::transport::FourierTransport;
@@ -43,6 +43,7 @@ fn lambert(name: &str, spectrum: SpectrumId) -> Material {
         },
         emission: Some(spectrum),
         two_sided: false,
+        sides: Sides::Both,
     }
 }
 
@@ -144,6 +145,7 @@ fn an_empty_image_is_an_error() -> TestResult {
             filter: Filter::Box,
             threads: Some(1),
             time_limit: None,
+            window: None,
         };
         let error = render(&transport, &scene, &settings, &mut |_| true)
             .err()

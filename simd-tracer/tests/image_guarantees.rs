@@ -105,6 +105,7 @@ fn settings(side: u32, spp: u32) -> RenderSettings {
         filter: Filter::gaussian(),
         threads: Some(2),
         time_limit: None,
+        window: None,
     }
 }
 

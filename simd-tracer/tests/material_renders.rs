@@ -46,6 +46,7 @@ fn settings(width: u32, height: u32, spp: u32, max_depth: u32) -> RenderSettings
         filter: Filter::Box,
         threads: Some(2),
         time_limit: None,
+        window: None,
     }
 }
 

@@ -139,6 +139,7 @@ fn mirror_render(fresnel: AngularFunction) -> TestResult<Vec<f64>> {
         filter: Filter::Box,
         threads: Some(2),
         time_limit: None,
+        window: None,
     };
     let transport =
         FourierTransport::<NETWORK_COEFFS>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?;

@@ -122,6 +122,7 @@ fn settings(spp: u32) -> RenderSettings {
         filter: Filter::Box,
         threads: Some(2),
         time_limit: None,
+        window: None,
     }
 }
 

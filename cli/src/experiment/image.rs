@@ -170,6 +170,7 @@ pub fn settings(size: u32, spp: u32, seed: u64, threads: Option<usize>) -> Rende
         filter: Filter::gaussian(),
         threads,
         time_limit: None,
+        window: None,
     }
 }
 

@@ -57,11 +57,12 @@
 //! scale = 10.0              # optional multiplier (>= 0) of any source
 //!
 //! [materials.floor]         # named materials; `type` is required
-//! type = "lambert"          # lambert | conductor | dielectric | coated | thin-film | neural
+//! type = "lambert"          # lambert | conductor | dielectric | thin-dielectric | coated | thin-film | neural
 //! albedo = "colorchecker-19"
 //! emission = "lamp"         # optional, any type
 //! emission_scale = 1.0      # optional, >= 0 (needs `emission`)
 //! two_sided = false         # optional: emit from both faces
+//! sides = "both"            # optional: "front" = black from behind (non-transmitting BSDFs)
 //!
 //! [[meshes]]                # zero or more OBJ files
 //! obj = "cornell/cornell.obj"            # relative to the scene file
@@ -95,11 +96,12 @@
 //!
 //! ## Materials
 //!
-//! | type | keys (besides `type`, `emission`, `emission_scale`, `two_sided`) | BSDF |
+//! | type | keys (besides `type`, `emission`, `emission_scale`, `two_sided`, `sides`) | BSDF |
 //! | --- | --- | --- |
 //! | `lambert` | `albedo` or `albedo_texture` | Lambertian |
 //! | `conductor` | `metal` (`gold`, `silver`, `copper`, `aluminium`), or `n` and `k` (spectra), or `n_const` and `k_const` (numbers); `roughness` | GGX conductor, Fresnel from the complex index (outside medium n = 1) |
 //! | `dielectric` | `ior`; `roughness` | smooth or GGX dielectric interface (inside relative to outside) |
+//! | `thin-dielectric` | `ior` (a number > 0, the slab relative to the outside) | thin slab: reflects `R' = 2R/(1 + R)`, passes the rest straight through (Mitsuba's `thindielectric`) |
 //! | `coated` | `albedo` or `albedo_texture`; `ior` (a number); `roughness` | dielectric coat over a Lambertian base |
 //! | `thin-film` | `layers`, `substrate`, `base`; `thickness_texture` with `thickness_range_nm` | smooth thin-film stack |
 //! | `neural` | `network`; `roughness`; for two-input networks `thickness_nm`, or `thickness_texture` with `thickness_range_nm` | GGX reflector whose Fresnel reflectance is a trained sine network (paper §4) |

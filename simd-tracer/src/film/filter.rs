@@ -1,9 +1,18 @@
-//! Pixel reconstruction filters, applied by filter importance sampling.
+//! Pixel reconstruction filters, applied by filter importance sampling,
+//! with Mitsuba 3.9.1's three filters (src/rfilters/box.cpp, tent.cpp,
+//! gaussian.cpp) and their parameters:
 //!
-//! * Box: the sample offset is uniform in the pixel.
-//! * Gaussian: Mitsuba 3's default, standard deviation 0.5 px truncated at a
-//!   radius of 2 px, `f(x) = max(0, exp(−x²/(2σ²)) − exp(−r²/(2σ²)))`,
-//!   separable in x and y.
+//! * Box: the sample offset is uniform in the pixel, `[−0.5, 0.5)²`.
+//!   Mitsuba's box has a fixed radius of 0.5 px and no parameter (a
+//!   `radius` given to it is refused as an unreferenced property).
+//! * Tent (`radius`, default 1 px): `f(x) = max(0, 1 − |x|/r)`, separable.
+//!   Sampled by its exact inverse CDF: `F(x) = (1 + x/r)²/2` for `x ≤ 0`,
+//!   so `x = r (√(2u) − 1)` for `u < 1/2` and `x = r (1 − √(2(1 − u)))`
+//!   above (the two halves mirrored, each through one square root).
+//! * Gaussian (`stddev` σ, default 0.5 px): truncated at Mitsuba's radius
+//!   `r = 4σ`, `f(x) = max(0, exp(−x²/(2σ²)) − exp(−r²/(2σ²)))`, separable
+//!   in x and y. (Mitsuba evaluates a Remez polynomial fit of the same
+//!   shifted exponential; the exponential is its target.)
 //!
 //! Instead of splatting every sample into all pixels under the filter
 //! footprint (Mitsuba), each sample's offset is drawn from the filter itself
@@ -13,11 +22,13 @@
 //! 1 025 CDF values `k/1024` (solved in `f64`) and interpolated linearly:
 //! each of the 1 024 cells of equal mass spreads its mass evenly between
 //! two knots. That piecewise-constant density is the filter the renderer
-//! applies: its CDF is within 2e-5 of the Gaussian's for `|x| < 1.17` px,
-//! within 1e-4 in the tails and within 4e-4 in the two outermost cells
-//! (`|x| > 1.7` px, where the filter rises from 0 and stays below 0.2 % of
-//! its peak), tested against the Gaussian's numerical integral: far below
-//! anything a reconstruction filter's shape shows in an image. A sample
+//! applies: at σ = 0.5 px its CDF is within 2e-5 of the Gaussian's for
+//! `|x| < 1.17` px, within 1e-4 in the tails and within 4e-4 in the two
+//! outermost cells (`|x| > 1.7` px, where the filter rises from 0 and stays
+//! below 0.2 % of its peak), tested against the Gaussian's numerical
+//! integral (the errors scale with σ in px, so relative to the filter's
+//! width they are the same for every σ): far below anything a
+//! reconstruction filter's shape shows in an image. A sample
 //! costs one table lookup, a multiply and an add (an exact inversion of a
 //! piecewise-linear table, a quadratic per sample behind a data-dependent
 //! search, cost 3 % of a Cornell-box render). The converged image equals the splatted one; a
@@ -25,17 +36,28 @@
 //! and deterministically.
 //!
 //! Offsets for a whole packet come from [`Filter::sample_offset_x8`], which
-//! finds the cells 8-wide, looks up each lane's cell and interpolates with
-//! the same IEEE operations as the scalar sampler on `f32x8` (no fused
-//! multiply-add), so every lane equals [`Filter::sample_offset`] bit for
-//! bit (tested).
+//! runs the scalar sampler's IEEE operations on `f32x8` (no fused
+//! multiply-add; the square root is correctly rounded in both), finding
+//! the Gaussian's cells 8-wide and looking each lane's cell up, so every
+//! lane equals [`Filter::sample_offset`] bit for bit (tested for every
+//! filter).
 
 use wide::f32x8;
 
-/// Standard deviation of the Gaussian filter, px.
+/// Standard deviation of the default Gaussian filter, px (Mitsuba's
+/// `stddev` default).
 pub const GAUSSIAN_SIGMA_PX: f32 = 0.5;
-/// Radius of the Gaussian filter, px.
-pub const GAUSSIAN_RADIUS_PX: f32 = 2.0;
+/// Radius of a Gaussian filter in standard deviations (Mitsuba cuts the
+/// Gaussian off at 4σ).
+pub const GAUSSIAN_RADIUS_STDDEVS: f32 = 4.0;
+/// Radius of the default Gaussian filter, px.
+pub const GAUSSIAN_RADIUS_PX: f32 = GAUSSIAN_RADIUS_STDDEVS * GAUSSIAN_SIGMA_PX;
+/// Radius of the default tent filter, px (Mitsuba's `radius` default).
+pub const TENT_RADIUS_PX: f32 = 1.0;
+/// The largest filter radius accepted, px: a wider filter would blur over
+/// more than a hundred pixels, which no scene asks for, and keeps the
+/// offsets far inside `f32`'s exact range of pixel coordinates.
+pub const MAX_FILTER_RADIUS_PX: f32 = 64.0;
 /// Cells of the tabulated inverse CDF: the Gaussian's offsets at the CDF
 /// values `k / INVERSE_CELLS`, interpolated linearly in between.
 const INVERSE_CELLS: usize = 1024;
@@ -45,22 +67,86 @@ const BUILD_SEGMENTS: usize = 4096;
 /// A reconstruction filter.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Filter {
-    /// Box of one pixel.
+    /// Box of one pixel (Mitsuba's `box`).
     Box,
-    /// Truncated Gaussian (σ = 0.5 px, r = 2 px), sampled by its inverse CDF.
+    /// Tent `max(0, 1 − |x|/r)` of radius `radius_px` (Mitsuba's `tent`),
+    /// sampled by its exact inverse CDF. Build it with [`Filter::tent`],
+    /// which checks the radius; [`Filter::validate`] checks a literal one.
+    Tent {
+        /// Radius `r`, px (in `(0, MAX_FILTER_RADIUS_PX]`).
+        radius_px: f32,
+    },
+    /// Truncated Gaussian (σ, r = 4σ), sampled by its inverse CDF.
     Gaussian(GaussianSampler),
 }
 
+/// A filter parameter out of range.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FilterError(String);
+
+impl core::fmt::Display for FilterError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for FilterError {}
+
+/// `value` if it is a radius the filters accept: finite, positive, at most
+/// [`MAX_FILTER_RADIUS_PX`].
+fn checked_radius(what: &str, value: f32) -> Result<f32, FilterError> {
+    if value.is_finite() && value > 0.0 && value <= MAX_FILTER_RADIUS_PX {
+        Ok(value)
+    } else {
+        Err(FilterError(format!(
+            "filter {what} {value} px: must be positive and at most {MAX_FILTER_RADIUS_PX} px"
+        )))
+    }
+}
+
 impl Filter {
-    /// Mitsuba's default Gaussian.
+    /// Mitsuba's default Gaussian (σ = 0.5 px, r = 2 px).
     pub fn gaussian() -> Self {
         Self::Gaussian(GaussianSampler::new(GAUSSIAN_SIGMA_PX, GAUSSIAN_RADIUS_PX))
+    }
+
+    /// Mitsuba's Gaussian of standard deviation `stddev_px`, cut off at
+    /// `4 stddev_px`; the radius must be at most [`MAX_FILTER_RADIUS_PX`].
+    pub fn gaussian_with_stddev(stddev_px: f32) -> Result<Self, FilterError> {
+        let radius = checked_radius("radius (4 × stddev)", GAUSSIAN_RADIUS_STDDEVS * stddev_px)?;
+        Ok(Self::Gaussian(GaussianSampler::new(stddev_px, radius)))
+    }
+
+    /// Mitsuba's tent of radius `radius_px` (its default: [`TENT_RADIUS_PX`]).
+    pub fn tent(radius_px: f32) -> Result<Self, FilterError> {
+        Ok(Self::Tent {
+            radius_px: checked_radius("radius", radius_px)?,
+        })
+    }
+
+    /// Whether the filter's parameters are in range (a [`Filter::Tent`]
+    /// written as a literal may not be).
+    pub fn validate(&self) -> Result<(), FilterError> {
+        match self {
+            Self::Tent { radius_px } => checked_radius("radius", *radius_px).map(|_| ()),
+            Self::Box | Self::Gaussian(_) => Ok(()),
+        }
+    }
+
+    /// The filter's radius, px: offsets lie in `[−r, r]²`.
+    pub fn radius_px(&self) -> f32 {
+        match self {
+            Self::Box => 0.5,
+            Self::Tent { radius_px } => *radius_px,
+            Self::Gaussian(g) => g.radius_px,
+        }
     }
 
     /// An offset from the pixel centre, px, for uniform `(u, v)`.
     pub fn sample_offset(&self, u: f32, v: f32) -> (f32, f32) {
         match self {
             Self::Box => (u - 0.5, v - 0.5),
+            Self::Tent { radius_px } => (tent_sample(u, *radius_px), tent_sample(v, *radius_px)),
             Self::Gaussian(g) => (g.sample(u), g.sample(v)),
         }
     }
@@ -72,9 +158,49 @@ impl Filter {
                 let half = f32x8::splat(0.5);
                 (u - half, v - half)
             }
+            Self::Tent { radius_px } => {
+                let r = f32x8::splat(*radius_px);
+                (tent_sample_x8(u, r), tent_sample_x8(v, r))
+            }
             Self::Gaussian(g) => (g.sample_x8(u), g.sample_x8(v)),
         }
     }
+}
+
+/// `u` clamped to `[0, 1]`, NaN to 0: `u > 0 ? min(u, 1) : 0`, the
+/// packet's `max` then `min`.
+#[inline(always)]
+fn clamp_unit(u: f32) -> f32 {
+    if u > 0.0 { u.min(1.0) } else { 0.0 }
+}
+
+/// [`clamp_unit`] for 8 lanes (`max` before `min` maps NaN to 0).
+#[inline(always)]
+fn clamp_unit_x8(u: f32x8) -> f32x8 {
+    u.fast_max(f32x8::ZERO).fast_min(f32x8::ONE)
+}
+
+/// The tent's inverse CDF at `u` (module docs): `r (√(2u) − 1)` below
+/// `u = 1/2`, `r (1 − √(2(1 − u)))` from there on.
+#[inline(always)]
+fn tent_sample(u: f32, radius_px: f32) -> f32 {
+    let u = clamp_unit(u);
+    let unit = if u < 0.5 {
+        (2.0 * u).sqrt() - 1.0
+    } else {
+        1.0 - (2.0 * (1.0 - u)).sqrt()
+    };
+    unit * radius_px
+}
+
+/// [`tent_sample`] for 8 lanes, with the same operations.
+#[inline(always)]
+fn tent_sample_x8(u: f32x8, radius_px: f32x8) -> f32x8 {
+    let (one, two) = (f32x8::ONE, f32x8::splat(2.0));
+    let u = clamp_unit_x8(u);
+    let lower = (two * u).sqrt() - one;
+    let upper = one - (two * (one - u)).sqrt();
+    u.simd_lt(f32x8::splat(0.5)).select(lower, upper) * radius_px
 }
 
 /// Inverse-CDF sampler of the 1-D truncated Gaussian on `[−r, r]`.
@@ -84,6 +210,8 @@ pub struct GaussianSampler {
     /// the offset `x_k` at its start and the step `x_{k+1} − x_k` to the
     /// next knot (fixed size: the lookups need no bounds checks).
     cells: Box<[[f32; 2]; INVERSE_CELLS]>,
+    /// The truncation radius, px.
+    radius_px: f32,
 }
 
 impl GaussianSampler {
@@ -91,8 +219,8 @@ impl GaussianSampler {
     /// the knots `x_k = F⁻¹(k/K)` of the filter's CDF `F`, solved in `f64`
     /// on its trapezoid integral over `BUILD_SEGMENTS` segments (exactly,
     /// a quadratic per segment), then rounded to `f32`.
-    pub fn new(sigma: f32, radius: f32) -> Self {
-        let (sigma, radius) = (f64::from(sigma), f64::from(radius));
+    pub fn new(sigma: f32, radius_px: f32) -> Self {
+        let (sigma, radius) = (f64::from(sigma), f64::from(radius_px));
         let two_variance = 2.0 * sigma * sigma;
         let bias = (-radius * radius / two_variance).exp();
         let step = 2.0 * radius / BUILD_SEGMENTS as f64;
@@ -140,6 +268,7 @@ impl GaussianSampler {
             cells: Box::new(core::array::from_fn(|k| {
                 [knots[k], knots[k + 1] - knots[k]]
             })),
+            radius_px,
         }
     }
 
@@ -147,9 +276,7 @@ impl GaussianSampler {
     /// it, `u K − k ∈ [0, 1]`.
     #[inline(always)]
     fn cell(u: f32) -> (usize, f32) {
-        // `u > 0 ? u : 0` then `min`: the packet's `max` and `min` (NaN to 0).
-        let clamped = if u > 0.0 { u.min(1.0) } else { 0.0 };
-        let scaled = clamped * INVERSE_CELLS as f32;
+        let scaled = clamp_unit(u) * INVERSE_CELLS as f32;
         let k = (scaled as usize).min(INVERSE_CELLS - 1);
         (k, scaled - k as f32)
     }
@@ -158,9 +285,7 @@ impl GaussianSampler {
     /// lookup per lane, the interpolation 8-wide with the scalar
     /// operations.
     pub fn sample_x8(&self, u: f32x8) -> f32x8 {
-        // `max` before `min` maps NaN to 0, as the scalar clamp does.
-        let scaled =
-            u.fast_max(f32x8::ZERO).fast_min(f32x8::ONE) * f32x8::splat(INVERSE_CELLS as f32);
+        let scaled = clamp_unit_x8(u) * f32x8::splat(INVERSE_CELLS as f32);
         let last = wide::i32x8::splat((INVERSE_CELLS - 1) as i32);
         let k = scaled.trunc_int().min(last);
         let position = scaled - k.round_float();
@@ -207,18 +332,13 @@ mod tests {
         assert_eq!(g.sample(f32::NAN), -GAUSSIAN_RADIUS_PX);
     }
 
-    /// The sampled offsets' CDF against the truncated Gaussian's, from its
-    /// own numerical integral (Simpson's rule, 20 000 intervals), on a dense
-    /// grid of `u` (the inverse of the sampler's CDF at those points).
-    #[test]
-    fn gaussian_offsets_follow_the_filter_cdf() {
-        let g = GaussianSampler::new(GAUSSIAN_SIGMA_PX, GAUSSIAN_RADIUS_PX);
-        let (sigma, radius) = (f64::from(GAUSSIAN_SIGMA_PX), f64::from(GAUSSIAN_RADIUS_PX));
-        let bias = (-radius * radius / (2.0 * sigma * sigma)).exp();
-        let f = |x: f64| ((-x * x / (2.0 * sigma * sigma)).exp() - bias).max(0.0);
+    /// The CDF of the filter `f` on `[−radius, radius]` from its own
+    /// numerical integral (Simpson's rule over 20 000 intervals, a node at
+    /// 0 where the tent has its kink), linear between the stored points
+    /// (spacing 2e-4 of the radius).
+    fn numerical_cdf(f: impl Fn(f64) -> f64, radius: f64) -> impl Fn(f64) -> f64 {
         let intervals = 20_000;
         let h = 2.0 * radius / f64::from(intervals);
-        // Simpson's cumulative integral at every second grid point.
         let mut cumulative = vec![0.0f64];
         for i in (0..intervals).step_by(2) {
             let x0 = -radius + f64::from(i) * h;
@@ -226,21 +346,25 @@ mod tests {
             cumulative.push(cumulative.last().copied().unwrap_or(0.0) + area);
         }
         let total = cumulative.last().copied().unwrap_or(1.0);
-        let exact_cdf = |x: f64| {
+        move |x: f64| {
             let position = (x + radius) / (2.0 * h);
             let i = (position.floor().max(0.0) as usize).min(cumulative.len() - 2);
-            // Linear between the stored points (spacing 2h = 2e-4 px).
             let t = (position - i as f64).clamp(0.0, 1.0);
             (cumulative[i] + t * (cumulative[i + 1] - cumulative[i])) / total
-        };
+        }
+    }
+
+    /// The largest `|F(sample(u)) − u|` over a dense grid of `u`: 0 for an
+    /// exact inverse of `F`. Split as the Gaussian's table is: the core (10
+    /// cells of the table in from either end), the next 9 cells, the two
+    /// outermost cells.
+    fn cdf_errors(sample: impl Fn(f32) -> f32, cdf: impl Fn(f64) -> f64) -> [f64; 3] {
         let n = 100_000;
-        // The largest error in the core (10 cells in from either end,
-        // |x| < 1.17 px), the next 9 cells, and the two outermost cells.
         let mut worst = [0.0f64; 3];
         let cell = 1.0 / INVERSE_CELLS as f64;
         for i in 0..n {
             let u = (f64::from(i) + 0.5) / f64::from(n);
-            let error = (exact_cdf(f64::from(g.sample(u as f32))) - u).abs();
+            let error = (cdf(f64::from(sample(u as f32))) - u).abs();
             let from_end = u.min(1.0 - u) / cell;
             let part = if from_end >= 10.0 {
                 0
@@ -251,51 +375,187 @@ mod tests {
             };
             worst[part] = worst[part].max(error);
         }
-        assert!(
-            worst[0] < 2e-5,
-            "largest CDF error in the core {}",
-            worst[0]
+        worst
+    }
+
+    /// The truncated Gaussian of standard deviation `sigma` (r = 4σ).
+    fn gaussian(sigma: f64) -> impl Fn(f64) -> f64 {
+        let radius = f64::from(GAUSSIAN_RADIUS_STDDEVS) * sigma;
+        let bias = (-radius * radius / (2.0 * sigma * sigma)).exp();
+        move |x: f64| ((-x * x / (2.0 * sigma * sigma)).exp() - bias).max(0.0)
+    }
+
+    /// The tent of radius `radius`.
+    fn tent(radius: f64) -> impl Fn(f64) -> f64 {
+        move |x: f64| (1.0 - x.abs() / radius).max(0.0)
+    }
+
+    /// The sampled offsets' CDF against the truncated Gaussian's, for the
+    /// default σ and two others (Mitsuba's `stddev`), on a dense grid of `u`
+    /// (the inverse of the sampler's CDF at those points); a sampler checked
+    /// against the CDF of a 10 % wider Gaussian fails.
+    #[test]
+    fn gaussian_offsets_follow_the_filter_cdf() -> Result<(), FilterError> {
+        for sigma in [GAUSSIAN_SIGMA_PX, 0.3, 1.25] {
+            let filter = Filter::gaussian_with_stddev(sigma)?;
+            let Filter::Gaussian(g) = &filter else {
+                panic!("a Gaussian filter");
+            };
+            let radius = f64::from(GAUSSIAN_RADIUS_STDDEVS * sigma);
+            assert_eq!(filter.radius_px(), GAUSSIAN_RADIUS_STDDEVS * sigma);
+            let worst = cdf_errors(
+                |u| g.sample(u),
+                numerical_cdf(gaussian(f64::from(sigma)), radius),
+            );
+            assert!(
+                worst[0] < 2e-5,
+                "σ {sigma}: CDF error in the core {}",
+                worst[0]
+            );
+            assert!(
+                worst[1] < 1e-4,
+                "σ {sigma}: CDF error in the tails {}",
+                worst[1]
+            );
+            // The outermost cells (|x| > 1.7 σ/0.5, below 0.2 % of the
+            // peak) hold their 1/1024 of the mass, spread evenly where the
+            // filter rises from 0: within half a cell's mass.
+            let cell = 1.0 / INVERSE_CELLS as f64;
+            assert!(worst[2] < 0.5 * cell, "σ {sigma}: end cells {}", worst[2]);
+            // Negative control: the CDF of σ × 1.1 (on its own wider range).
+            let wider = 1.1 * f64::from(sigma);
+            let wrong = cdf_errors(
+                |u| g.sample(u),
+                numerical_cdf(gaussian(wider), f64::from(GAUSSIAN_RADIUS_STDDEVS) * wider),
+            );
+            assert!(
+                wrong[0] > 1e-2,
+                "σ {sigma}: a wrong σ passes ({})",
+                wrong[0]
+            );
+        }
+        // The default is the σ = 0.5 filter, bit for bit.
+        assert_eq!(
+            Filter::gaussian(),
+            Filter::gaussian_with_stddev(GAUSSIAN_SIGMA_PX)?
         );
-        assert!(
-            worst[1] < 1e-4,
-            "largest CDF error in the tails {}",
-            worst[1]
-        );
-        // The outermost cells (|x| > 1.7 px, below 0.2 % of the peak) hold
-        // their 1/1024 of the mass, spread evenly where the filter rises
-        // from 0: within half a cell's mass.
-        assert!(
-            worst[2] < 0.5 * cell,
-            "largest CDF error in the end cells {}",
-            worst[2]
-        );
+        Ok(())
+    }
+
+    /// The tent's inverse CDF is exact: the sampled offsets' CDF equals the
+    /// tent's numerical integral to rounding everywhere, for the default
+    /// radius and two others; against the CDF of a 10 % wider tent it fails.
+    #[test]
+    fn tent_offsets_follow_the_filter_cdf() -> Result<(), FilterError> {
+        for radius in [TENT_RADIUS_PX, 0.5, 2.5] {
+            let filter = Filter::tent(radius)?;
+            assert_eq!(filter.radius_px(), radius);
+            let sample = |u: f32| filter.sample_offset(u, u).0;
+            let r = f64::from(radius);
+            let worst = cdf_errors(sample, numerical_cdf(tent(r), r));
+            assert!(
+                worst.iter().all(|&e| e < 2e-6),
+                "radius {radius}: CDF errors {worst:?}"
+            );
+            let wrong = cdf_errors(sample, numerical_cdf(tent(1.1 * r), 1.1 * r));
+            assert!(wrong[0] > 1e-2, "radius {radius}: a wrong radius passes");
+            // The ends and the middle, and offsets within the radius.
+            assert_eq!(sample(0.0), -radius);
+            assert_eq!(sample(0.5), 0.0);
+            assert_eq!(sample(1.0), radius);
+            assert_eq!(sample(f32::NAN), -radius);
+            assert!((0..1000).all(|i| sample(i as f32 / 1000.0).abs() <= radius));
+        }
+        Ok(())
+    }
+
+    /// The box's offsets are uniform on `[−0.5, 0.5)`: the CDF `x + 1/2`
+    /// exactly; checked against a tent of the same support it fails.
+    #[test]
+    fn box_offsets_follow_the_filter_cdf() {
+        let sample = |u: f32| Filter::Box.sample_offset(u, u).0;
+        let worst = cdf_errors(sample, |x| (x + 0.5).clamp(0.0, 1.0));
+        assert!(worst.iter().all(|&e| e < 1e-6), "{worst:?}");
+        let wrong = cdf_errors(sample, numerical_cdf(tent(0.5), 0.5));
+        assert!(wrong[0] > 1e-2);
+        assert_eq!(Filter::Box.radius_px(), 0.5);
+    }
+
+    /// Radii out of range are refused, by the constructors and by
+    /// `validate` for a literal tent.
+    #[test]
+    fn filter_parameters_are_checked() {
+        for bad in [
+            0.0,
+            -1.0,
+            f32::NAN,
+            f32::INFINITY,
+            2.0 * MAX_FILTER_RADIUS_PX,
+        ] {
+            assert!(Filter::tent(bad).is_err(), "tent {bad}");
+            assert!(Filter::gaussian_with_stddev(bad).is_err(), "gaussian {bad}");
+            assert!(Filter::Tent { radius_px: bad }.validate().is_err());
+        }
+        assert!(Filter::gaussian_with_stddev(MAX_FILTER_RADIUS_PX).is_err());
+        assert!(Filter::Tent { radius_px: 1.5 }.validate().is_ok());
+        assert!(Filter::Box.validate().is_ok() && Filter::gaussian().validate().is_ok());
     }
 
     #[test]
-    fn packet_offsets_equal_scalar_offsets_bit_for_bit() {
+    fn packet_offsets_equal_scalar_offsets_bit_for_bit() -> Result<(), FilterError> {
         let mut rng = crate::sampling::rng::Rng::new(7, 11);
         let edges = [0.0, 0.5, 1.0 - f32::EPSILON, 1e-9, 0.25, 0.75, 0.999, 1e-3];
-        for filter in [Filter::gaussian(), Filter::Box] {
+        let specials = [
+            f32::NAN,
+            -0.25,
+            1.5,
+            0.5 - f32::EPSILON / 4.0,
+            0.0,
+            1.0,
+            2e-38,
+            0.5,
+        ];
+        let filters = [
+            Filter::gaussian(),
+            Filter::gaussian_with_stddev(0.3)?,
+            Filter::Box,
+            Filter::tent(TENT_RADIUS_PX)?,
+            Filter::tent(1.7)?,
+        ];
+        for filter in filters {
             for round in 0..2000 {
-                let (u, v): ([f32; 8], [f32; 8]) = if round == 0 {
-                    (
+                let (u, v): ([f32; 8], [f32; 8]) = match round {
+                    0 => (
                         edges,
                         edges.map(|e| 1.0 - f32::EPSILON - e).map(|e| e.max(0.0)),
-                    )
-                } else {
-                    (
+                    ),
+                    // Outside [0, 1) and NaN: the box passes them through,
+                    // the others clamp; scalar and packet alike.
+                    1 => (specials, edges),
+                    _ => (
                         core::array::from_fn(|_| rng.next_f32()),
                         core::array::from_fn(|_| rng.next_f32()),
-                    )
+                    ),
                 };
                 let (x, y) = filter.sample_offset_x8(f32x8::new(u), f32x8::new(v));
                 for lane in 0..8 {
                     let (sx, sy) = filter.sample_offset(u[lane], v[lane]);
-                    assert_eq!(x.to_array()[lane].to_bits(), sx.to_bits(), "{}", u[lane]);
-                    assert_eq!(y.to_array()[lane].to_bits(), sy.to_bits(), "{}", v[lane]);
+                    assert_eq!(
+                        x.to_array()[lane].to_bits(),
+                        sx.to_bits(),
+                        "{filter:?} {}",
+                        u[lane]
+                    );
+                    assert_eq!(
+                        y.to_array()[lane].to_bits(),
+                        sy.to_bits(),
+                        "{filter:?} {}",
+                        v[lane]
+                    );
                 }
             }
         }
+        Ok(())
     }
 
     #[test]

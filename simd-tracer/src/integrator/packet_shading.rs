@@ -305,6 +305,34 @@ pub(super) fn shading_normals(
     Vec3x8::from_lanes(&lanes)
 }
 
+/// `wo` against the front side of each lane's shading normal, the side on
+/// which a one-sided BSDF scatters (Mitsuba decides it in the shading
+/// frame): in the lanes of `lanes` on smooth triangles, `n · wo` with `n`
+/// the interpolated vertex normal as the vertices give it (on the
+/// triangle's front); elsewhere `cos_geometric`, the unturned geometric
+/// normal's `n_g · wo`.
+pub(super) fn front_shading_cosines(
+    scene: &Scene,
+    hit: &PacketHit,
+    lanes: LaneMask,
+    cos_geometric: f32x8,
+    wo: Vec3x8,
+) -> f32x8 {
+    let (u, v) = (hit.u.to_array(), hit.v.to_array());
+    let wo_lanes = wo.to_lanes();
+    let mut cosines = cos_geometric.to_array();
+    for lane in lanes.iter() {
+        let Some([n0, n1, n2]) = scene.vertex_normals(hit.triangle[lane] as usize) else {
+            continue;
+        };
+        let interpolated = *n0 * (1.0 - u[lane] - v[lane]) + *n1 * u[lane] + *n2 * v[lane];
+        if let Some(n) = interpolated.try_normalize() {
+            cosines[lane] = n.dot(wo_lanes[lane]);
+        }
+    }
+    f32x8::new(cosines)
+}
+
 /// Lanes where `wi` lies on the same side of the shading normal as of the
 /// geometric one: the guard against light leaking through a surface whose
 /// shading normal is bent (module `path`). A direction on opposite sides

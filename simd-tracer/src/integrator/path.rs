@@ -3,7 +3,8 @@
 
 use super::emission::{EmissionSums, Emitted};
 use super::packet_shading::{
-    Shading, consistent_sides, offset_x8, power_heuristic_x8, shading_normals, uniforms,
+    Shading, consistent_sides, front_shading_cosines, offset_x8, power_heuristic_x8,
+    shading_normals, uniforms,
 };
 use super::{PathContext, RR_MAX_SURVIVAL, SHADOW_EPSILON};
 use crate::ids::SpectrumId;
@@ -287,11 +288,27 @@ impl<S: Copy> PathState<S> {
             self.active = LaneMask::NONE;
             return;
         }
+        // Surfaces that scatter from the front only (Mitsuba's one-sided
+        // BSDFs) are black from behind their shading normal: no light
+        // sample, no continuation.
+        let smooth = scene.has_vertex_normals();
+        let front_only = surface.front_only.and(active);
+        if !front_only.is_empty() {
+            let cos_view = if smooth {
+                front_shading_cosines(scene, hit, front_only, cos_o, wo)
+            } else {
+                cos_o
+            };
+            active = active.and(surface.scatters_towards(cos_view));
+            if active.is_empty() {
+                self.active = active;
+                return;
+            }
+        }
         let origin = offset_x8(position, normal);
         let origin_below = offset_x8(position, -normal);
         // Smooth triangles shade with their interpolated normal; rays
         // still leave from the geometric surface (`departure`).
-        let smooth = scene.has_vertex_normals();
         let shading_normal = if smooth {
             shading_normals(scene, hit, active, normal, wo)
         } else {

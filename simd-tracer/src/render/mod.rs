@@ -15,6 +15,22 @@
 //! per pass: the image depends only on the seed, never on the thread count
 //! or scheduling (tested bit for bit).
 //!
+//! A crop window ([`RenderSettings::window`], Mitsuba's `hdrfilm`
+//! `crop_offset_x/y`, `crop_width/height`) renders part of the film: the
+//! camera and the random streams stay those of the full film (streams are
+//! keyed by the pixel's index in the full film), tiles and packets stay on
+//! the full film's grid, and the result holds the window's pixels only,
+//! each equal bit for bit to the same pixel of the full render (tested).
+//! A packet (4 × 2 pixels) that straddles the window's edge is traced
+//! whole and its outside pixels dropped: a lane's result may depend on its
+//! packet-mates (all-Lambert packets shade 8-wide, mixed ones per lane with
+//! the scalar forms, which round differently), so a packet is only ever
+//! traced as the full render traces it. Rays cast count those lanes too.
+//! One exception: control variates with the pooled α
+//! ([`crate::film::AlphaMode::Shared`]) pool it over the window's pixels,
+//! so their crop is a render of the window, not a cut of the full image
+//! (per-pixel α crops bit for bit).
+//!
 //! After each batch the `progress` callback sees the totals and may stop
 //! the render; a time limit stops after the batch that crosses it (batches
 //! are sized not to run past the limit at the measured speed). Samples with
@@ -22,7 +38,7 @@
 //! [`RenderResult::rejected`].
 
 use crate::film::Film;
-use crate::film::filter::Filter;
+use crate::film::filter::{Filter, FilterError};
 use crate::integrator::{
     GROUP, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
 };
@@ -62,6 +78,94 @@ pub struct RenderSettings {
     pub threads: Option<usize>,
     /// Stop after the batch of passes during which this much time has passed.
     pub time_limit: Option<Duration>,
+    /// Render only this part of the `width × height` film (`None`: all of
+    /// it); the result is the window's size (module docs).
+    pub window: Option<PixelWindow>,
+}
+
+/// A rectangle of the film, pixels: columns `x .. x + width`, rows
+/// `y .. y + height`, counted from the top-left of the full film.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PixelWindow {
+    /// First column.
+    pub x: u32,
+    /// First row.
+    pub y: u32,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+}
+
+impl PixelWindow {
+    /// The whole `width × height` film.
+    pub fn full(width: u32, height: u32) -> Self {
+        Self {
+            x: 0,
+            y: 0,
+            width,
+            height,
+        }
+    }
+
+    /// One past the last column and row (`u64`: no overflow).
+    fn end(&self) -> (u64, u64) {
+        (
+            u64::from(self.x) + u64::from(self.width),
+            u64::from(self.y) + u64::from(self.height),
+        )
+    }
+
+    /// Whether pixel `(x, y)` of the film lies in the window.
+    #[inline]
+    pub fn contains(&self, x: u32, y: u32) -> bool {
+        let (x_end, y_end) = self.end();
+        x >= self.x && y >= self.y && u64::from(x) < x_end && u64::from(y) < y_end
+    }
+
+    /// Pixels in the window.
+    pub fn pixel_count(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height)
+    }
+
+    /// The window if it is non-empty and inside a `width × height` film.
+    pub fn validate(self, width: u32, height: u32) -> Result<Self, RenderError> {
+        let (x_end, y_end) = self.end();
+        if self.width == 0
+            || self.height == 0
+            || x_end > u64::from(width)
+            || y_end > u64::from(height)
+        {
+            return Err(RenderError::Window {
+                window: self,
+                width,
+                height,
+            });
+        }
+        Ok(self)
+    }
+
+    /// The window grown outwards to whole packets of the film's packet
+    /// grid (4 × 2 pixels from the film's corner), clipped to the film:
+    /// the pixels a cropped render traces.
+    fn to_packet_grid(self, width: u32, height: u32) -> Self {
+        let (x_end, y_end) = self.end();
+        let (x, y) = (
+            self.x / PACKET_WIDTH * PACKET_WIDTH,
+            self.y / PACKET_HEIGHT * PACKET_HEIGHT,
+        );
+        let x_end = x_end.div_ceil(u64::from(PACKET_WIDTH)) * u64::from(PACKET_WIDTH);
+        let y_end = y_end.div_ceil(u64::from(PACKET_HEIGHT)) * u64::from(PACKET_HEIGHT);
+        // Clipped to the film, whose sides are `u32`.
+        let x_end = x_end.min(u64::from(width)) as u32;
+        let y_end = y_end.min(u64::from(height)) as u32;
+        Self {
+            x,
+            y,
+            width: x_end - x,
+            height: y_end - y,
+        }
+    }
 }
 
 impl Default for RenderSettings {
@@ -75,7 +179,16 @@ impl Default for RenderSettings {
             filter: Filter::gaussian(),
             threads: None,
             time_limit: None,
+            window: None,
         }
+    }
+}
+
+impl RenderSettings {
+    /// The pixels rendered: the window, or the whole film.
+    pub fn film_window(&self) -> PixelWindow {
+        self.window
+            .unwrap_or_else(|| PixelWindow::full(self.width, self.height))
     }
 }
 
@@ -86,6 +199,17 @@ pub enum RenderError {
     EmptyImage,
     /// The thread pool could not be created.
     Threads(String),
+    /// A filter parameter is out of range.
+    Filter(FilterError),
+    /// The crop window is empty or leaves the film.
+    Window {
+        /// The window asked for.
+        window: PixelWindow,
+        /// Film width, pixels.
+        width: u32,
+        /// Film height, pixels.
+        height: u32,
+    },
 }
 
 impl core::fmt::Display for RenderError {
@@ -93,6 +217,16 @@ impl core::fmt::Display for RenderError {
         match self {
             Self::EmptyImage => write!(f, "width, height and samples per pixel must be at least 1"),
             Self::Threads(e) => write!(f, "cannot start worker threads: {e}"),
+            Self::Filter(e) => write!(f, "{e}"),
+            Self::Window {
+                window,
+                width,
+                height,
+            } => write!(
+                f,
+                "crop window {}×{} at ({}, {}) must be non-empty and inside the {width}×{height} film",
+                window.width, window.height, window.x, window.y
+            ),
         }
     }
 }
@@ -115,11 +249,11 @@ pub struct Progress {
 /// A finished render.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderResult {
-    /// Width, pixels.
+    /// Width, pixels (the window's when cropped).
     pub width: u32,
-    /// Height, pixels.
+    /// Height, pixels (the window's when cropped).
     pub height: u32,
-    /// XYZ per pixel, row-major from the top-left.
+    /// XYZ per pixel of the window (or film), row-major from its top-left.
     pub xyz: Vec<Xyz>,
     /// Mean Fourier coefficients per pixel (`N` per pixel, row-major), when
     /// the transport keeps a spectral buffer.
@@ -144,6 +278,25 @@ struct Tile<P> {
     pixels: Vec<P>,
     rejected: u64,
     rays: RayCounts,
+}
+
+impl<P> Tile<P> {
+    /// The tile's pixels inside `window`, with their film coordinates.
+    fn window_pixels<'a>(
+        &'a self,
+        window: &'a PixelWindow,
+    ) -> impl Iterator<Item = ((u32, u32), &'a P)> + 'a {
+        self.pixels
+            .iter()
+            .enumerate()
+            .filter_map(move |(index, pixel)| {
+                let (x, y) = (
+                    self.x0 + index as u32 % self.width,
+                    self.y0 + index as u32 / self.width,
+                );
+                window.contains(x, y).then_some(((x, y), pixel))
+            })
+    }
 }
 
 /// The camera rays of a packet: lane `l` goes through pixel `lanes[l]` of
@@ -228,6 +381,7 @@ fn render_tile<T: Transport>(
     let pixel_index = |(lx, ly): (u32, u32)| {
         u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx)
     };
+    let window = settings.film_window();
     let path_key = SampleKey::new(settings.seed, u64::from(pass), Purpose::Path);
     let wavelength_key = SampleKey::new(settings.seed, u64::from(pass), Purpose::Wavelengths);
     for first in (0..count).step_by(GROUP) {
@@ -281,7 +435,10 @@ fn render_tile<T: Transport>(
             let samples = transport.samples(&radiance[g], &wavelengths[g]);
             let finite = transport.finite_lanes(&radiance[g], &samples);
             for (lane, slot) in lanes[g].iter().enumerate() {
-                if let Some((lx, ly)) = *slot {
+                // Lanes outside a crop window were traced for their
+                // packet-mates' sake only (module docs).
+                let kept = slot.filter(|&(lx, ly)| window.contains(tile.x0 + lx, tile.y0 + ly));
+                if let Some((lx, ly)) = kept {
                     if finite.contains(lane) {
                         let index = (ly * tile.width + lx) as usize;
                         transport
@@ -307,6 +464,10 @@ pub fn render<T: Transport>(
     if settings.width == 0 || settings.height == 0 || settings.spp == 0 {
         return Err(RenderError::EmptyImage);
     }
+    settings.filter.validate().map_err(RenderError::Filter)?;
+    let window = settings
+        .film_window()
+        .validate(settings.width, settings.height)?;
     let mut builder = rayon::ThreadPoolBuilder::new().stack_size(RENDER_THREAD_STACK_BYTES);
     if let Some(threads) = settings.threads {
         builder = builder.num_threads(threads.max(1));
@@ -315,11 +476,20 @@ pub fn render<T: Transport>(
         .build()
         .map_err(|e| RenderError::Threads(e.to_string()))?;
     let start = Instant::now();
+    // The film's tiles cut to the traced pixels: each starts on the
+    // film's packet grid, so its packets are the full render's.
+    let traced = window.to_packet_grid(settings.width, settings.height);
+    let (traced_x_end, traced_y_end) = (traced.x + traced.width, traced.y + traced.height);
     let mut tiles = Vec::new();
-    for y0 in (0..settings.height).step_by(TILE_SIZE as usize) {
-        for x0 in (0..settings.width).step_by(TILE_SIZE as usize) {
-            let width = TILE_SIZE.min(settings.width - x0);
-            let height = TILE_SIZE.min(settings.height - y0);
+    for tile_y in (0..settings.height).step_by(TILE_SIZE as usize) {
+        for tile_x in (0..settings.width).step_by(TILE_SIZE as usize) {
+            let (x0, y0) = (tile_x.max(traced.x), tile_y.max(traced.y));
+            let x_end = tile_x.saturating_add(TILE_SIZE).min(traced_x_end);
+            let y_end = tile_y.saturating_add(TILE_SIZE).min(traced_y_end);
+            if x0 >= x_end || y0 >= y_end {
+                continue;
+            }
+            let (width, height) = (x_end - x0, y_end - y0);
             tiles.push(Tile {
                 x0,
                 y0,
@@ -331,7 +501,7 @@ pub fn render<T: Transport>(
             });
         }
     }
-    let pixel_count = u64::from(settings.width) * u64::from(settings.height);
+    let pixel_count = window.pixel_count();
     let mut passes = 0;
     let mut batch = 1;
     while passes < settings.spp {
@@ -350,12 +520,18 @@ pub fn render<T: Transport>(
         });
         if transport.film().passes_interact() {
             debug_assert_eq!(end, first + 1);
-            let shared = transport
-                .film()
-                .pass_shared(&mut tiles.iter().flat_map(|tile| tile.pixels.iter()));
+            let shared = transport.film().pass_shared(
+                &mut tiles
+                    .iter()
+                    .flat_map(|tile| tile.window_pixels(&window).map(|(_, pixel)| pixel)),
+            );
             for tile in &mut tiles {
-                for pixel in &mut tile.pixels {
-                    transport.film().end_pass(pixel, &shared);
+                let (x0, y0, width) = (tile.x0, tile.y0, tile.width);
+                for (index, pixel) in tile.pixels.iter_mut().enumerate() {
+                    let (lx, ly) = (index as u32 % width, index as u32 / width);
+                    if window.contains(x0 + lx, y0 + ly) {
+                        transport.film().end_pass(pixel, &shared);
+                    }
                 }
             }
         }
@@ -381,25 +557,21 @@ pub fn render<T: Transport>(
     for tile in &tiles {
         rejected += tile.rejected;
         rays.add(&tile.rays);
-        for ly in 0..tile.height {
-            for lx in 0..tile.width {
-                let pixel = &tile.pixels[(ly * tile.width + lx) as usize];
-                let index = ((tile.y0 + ly) * settings.width + tile.x0 + lx) as usize;
-                xyz[index] = transport.film().resolve(pixel);
-                if let Some(c) = transport.film().coefficients(pixel) {
-                    let (n, data) = planes.get_or_insert_with(|| {
-                        (c.len(), vec![0.0; pixel_count as usize * c.len()])
-                    });
-                    for (j, &v) in c.iter().enumerate().take(*n) {
-                        data[index * *n + j] = v as f32;
-                    }
+        for ((x, y), pixel) in tile.window_pixels(&window) {
+            let index = ((y - window.y) * window.width + x - window.x) as usize;
+            xyz[index] = transport.film().resolve(pixel);
+            if let Some(c) = transport.film().coefficients(pixel) {
+                let (n, data) = planes
+                    .get_or_insert_with(|| (c.len(), vec![0.0; pixel_count as usize * c.len()]));
+                for (j, &v) in c.iter().enumerate().take(*n) {
+                    data[index * *n + j] = v as f32;
                 }
             }
         }
     }
     Ok(RenderResult {
-        width: settings.width,
-        height: settings.height,
+        width: window.width,
+        height: window.height,
         xyz,
         coefficients: planes,
         passes,

@@ -13,7 +13,7 @@
 //! a record copy per lane. Both paths give the scalar sample bit for bit.
 
 use crate::ids::SpectrumId;
-use crate::shading::surface::{Surface, SurfacePacket};
+use crate::shading::surface::{SideFlags, Surface, SurfacePacket};
 use crate::simd::{LANES, LaneMask};
 use crate::simd::{Vec3x8, lookup_f32x8, lookup_u32x8};
 use crate::spectra::SceneSpectrum;
@@ -67,8 +67,8 @@ struct LightRegisters {
     emission: u32x8,
     lambert_albedo: u32x8,
     triangle: u32x8,
-    /// 1 where the light is two-sided.
-    two_sided: u32x8,
+    /// The records' sides words ([`SideFlags`]).
+    sides: u32x8,
 }
 
 impl LightRegisters {
@@ -94,7 +94,7 @@ impl LightRegisters {
             emission: words(&|light| light.surface.emission.0),
             lambert_albedo: words(&|light| light.surface.lambert_albedo.0),
             triangle: words(&|light| light.triangle),
-            two_sided: words(&|light| u32::from(light.surface.two_sided)),
+            sides: words(&|light| SideFlags::pack(&light.surface)),
         })
     }
 
@@ -125,7 +125,7 @@ impl LightRegisters {
         let [a, b, c] = self.vertices;
         let (a, b, c) = (corner(a), corner(b), corner(c));
         let none = Surface::NONE;
-        let two_sided = word(self.two_sided, 0).simd_eq(u32x8::ONE);
+        let (two_sided, front_only) = SideFlags::unpack(word(self.sides, 0));
         LightSamplePacket {
             point: point_on_triangle_x8([a, b, c], u, v),
             triangle: word(self.triangle, 0).to_array(),
@@ -136,7 +136,8 @@ impl LightRegisters {
                     float(self.normal[2], none.normal.z),
                 ),
                 emission: SpectrumId::from_words(word(self.emission, none.emission.0).to_array()),
-                two_sided: LaneMask::from_simd(cast(two_sided)),
+                two_sided,
+                front_only,
                 light_pmf: float(self.light_pmf, none.light_pmf),
                 area: float(self.area, none.area),
                 lambert_albedo: SpectrumId::from_words(
@@ -382,7 +383,7 @@ mod tests {
     use super::*;
     use crate::ids::MaterialId;
     use crate::sampling::rng::Rng;
-    use crate::shading::material::Material;
+    use crate::shading::material::{Material, Sides};
     use crate::shading::surface::{emits_towards, light_pdf_solid_angle};
     use crate::spectra::SpectrumSource;
     use spectral_core::SpectralRange;
@@ -462,10 +463,14 @@ mod tests {
                 Vec3::new(x, 1.0, 0.25 * i as f32),
             ]);
             let mut material = Material::lambert("m", SpectrumId(0));
-            // Triangle 1 is grey; the others emit, every third two-sided.
+            // Triangle 1 is grey; the others emit, every third two-sided;
+            // every other one scatters from its front only.
             if i != 1 {
                 material.emission = Some(SpectrumId(surfaces.len().min(count - 1) as u32));
                 material.two_sided = i % 3 == 0;
+            }
+            if i % 2 == 0 {
+                material.sides = Sides::Front;
             }
             surfaces.push(Surface::new(
                 Vec3::Z,
@@ -518,6 +523,7 @@ mod tests {
                     assert_eq!(record.normal.lane(lane), Surface::NONE.normal);
                     assert_eq!(record.area.to_array()[lane], 0.0);
                     assert!(!record.two_sided.contains(lane));
+                    assert!(!record.front_only.contains(lane));
                     continue;
                 }
                 let Some(s) = set.sample(u_light[lane], u[lane], v[lane]) else {
@@ -533,6 +539,7 @@ mod tests {
                 assert_eq!(record.light_pmf.to_array()[lane], s.surface.light_pmf);
                 assert_eq!(record.area.to_array()[lane], s.surface.area);
                 assert_eq!(record.two_sided.contains(lane), s.surface.two_sided);
+                assert_eq!(record.front_only.contains(lane), s.surface.front_only);
                 assert_eq!(record.lambert_albedo[lane], s.surface.lambert_albedo);
             }
         }

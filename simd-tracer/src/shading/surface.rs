@@ -7,8 +7,11 @@
 //! sides, the light-selection probability and area that the MIS weight of
 //! an emitter hit needs,
 //! `p_light = P(light) · d² / (A |cos θ_y|)` (see [`crate::shading::light`]),
-//! and whether the BSDF is Lambert with a spectrum albedo (the packet path
-//! that needs neither texture coordinates nor a per-lane material call).
+//! whether the BSDF is Lambert with a spectrum albedo (the packet path
+//! that needs neither texture coordinates nor a per-lane material call),
+//! and whether only the front face scatters
+//! ([`Material::front_only`]: the bounce ends lanes that see such a
+//! surface from behind, [`scatters_towards`]).
 //! The 8-wide emission mask and pdf here are checked lane by lane against
 //! the scalar [`emits_towards`] and [`light_pdf_solid_angle`].
 //!
@@ -35,6 +38,8 @@ pub struct Surface {
     pub emission: SpectrumId,
     /// Whether the emission leaves both faces.
     pub two_sided: bool,
+    /// Whether only the front face scatters ([`Material::front_only`]).
+    pub front_only: bool,
     /// Probability that light sampling picks this triangle (0 if it is not
     /// in the light set).
     pub light_pmf: f32,
@@ -52,6 +57,7 @@ impl Surface {
         material: MaterialId::NONE,
         emission: SpectrumId::NONE,
         two_sided: false,
+        front_only: false,
         light_pmf: 0.0,
         area: 0.0,
         lambert_albedo: SpectrumId::NONE,
@@ -66,6 +72,7 @@ impl Surface {
             material: material_id,
             emission: material.emission.unwrap_or(SpectrumId::NONE),
             two_sided: material.two_sided,
+            front_only: material.front_only(),
             light_pmf: 0.0,
             area,
             lambert_albedo: match material.bsdf {
@@ -87,6 +94,8 @@ pub struct SurfacePacket {
     pub emission: [SpectrumId; LANES],
     /// Lanes whose emission is two-sided.
     pub two_sided: LaneMask,
+    /// Lanes where only the front face scatters.
+    pub front_only: LaneMask,
     /// Light-selection probabilities.
     pub light_pmf: f32x8,
     /// Areas.
@@ -96,12 +105,50 @@ pub struct SurfacePacket {
 }
 
 /// The shading records as eight 32-bit words each, in the order of
-/// [`SurfacePacket`]'s fields: normal x, y, z, emission, two-sided (all
-/// bits set, else 0), light-selection probability, area, Lambert albedo
-/// (ids as their integer bits). The material is not packed: packets read it
-/// from [`crate::scene::Scene::triangle_material`].
+/// [`SurfacePacket`]'s fields: normal x, y, z, emission, the sides (bit 31,
+/// the sign bit that lane masks read: two-sided emission; bit 0: front-only
+/// scattering), light-selection probability, area, Lambert
+/// albedo (ids as their integer bits). The material is not packed: packets
+/// read it from [`crate::scene::Scene::triangle_material`].
 #[derive(Debug, Clone, Default)]
 pub struct PackedSurfaces(Vec<u32x8>);
+
+/// The sides word of a packed record ([`PackedSurfaces`]).
+pub(crate) struct SideFlags;
+
+impl SideFlags {
+    /// Two-sided emission: the sign bit, so the word is its own lane mask.
+    const TWO_SIDED: u32 = 1 << 31;
+    /// Front-only scattering.
+    const FRONT_ONLY: u32 = 1;
+
+    /// The word of a record.
+    pub(crate) fn pack(surface: &Surface) -> u32 {
+        let two_sided = if surface.two_sided {
+            Self::TWO_SIDED
+        } else {
+            0
+        };
+        let front_only = if surface.front_only {
+            Self::FRONT_ONLY
+        } else {
+            0
+        };
+        two_sided | front_only
+    }
+
+    /// The lanes with two-sided emission and the lanes with front-only
+    /// scattering, from 8 words.
+    #[inline(always)]
+    pub(crate) fn unpack(words: u32x8) -> (LaneMask, LaneMask) {
+        let flag = u32x8::splat(Self::FRONT_ONLY);
+        let front_only: f32x8 = cast((words & flag).simd_eq(flag));
+        (
+            LaneMask::from_simd(cast(words)),
+            LaneMask::from_simd(front_only),
+        )
+    }
+}
 
 impl PackedSurfaces {
     /// The packed form of `surfaces`.
@@ -115,7 +162,7 @@ impl PackedSurfaces {
             surface.normal.y.to_bits(),
             surface.normal.z.to_bits(),
             surface.emission.0,
-            if surface.two_sided { u32::MAX } else { 0 },
+            SideFlags::pack(surface),
             surface.light_pmf.to_bits(),
             surface.area.to_bits(),
             surface.lambert_albedo.0,
@@ -147,20 +194,13 @@ impl PackedSurfaces {
                 Some(&words) if active.contains(lane) => cast(words),
                 _ => none,
             });
-        let [
-            x,
-            y,
-            z,
-            emission,
-            two_sided,
-            light_pmf,
-            area,
-            lambert_albedo,
-        ] = f32x8::transpose(rows);
+        let [x, y, z, emission, sides, light_pmf, area, lambert_albedo] = f32x8::transpose(rows);
+        let (two_sided, front_only) = SideFlags::unpack(cast(sides));
         SurfacePacket {
             normal: Vec3x8::new(x, y, z),
             emission: SpectrumId::from_words(cast::<f32x8, u32x8>(emission).to_array()),
-            two_sided: LaneMask::from_simd(two_sided),
+            two_sided,
+            front_only,
             light_pmf,
             area,
             lambert_albedo: SpectrumId::from_words(cast::<f32x8, u32x8>(lambert_albedo).to_array()),
@@ -176,6 +216,9 @@ impl SurfacePacket {
             emission: records.map(|r| r.emission),
             two_sided: (0..LANES)
                 .filter(|&lane| records[lane].two_sided)
+                .fold(LaneMask::NONE, LaneMask::with),
+            front_only: (0..LANES)
+                .filter(|&lane| records[lane].front_only)
                 .fold(LaneMask::NONE, LaneMask::with),
             light_pmf: f32x8::new(records.map(|r| r.light_pmf)),
             area: f32x8::new(records.map(|r| r.area)),
@@ -194,6 +237,14 @@ impl SurfacePacket {
             cast(u32x8::new(SpectrumId::words(self.emission)).simd_eq(u32x8::splat(NO_ID)));
         let emissive = LaneMask::ALL.and_not(LaneMask::from_simd(none));
         front.or(back).and(emissive)
+    }
+
+    /// Lanes that scatter light seen at cosine `cos_view` (geometric
+    /// normal · to viewer): [`scatters_towards`] lane-wise.
+    #[inline(always)]
+    pub fn scatters_towards(&self, cos_view: f32x8) -> LaneMask {
+        let in_front = LaneMask::from_simd(cos_view.simd_gt(f32x8::ZERO));
+        in_front.or(LaneMask::ALL.and_not(self.front_only))
     }
 
     /// The solid-angle pdf with which light sampling would have produced
@@ -234,6 +285,14 @@ pub fn light_pdf_solid_angle(pmf: f32, area: f32, distance_sq: f32, cos_light: f
     pmf * distance_sq / (area * cos)
 }
 
+/// Whether a surface scatters light seen at `cos_view = normal · (to
+/// viewer)`: always, unless only its front scatters
+/// ([`Material::front_only`]) and the viewer is not in front of it
+/// (`cos_view ≤ 0`, Mitsuba's `cos θ_i ≤ 0`).
+pub fn scatters_towards(front_only: bool, cos_view: f32) -> bool {
+    !front_only || cos_view > 0.0
+}
+
 /// Whether a light with this material emits towards a viewer on the side
 /// given by `cos_light = normal · (to viewer)`.
 pub fn emits_towards(two_sided: bool, cos_light: f32) -> bool {
@@ -247,11 +306,17 @@ mod tests {
     use crate::scene::camera::Camera;
     use crate::scene::{Scene, SceneBuilder};
 
+    use crate::shading::material::Sides;
     use crate::spectra::SpectrumSource;
     use spectral_core::SpectralRange;
 
+    /// A glass's relative index.
+    const GLASS_ETA: f32 = 1.5;
+
     /// Triangles: a one-sided light, a two-sided light, a Lambert
-    /// triangle, a coated one and an emissive coated one.
+    /// triangle, a coated one and an emissive coated one; the Lambert and
+    /// the emissive coated triangles scatter from the front only, and a
+    /// front-only dielectric (which transmits) from both faces.
     fn scene() -> Result<Scene, Box<dyn std::error::Error>> {
         let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
         let grey = b.add_spectrum("grey", SpectrumSource::Constant(0.5))?;
@@ -271,12 +336,18 @@ mod tests {
         );
         let mut glowing = coated.clone();
         glowing.emission = Some(grey);
+        glowing.sides = Sides::Front;
+        let mut front_lambert = Material::lambert("grey", grey);
+        front_lambert.sides = Sides::Front;
+        let mut glass = Material::new("glass", Bsdf::ThinDielectric { eta: GLASS_ETA });
+        glass.sides = Sides::Front;
         let materials = [
             b.add_material(one_sided),
             b.add_material(two_sided),
-            b.add_material(Material::lambert("grey", grey)),
+            b.add_material(front_lambert),
             b.add_material(coated),
             b.add_material(glowing),
+            b.add_material(glass),
         ];
         for (i, &m) in materials.iter().enumerate() {
             let x = 2.0 * i as f32;
@@ -299,15 +370,22 @@ mod tests {
         let scene = scene()?;
         scene.validate_surfaces()?;
         let s = &scene.surfaces();
-        assert_eq!(s.len(), 5);
+        assert_eq!(s.len(), 6);
+        let front_only: Vec<bool> = s.iter().map(|r| r.front_only).collect();
+        assert_eq!(front_only, [false, false, true, false, true, false]);
         assert_eq!((s[0].emission, s[0].two_sided), (SpectrumId(1), false));
         assert_eq!((s[1].emission, s[1].two_sided), (SpectrumId(1), true));
         assert_eq!(
-            [s[2].emission, s[3].emission, s[4].emission],
-            [SpectrumId::NONE, SpectrumId::NONE, SpectrumId(0)]
+            [s[2].emission, s[3].emission, s[4].emission, s[5].emission],
+            [
+                SpectrumId::NONE,
+                SpectrumId::NONE,
+                SpectrumId(0),
+                SpectrumId::NONE
+            ]
         );
         let lambert: Vec<u32> = s.iter().map(|r| r.lambert_albedo.0).collect();
-        assert_eq!(lambert, [0, 0, 0, NO_ID, NO_ID]);
+        assert_eq!(lambert, [0, 0, 0, NO_ID, NO_ID, NO_ID]);
         for (index, surface) in s.iter().enumerate() {
             assert_eq!(surface.normal, scene.normals()[index]);
             assert_eq!(surface.area, triangle_area(&scene.triangles()[index]));
@@ -335,11 +413,12 @@ mod tests {
             )
         };
         assert!(check(&s[..4]).is_err());
-        let corruptions: [fn(&mut Surface); 7] = [
+        let corruptions: [fn(&mut Surface); 8] = [
             |r| r.normal = -r.normal,
             |r| r.material = MaterialId(3),
             |r| r.emission = SpectrumId::NONE,
             |r| r.two_sided = !r.two_sided,
+            |r| r.front_only = !r.front_only,
             |r| r.light_pmf *= 0.5,
             |r| r.area += 1.0,
             |r| r.lambert_albedo = SpectrumId::NONE,
@@ -365,18 +444,20 @@ mod tests {
         let scene = scene()?;
         let mut rng = Rng::new(3, 7);
         for _ in 0..2000 {
-            let triangles: [u32; LANES] = core::array::from_fn(|_| match rng.next_u32() % 7 {
-                6 => u32::MAX,
+            let triangles: [u32; LANES] = core::array::from_fn(|_| match rng.next_u32() % 8 {
+                7 => u32::MAX,
                 i => i,
             });
             let active = LaneMask((rng.next_u32() & 0xff) as u8);
-            let cos: [f32; LANES] = core::array::from_fn(|_| match rng.next_u32() % 4 {
+            let cos: [f32; LANES] = core::array::from_fn(|_| match rng.next_u32() % 5 {
                 0 => 0.0,
+                1 => -0.0,
                 _ => 2.0 * rng.next_f32() - 1.0,
             });
             let distance_sq: [f32; LANES] = core::array::from_fn(|_| 10.0 * rng.next_f32());
             let packet = scene.packed_surfaces().gather(&triangles, active);
             let emits = packet.emits_towards(f32x8::new(cos));
+            let scatters = packet.scatters_towards(f32x8::new(cos));
             let pdf = packet
                 .light_pdf(f32x8::new(distance_sq), f32x8::new(cos))
                 .to_array();
@@ -389,6 +470,11 @@ mod tests {
                 assert_eq!(packet.normal.lane(lane), record.normal);
                 assert_eq!(packet.emission[lane], record.emission);
                 assert_eq!(packet.two_sided.contains(lane), record.two_sided);
+                assert_eq!(packet.front_only.contains(lane), record.front_only);
+                assert_eq!(
+                    scatters.contains(lane),
+                    scatters_towards(record.front_only, cos[lane])
+                );
                 assert_eq!(packet.light_pmf.to_array()[lane], record.light_pmf);
                 assert_eq!(packet.area.to_array()[lane], record.area);
                 assert_eq!(packet.lambert_albedo[lane], record.lambert_albedo);

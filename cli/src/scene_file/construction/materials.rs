@@ -4,7 +4,8 @@
 //! A front end reads a material's parameters (spectra, indices of
 //! refraction, roughness, film layers) and calls the builder of its BSDF
 //! here: [`Construction::conductor_fresnel`], [`Construction::dielectric`],
-//! [`coated`], [`Construction::thin_film`]; the angular functions are named
+//! [`coated`], [`Construction::thin_film`], [`Construction::thin_dielectric`];
+//! the angular functions are named
 //! after the material's key so that the builder's own errors are located.
 //! [`Construction::add_material`] adds the result and remembers whether it
 //! emits (for the "no light" warning); named materials are defined and
@@ -185,6 +186,19 @@ impl Construction<'_> {
             ior,
             roughness,
         })
+    }
+
+    /// A thin dielectric slab of relative index `eta` (slab / outside:
+    /// Mitsuba's `int_ior / ext_ior`, which may be below 1), for the
+    /// material at `at`; `eta` must be finite and above 0.
+    pub(crate) fn thin_dielectric(&self, at: &Spot, eta: f32) -> Result<Bsdf, CliError> {
+        if !(eta.is_finite() && eta > 0.0) {
+            return Err(self.src.error_at(
+                at,
+                format!("relative index of refraction {eta} must be a finite number > 0"),
+            ));
+        }
+        Ok(Bsdf::ThinDielectric { eta })
     }
 
     /// A smooth thin-film stack, for the material at `at`.

@@ -29,7 +29,7 @@ use super::spectra::{SpectrumUse, zero_outside};
 use crate::error::CliError;
 use crate::scene_file::construction::coated;
 use simd_tracer::ids::SpectrumId;
-use simd_tracer::shading::material::{Albedo, Bsdf, Material};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material, Sides};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::Ior;
 
@@ -63,7 +63,11 @@ impl BuiltBsdf {
     pub(crate) fn material(&self, emission: Option<SpectrumId>) -> Material {
         let mut material = Material::new(&self.name, self.bsdf.clone());
         material.emission = emission;
-        let _ = self.one_sided;
+        material.sides = if self.one_sided {
+            Sides::Front
+        } else {
+            Sides::Both
+        };
         material
     }
 }
@@ -150,11 +154,7 @@ impl<'e> Importer<'e, '_> {
                 self.unit_factor(&object, "specular_reflectance")?;
                 self.unit_factor(&object, "specular_transmittance")?;
                 let eta = self.relative_ior(&object, DEFAULT_DIELECTRIC_INT_IOR)?;
-                {
-                    let _ = eta;
-                    self.unsupported(e, "rendered as grey diffuse")?;
-                    return self.default_bsdf();
-                }
+                (self.cx.thin_dielectric(&spot, eta as f32)?, false)
             }
             "plastic" | "roughplastic" => {
                 let rough = self.roughness(&object)?;

@@ -9,19 +9,20 @@ use crate::scene_file::construction::{ThinFilm, coated};
 use crate::scene_file::toml_reader::{Item, Table};
 use crate::texture_file::TextureUse;
 use simd_tracer::ids::MaterialId;
-use simd_tracer::shading::material::{Albedo, Bsdf, Material};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material, Sides};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
 use spectral_core::table::MAX_LAYERS;
 use toml::de::DeValue;
 
 /// The keys each material type allows (`type`, `emission`,
-/// `emission_scale` and `two_sided` for all).
+/// `emission_scale`, `two_sided` and `sides` for all).
 const LAMBERT_KEYS: &[&str] = &[
     "type",
     "emission",
     "emission_scale",
     "two_sided",
+    "sides",
     "albedo",
     "albedo_texture",
 ];
@@ -30,6 +31,7 @@ const CONDUCTOR_KEYS: &[&str] = &[
     "emission",
     "emission_scale",
     "two_sided",
+    "sides",
     "metal",
     "n",
     "k",
@@ -42,14 +44,24 @@ const DIELECTRIC_KEYS: &[&str] = &[
     "emission",
     "emission_scale",
     "two_sided",
+    "sides",
     "ior",
     "roughness",
+];
+const THIN_DIELECTRIC_KEYS: &[&str] = &[
+    "type",
+    "emission",
+    "emission_scale",
+    "two_sided",
+    "sides",
+    "ior",
 ];
 const COATED_KEYS: &[&str] = &[
     "type",
     "emission",
     "emission_scale",
     "two_sided",
+    "sides",
     "albedo",
     "albedo_texture",
     "ior",
@@ -60,6 +72,7 @@ const THIN_FILM_KEYS: &[&str] = &[
     "emission",
     "emission_scale",
     "two_sided",
+    "sides",
     "layers",
     "substrate",
     "base",
@@ -72,6 +85,7 @@ const NEURAL_KEYS: &[&str] = &[
     "emission",
     "emission_scale",
     "two_sided",
+    "sides",
     "network",
     "roughness",
     "thickness_nm",
@@ -115,13 +129,14 @@ impl Loader<'_> {
         let kind_item = table.require(
             &self.src,
             "type",
-            "lambert, conductor, dielectric, coated, thin-film or neural",
+            "lambert, conductor, dielectric, thin-dielectric, coated, thin-film or neural",
         )?;
         let kind = kind_item.string(&self.src)?;
         let keys = match kind {
             "lambert" => LAMBERT_KEYS,
             "conductor" => CONDUCTOR_KEYS,
             "dielectric" => DIELECTRIC_KEYS,
+            "thin-dielectric" => THIN_DIELECTRIC_KEYS,
             "coated" => COATED_KEYS,
             "thin-film" => THIN_FILM_KEYS,
             "neural" => NEURAL_KEYS,
@@ -129,7 +144,7 @@ impl Loader<'_> {
                 return Err(kind_item.err(
                     &self.src,
                     format!(
-                        "unknown material type \"{other}\" (lambert, conductor, dielectric, coated, thin-film or neural)"
+                        "unknown material type \"{other}\" (lambert, conductor, dielectric, thin-dielectric, coated, thin-film or neural)"
                     ),
                 ));
             }
@@ -141,6 +156,7 @@ impl Loader<'_> {
             },
             "conductor" => self.conductor(&table)?,
             "dielectric" => self.dielectric(&table)?,
+            "thin-dielectric" => self.thin_dielectric(&table)?,
             "coated" => self.coated(&table)?,
             "neural" => self.neural(&table)?,
             _ => self.thin_film(&table)?,
@@ -161,7 +177,33 @@ impl Loader<'_> {
         if let Some(two_sided) = table.get("two_sided") {
             material.two_sided = two_sided.boolean(&self.src)?;
         }
+        if let Some(sides) = table.get("sides") {
+            material.sides = match sides.string(&self.src)? {
+                "both" => Sides::Both,
+                "front" => Sides::Front,
+                other => {
+                    return Err(sides.err(
+                        &self.src,
+                        format!("unknown sides \"{other}\" (both or front)"),
+                    ));
+                }
+            };
+        }
         Ok(self.cx.add_material(material))
+    }
+
+    /// A thin dielectric: `ior`, the slab's index relative to the outside,
+    /// a number > 0 (required).
+    fn thin_dielectric(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
+        let item = table.require(&self.src, "ior", "the slab's index of refraction")?;
+        let (DeValue::Integer(_) | DeValue::Float(_)) = item.value.get_ref() else {
+            return Err(item.wrong_type(
+                &self.src,
+                "a number (a thin dielectric's index is not dispersive)",
+            ));
+        };
+        let eta = item.number(&self.src)?;
+        self.cx.thin_dielectric(&item.spot(), eta as f32)
     }
 
     fn albedo(&mut self, table: &Table<'_, '_>, kind: &str) -> Result<Albedo, CliError> {

@@ -1,6 +1,7 @@
 //! Smooth and rough dielectric interfaces: the lobe choice, the smooth
 //! interface's reflection or refraction, and the rough (GGX) interface's
-//! evaluation, shared by the dielectric and the film materials.
+//! evaluation, shared by the dielectric and the film materials; and the
+//! reflectance of a thin dielectric slab (two parallel interfaces).
 
 use super::MaterialTables;
 use super::lane_spectrum::LaneSpectrum;
@@ -8,6 +9,18 @@ use super::{BsdfEval, BsdfSample, angular_mean, angular_ref};
 use crate::ids::AngularId;
 use crate::shading::microfacet::{self};
 use glam::Vec3;
+use spectral_core::optics::fresnel_dielectric;
+
+/// The reflectance of a thin slab of relative index `eta`, lit at
+/// `|cos θ| = cos_theta`: `R' = 2R/(1 + R)` with `R` the Fresnel
+/// reflectance of one interface, the sum `R + T²R/(1 − R²)` (`T = 1 − R`)
+/// of the light that leaves the front after `0, 2, 4, …` inner
+/// reflections (Mitsuba 3.9.1, src/bsdfs/thindielectric.cpp). The slab
+/// transmits `1 − R'`. `R` is evaluated in `f64`, as the coat's is.
+pub fn thin_dielectric_reflectance(cos_theta: f32, eta: f32) -> f32 {
+    let r = fresnel_dielectric(f64::from(cos_theta.abs()), f64::from(eta));
+    (2.0 * r / (1.0 + r)) as f32
+}
 
 /// The probability of reflecting at a (film or bare) smooth interface:
 /// `c_0(R)` or `c_0(R)/(c_0(R) + c_0(T))` when a transmittance table is given.

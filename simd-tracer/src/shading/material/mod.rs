@@ -14,6 +14,21 @@
 //! | Dielectric | smooth (delta) or GGX (Walter et al. 2007) reflection and transmission; the lobe is chosen with the mean Fresnel `c_0` of the table (Fourier mode, and sampled mode without dispersion) and the throughput carries the spectral `F` or `1 − F`; transmitted radiance is scaled by `1/η²`; with a dispersive IOR and a hero wavelength, refraction follows the hero's IOR and terminates the secondary wavelengths |
 //! | Coated | a smooth or GGX dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic): specular `F(θo)` plus diffuse `ρ (1 − F_i)(1 − F_o)/(π η² (1 − F_dr,int))`, which conserves energy exactly for `ρ = 1` (the coat's Fresnel is achromatic, so it rides in the scalar part) |
 //! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
+//! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1; achromatic, delta, the same from both faces |
+//!
+//! **Sides.** [`Material::sides`] says which faces scatter. With
+//! [`Sides::Both`] (TOML and built-in scenes) the normal is turned towards
+//! the viewer and both faces scatter alike. [`Sides::Front`] is Mitsuba's
+//! convention for its reflective BSDFs (diffuse, conductor, plastic and
+//! their rough forms return 0 for `cos θ_i ≤ 0` or `cos θ_o ≤ 0` in the
+//! shading frame, src/bsdfs/diffuse.cpp; src/bsdfs/twosided.cpp makes
+//! them two-sided): a view from behind the shading normal sees black, no
+//! reflection and no light sample, and the path ends. It applies to the
+//! BSDFs that do not transmit ([`Bsdf::transmits`]); dielectrics, thin
+//! dielectrics and transparent films scatter from both faces whatever the
+//! setting, as Mitsuba's do. Emission has its own sides,
+//! [`Material::two_sided`]. The integrator reads the setting from the
+//! triangles' shading records ([`crate::shading::surface`]).
 
 use crate::ids::{AngularId, SpectrumId, TextureId};
 use crate::spectra::SceneSpectrum;
@@ -29,6 +44,7 @@ mod frame;
 pub use frame::{basis, sample_cosine, sample_cosine_x8};
 mod coated;
 mod interface;
+pub use interface::thin_dielectric_reflectance;
 mod packet;
 mod scalar;
 pub use packet::{
@@ -106,6 +122,11 @@ pub enum Bsdf {
         /// Diffuse Fresnel reflectance of the coat seen from inside.
         fdr_inside: f32,
     },
+    /// A thin dielectric slab (module docs), the same from both faces.
+    ThinDielectric {
+        /// `n_slab / n_outside` (constant; above 0).
+        eta: f32,
+    },
     /// A smooth thin-film stack.
     ThinFilm {
         /// Reflectance from the front.
@@ -132,6 +153,18 @@ pub struct Material {
     pub emission: Option<SpectrumId>,
     /// Whether the emission leaves both faces (else only the front).
     pub two_sided: bool,
+    /// Which faces scatter light (module docs).
+    pub sides: Sides,
+}
+
+/// Which faces of a material scatter light (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Sides {
+    /// Both faces alike (the normal is turned towards the viewer).
+    #[default]
+    Both,
+    /// Only the front: a BSDF that does not transmit is black from behind.
+    Front,
 }
 
 /// Ids a material refers to, for validation.
@@ -163,7 +196,14 @@ impl Material {
             bsdf,
             emission: None,
             two_sided: false,
+            sides: Sides::Both,
         }
+    }
+
+    /// Whether only the front face scatters: [`Sides::Front`] with a BSDF
+    /// that does not transmit (module docs).
+    pub fn front_only(&self) -> bool {
+        self.sides == Sides::Front && !self.bsdf.transmits()
     }
 
     /// Every id the material refers to.
@@ -176,6 +216,7 @@ impl Material {
         match &self.bsdf {
             Bsdf::Lambert { albedo: a } | Bsdf::Coated { albedo: a, .. } => albedo(a, &mut r),
             Bsdf::Conductor { fresnel, .. } => r.angular.push(*fresnel),
+            Bsdf::ThinDielectric { .. } => {}
             Bsdf::Dielectric {
                 outside, inside, ..
             } => r.angular.extend([*outside, *inside]),
@@ -196,6 +237,21 @@ impl Material {
         }
         r.spectra.extend(self.emission);
         r
+    }
+}
+
+impl Bsdf {
+    /// Whether the BSDF transmits light through the surface (then it
+    /// scatters from both faces whatever [`Material::sides`] says).
+    pub fn transmits(&self) -> bool {
+        match self {
+            Self::Dielectric { .. } | Self::ThinDielectric { .. } => true,
+            Self::ThinFilm {
+                front_transmittance,
+                ..
+            } => front_transmittance.is_some(),
+            Self::Lambert { .. } | Self::Conductor { .. } | Self::Coated { .. } => false,
+        }
     }
 }
 
@@ -328,7 +384,8 @@ mod tests {
 
     /// `eval_packet` and `sample_packet` against `Bsdf::eval` and
     /// `Bsdf::sample` lane by lane, for all-Lambert packets (the 8-wide
-    /// path) and packets with a coated lane (the per-lane path), with `wo`
+    /// path) and packets with a coated or a thin-dielectric lane (the
+    /// per-lane path), with `wo`
     /// strictly above each lane's normal (as the integrator provides it).
     #[test]
     fn packet_bsdfs_match_the_scalar_oracle() -> Result<(), Box<dyn std::error::Error>> {
@@ -350,6 +407,7 @@ mod tests {
             roughness: 0.2,
             fdr_inside: 0.6,
         };
+        let thin = Bsdf::ThinDielectric { eta: 1.5 };
         let mut rng = Rng::new(77, 3);
         for round in 0..1000 {
             let normals: [Vec3; LANES] = core::array::from_fn(|_| random_unit(&mut rng));
@@ -365,10 +423,10 @@ mod tests {
                 core::array::from_fn(|_| rng.next_f32()),
             );
             let bsdfs: [Option<&Bsdf>; LANES] = core::array::from_fn(|lane| {
-                Some(if round % 2 == 1 && lane == 3 {
-                    &coated
-                } else {
-                    &lambert
+                Some(match (round % 3, lane) {
+                    (1, 3) => &coated,
+                    (2, 5) => &thin,
+                    _ => &lambert,
                 })
             });
             let points: [ShadingPoint; LANES] = core::array::from_fn(|lane| ShadingPoint {

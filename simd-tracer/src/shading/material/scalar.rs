@@ -6,6 +6,7 @@ use super::coated::CoatLobes;
 use super::frame::{Frame, sample_cosine};
 use super::interface::{
     SmoothInterface, eval_rough_dielectric, reflect_probability, sample_smooth_interface,
+    thin_dielectric_reflectance,
 };
 use super::lane_spectrum::LaneSpectrum;
 use super::{Bsdf, BsdfEval, BsdfSample, ShadingPoint, angular_ref, direction_ior};
@@ -142,6 +143,24 @@ impl Bsdf {
                 let coat = CoatLobes::new(tables, albedo, *ior, *roughness, *fdr_inside, p.uv);
                 coat.sample(frame, wo_local, u_lobe, u, v)
             }
+            Self::ThinDielectric { eta } => {
+                // Lobe by `R'`: each weight `R'/R'` or `(1 − R')/(1 − R')`
+                // is exactly 1 (`u_lobe < R'` keeps the chosen lobe's
+                // probability above 0).
+                let reflectance = thin_dielectric_reflectance(wo_local.z, *eta);
+                let wi = if u_lobe < reflectance {
+                    microfacet::reflect(wo, p.n)
+                } else {
+                    -wo
+                };
+                Some(BsdfSample {
+                    wi,
+                    pdf: 0.0,
+                    weight: 1.0,
+                    spectrum: LaneSpectrum::ONE,
+                    terminate_secondary: false,
+                })
+            }
             Self::ThinFilm {
                 front_reflectance,
                 front_transmittance,
@@ -245,7 +264,7 @@ impl Bsdf {
                 fdr_inside,
             } => CoatLobes::new(tables, albedo, *ior, *roughness, *fdr_inside, p.uv)
                 .eval(wo_local, wi_local),
-            Self::ThinFilm { .. } => BsdfEval::ZERO,
+            Self::ThinFilm { .. } | Self::ThinDielectric { .. } => BsdfEval::ZERO,
         }
     }
 }
