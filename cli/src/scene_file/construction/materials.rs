@@ -16,7 +16,8 @@ use crate::error::CliError;
 use crate::scene_file::source::Spot;
 use simd_tracer::ids::{AngularId, MaterialId, SpectrumId, TextureId};
 use simd_tracer::scene::SceneError;
-use simd_tracer::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
+use simd_tracer::shading::material::{Albedo, Bsdf, CoatParams, Material, diffuse_fresnel};
+use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, REFERENCE_WAVELENGTH_NM};
 use spectral_core::table::{FilmQuantity, FilmSide};
 
@@ -44,8 +45,10 @@ pub(crate) struct ThinFilm {
 }
 
 /// A dielectric coat of index `ior` (a dispersive one at the reference
-/// wavelength) over a Lambertian base.
-pub(crate) fn coated(albedo: Albedo, ior: Ior, roughness: f32) -> Bsdf {
+/// wavelength) over a Lambertian base: the renderer's coat
+/// ([`CoatParams::default`]; Mitsuba's plastics are
+/// [`simd_tracer::shading::material::MitsubaPlastic`]).
+pub(crate) fn coated(albedo: Albedo, ior: Ior, microfacet: Microfacet) -> Bsdf {
     let ior = match ior {
         Ior::Constant(n) => n,
         other => other.at(REFERENCE_WAVELENGTH_NM),
@@ -53,8 +56,9 @@ pub(crate) fn coated(albedo: Albedo, ior: Ior, roughness: f32) -> Bsdf {
     Bsdf::Coated {
         albedo,
         ior: ior as f32,
-        roughness,
+        microfacet,
         fdr_inside: diffuse_fresnel(1.0 / ior) as f32,
+        params: CoatParams::default(),
     }
 }
 
@@ -154,13 +158,13 @@ impl Construction<'_> {
         self.add_angular(at, &at.key, function)
     }
 
-    /// A smooth or GGX dielectric interface of index `ior` (inside relative
-    /// to outside), for the material at `at`.
+    /// A smooth or rough dielectric interface of index `ior` (inside
+    /// relative to outside), for the material at `at`.
     pub(crate) fn dielectric(
         &mut self,
         at: &Spot,
         ior: Ior,
-        roughness: f32,
+        microfacet: Microfacet,
     ) -> Result<Bsdf, CliError> {
         let name = &at.key;
         let outside = self.add_angular(
@@ -183,7 +187,7 @@ impl Construction<'_> {
             outside,
             inside,
             ior,
-            roughness,
+            microfacet,
         })
     }
 
