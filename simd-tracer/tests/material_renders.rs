@@ -17,6 +17,7 @@ use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::shapes::{add_quad_uv, add_sphere};
 use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::shading::material::{Bsdf, Material};
+use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior};
 use simd_tracer::transport::{FourierTransport, SampledTransport, Transport};
@@ -116,7 +117,7 @@ fn glass(b: &mut SceneBuilder, roughness: f32) -> TestResult<MaterialId> {
             outside,
             inside,
             ior,
-            roughness,
+            microfacet: Microfacet::ggx(roughness),
         },
     )))
 }
@@ -442,7 +443,7 @@ fn gold_at_normal_incidence_has_the_colour_of_the_core_fresnel() -> TestResult {
             "gold",
             Bsdf::Conductor {
                 fresnel,
-                roughness: 0.0,
+                microfacet: Microfacet::ggx(0.0),
             },
         )))
     })?;

@@ -13,6 +13,7 @@ use simd_tracer::scene::builtin::FILM_NETWORK;
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::shapes::add_sphere;
 use simd_tracer::shading::material::{Bsdf, Material};
+use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, AngularSpectrum, FilmLayer, Ior, Network};
 use simd_tracer::transport::FourierTransport;
@@ -115,7 +116,7 @@ fn mirror_render(fresnel: AngularFunction) -> TestResult<Vec<f64>> {
         "mirror",
         Bsdf::Conductor {
             fresnel,
-            roughness: 0.0,
+            microfacet: Microfacet::ggx(0.0),
         },
     ));
     add_sphere(&mut b, Vec3::ZERO, 1.0, 48, 96, mirror);

@@ -104,7 +104,7 @@ fn conductor(b: &mut SceneBuilder, sides: Sides) -> TestResult<MaterialId> {
         "metal",
         Bsdf::Conductor {
             fresnel,
-            roughness: CONDUCTOR_ALPHA,
+            microfacet: simd_tracer::shading::microfacet::Microfacet::ggx(CONDUCTOR_ALPHA),
         },
     );
     m.sides = sides;

@@ -13,7 +13,8 @@ use crate::scene::camera::Camera;
 use crate::scene::obj::{ObjError, ObjSource, load_obj};
 use crate::scene::shapes::{add_box, add_quad_uv, add_sphere};
 use crate::scene::{Scene, SceneBuilder, SceneError};
-use crate::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
+use crate::shading::material::{Albedo, Bsdf, CoatParams, Material, diffuse_fresnel};
+use crate::shading::microfacet::Microfacet;
 use crate::spectra::SpectrumSource;
 use crate::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
 use crate::spectra::texture::Texture;
@@ -343,8 +344,9 @@ fn coated(b: &mut SceneBuilder, name: &str, albedo: SpectrumId, roughness: f32) 
         Bsdf::Coated {
             albedo: Albedo::Spectrum(albedo),
             ior: 1.5,
-            roughness,
+            microfacet: Microfacet::ggx(roughness),
             fdr_inside: diffuse_fresnel(1.0 / 1.5) as f32,
+            params: CoatParams::default(),
         },
     ))
 }
@@ -482,7 +484,13 @@ fn materials(range: SpectralRange) -> Result<SceneBuilder, BuiltinError> {
                     outside: 1.0,
                 },
             )?;
-            Ok(b.add_material(Material::new(name, Bsdf::Conductor { fresnel, roughness })))
+            Ok(b.add_material(Material::new(
+                name,
+                Bsdf::Conductor {
+                    fresnel,
+                    microfacet: Microfacet::ggx(roughness),
+                },
+            )))
         };
     let gold = metal(&mut b, "gold", 0.0)?;
     let copper = metal(&mut b, "copper", 0.15)?;
@@ -507,7 +515,7 @@ fn materials(range: SpectralRange) -> Result<SceneBuilder, BuiltinError> {
             outside,
             inside,
             ior: glass_ior,
-            roughness: 0.0,
+            microfacet: Microfacet::ggx(0.0),
         },
     ));
     let red = b.add_spectrum(
@@ -588,7 +596,7 @@ fn materials(range: SpectralRange) -> Result<SceneBuilder, BuiltinError> {
         "neural film",
         Bsdf::Conductor {
             fresnel: neural_fresnel,
-            roughness: 0.0,
+            microfacet: Microfacet::ggx(0.0),
         },
     ));
     let spheres = [diffuse, gold, copper, glass, plastic, single, multi, neural];

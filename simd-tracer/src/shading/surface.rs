@@ -305,6 +305,8 @@ mod tests {
     use crate::sampling::rng::Rng;
     use crate::scene::camera::Camera;
     use crate::scene::{Scene, SceneBuilder};
+    use crate::shading::material::CoatParams;
+    use crate::shading::microfacet::Microfacet;
 
     use crate::shading::material::Sides;
     use crate::spectra::SpectrumSource;
@@ -330,8 +332,9 @@ mod tests {
             Bsdf::Coated {
                 albedo: Albedo::Spectrum(grey),
                 ior: 1.5,
-                roughness: 0.0,
+                microfacet: Microfacet::ggx(0.0),
                 fdr_inside: 0.5,
+                params: CoatParams::default(),
             },
         );
         let mut glowing = coated.clone();

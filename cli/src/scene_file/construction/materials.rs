@@ -17,7 +17,8 @@ use crate::error::CliError;
 use crate::scene_file::source::Spot;
 use simd_tracer::ids::{AngularId, MaterialId, SpectrumId, TextureId};
 use simd_tracer::scene::SceneError;
-use simd_tracer::shading::material::{Albedo, Bsdf, Material, diffuse_fresnel};
+use simd_tracer::shading::material::{Albedo, Bsdf, CoatParams, Material, diffuse_fresnel};
+use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, REFERENCE_WAVELENGTH_NM};
 use spectral_core::table::{FilmQuantity, FilmSide};
 
@@ -45,8 +46,10 @@ pub(crate) struct ThinFilm {
 }
 
 /// A dielectric coat of index `ior` (a dispersive one at the reference
-/// wavelength) over a Lambertian base.
-pub(crate) fn coated(albedo: Albedo, ior: Ior, roughness: f32) -> Bsdf {
+/// wavelength) over a Lambertian base: the renderer's coat
+/// ([`CoatParams::default`]; Mitsuba's plastics are
+/// [`simd_tracer::shading::material::MitsubaPlastic`]).
+pub(crate) fn coated(albedo: Albedo, ior: Ior, microfacet: Microfacet) -> Bsdf {
     let ior = match ior {
         Ior::Constant(n) => n,
         other => other.at(REFERENCE_WAVELENGTH_NM),
@@ -54,8 +57,9 @@ pub(crate) fn coated(albedo: Albedo, ior: Ior, roughness: f32) -> Bsdf {
     Bsdf::Coated {
         albedo,
         ior: ior as f32,
-        roughness,
+        microfacet,
         fdr_inside: diffuse_fresnel(1.0 / ior) as f32,
+        params: CoatParams::default(),
     }
 }
 
@@ -155,13 +159,13 @@ impl Construction<'_> {
         self.add_angular(at, &at.key, function)
     }
 
-    /// A smooth or GGX dielectric interface of index `ior` (inside relative
-    /// to outside), for the material at `at`.
+    /// A smooth or rough dielectric interface of index `ior` (inside
+    /// relative to outside), for the material at `at`.
     pub(crate) fn dielectric(
         &mut self,
         at: &Spot,
         ior: Ior,
-        roughness: f32,
+        microfacet: Microfacet,
     ) -> Result<Bsdf, CliError> {
         let name = &at.key;
         let outside = self.add_angular(
@@ -184,7 +188,7 @@ impl Construction<'_> {
             outside,
             inside,
             ior,
-            roughness,
+            microfacet,
         })
     }
 
@@ -253,6 +257,25 @@ impl Construction<'_> {
             substrate_ior: substrate.at(REFERENCE_WAVELENGTH_NM) as f32,
             thickness,
         })
+    }
+
+    /// The mean of the spectrum `id` over the range (0 if missing).
+    pub(crate) fn spectrum_mean(&self, id: SpectrumId) -> f64 {
+        self.builder.spectrum(id).map_or(0.0, |s| s.mean())
+    }
+
+    /// Mitsuba's nonlinear plastic albedo `ρ / (1 − ρ F_dr,int)` of the
+    /// spectrum `id` (`simd_tracer::shading::material::nonlinear_albedo`).
+    pub(crate) fn nonlinear_albedo(
+        &self,
+        at: &Spot,
+        id: SpectrumId,
+        fdr_inside: f32,
+    ) -> Result<simd_tracer::spectra::SpectrumSource, CliError> {
+        let spectrum = self.prepared(at, id)?;
+        Ok(simd_tracer::shading::material::nonlinear_albedo(
+            &spectrum, fdr_inside,
+        ))
     }
 
     /// Warns about defined materials that nothing referred to.

@@ -27,9 +27,10 @@ use super::named_ior::{named_ior, names};
 use super::properties::{Object, Value};
 use super::spectra::{SpectrumUse, zero_outside};
 use crate::error::CliError;
-use crate::scene_file::construction::coated;
+use crate::scene_file::source::Spot;
 use simd_tracer::ids::SpectrumId;
-use simd_tracer::shading::material::{Albedo, Bsdf, Material, Sides};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material, MitsubaPlastic, Sides};
+use simd_tracer::shading::microfacet::{Distribution, Microfacet};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::Ior;
 
@@ -156,14 +157,7 @@ impl<'e> Importer<'e, '_> {
                 let eta = self.relative_ior(&object, DEFAULT_DIELECTRIC_INT_IOR)?;
                 (self.cx.thin_dielectric(&spot, eta as f32)?, false)
             }
-            "plastic" | "roughplastic" => {
-                let rough = self.roughness(&object)?;
-                self.unit_factor(&object, "specular_reflectance")?;
-                let eta = self.relative_ior(&object, DEFAULT_PLASTIC_INT_IOR)?;
-                let nonlinear = object.boolean("nonlinear", false)?;
-                let albedo = self.albedo(&object, "diffuse_reflectance")?;
-                (plastic(albedo, eta, rough, nonlinear), true)
-            }
+            "plastic" | "roughplastic" => (self.plastic(&object, &spot)?, true),
             "twosided" => {
                 let nested = object.objects();
                 let inner = match nested.as_slice() {
@@ -209,6 +203,48 @@ impl<'e> Importer<'e, '_> {
             bsdf,
             one_sided,
         })
+    }
+
+    /// Mitsuba's `plastic` / `roughplastic` (`simd_tracer`'s
+    /// `MitsubaPlastic`): a nonlinear plastic needs a spectrum (its albedo
+    /// `ρ / (1 − ρ F_dr)` is tabulated), not a texture.
+    fn plastic(&mut self, object: &Object<'e>, spot: &Spot) -> Result<Bsdf, CliError> {
+        let rough = self.roughness(object)?;
+        let specular_scale = self.scalar(object, "specular_reflectance", 1.0)?;
+        if !(0.0..=1.0).contains(&specular_scale) {
+            return Err(object.error(format!(
+                "specular_reflectance {specular_scale}: must be in [0, 1]"
+            )));
+        }
+        let eta = self.relative_ior(object, DEFAULT_PLASTIC_INT_IOR)?;
+        let nonlinear = object.boolean("nonlinear", false)?;
+        let albedo = self.albedo(object, "diffuse_reflectance")?;
+        let albedo_mean = match albedo {
+            Albedo::Spectrum(id) => self.cx.spectrum_mean(id),
+            // The lobe choice only (not the expected image).
+            Albedo::Texture(_) => DEFAULT_REFLECTANCE,
+        };
+        let prepared = MitsubaPlastic {
+            eta: eta as f32,
+            microfacet: rough.coat(),
+            specular_scale: specular_scale as f32,
+            nonlinear,
+            albedo_mean: albedo_mean as f32,
+        }
+        .prepare();
+        let albedo = match (nonlinear, albedo) {
+            (false, albedo) => albedo,
+            (true, Albedo::Spectrum(id)) => {
+                let source = self.cx.nonlinear_albedo(spot, id, prepared.fdr_inside)?;
+                Albedo::Spectrum(self.cx.add_spectrum(spot, source)?)
+            }
+            (true, Albedo::Texture(_)) => {
+                return Err(
+                    object.error("nonlinear with a textured diffuse_reflectance is not supported")
+                );
+            }
+        };
+        Ok(prepared.bsdf(albedo))
     }
 
     /// `alpha` (or `alpha_u`/`alpha_v`) and `distribution` of a rough BSDF;
@@ -411,33 +447,33 @@ impl<'e> Importer<'e, '_> {
     }
 }
 
-/// The microfacet distribution of a rough BSDF.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Distribution {
-    Ggx,
-    Beckmann,
+impl Roughness {
+    /// Mitsuba's microfacet model (separable shadowing); smooth below
+    /// our mirror threshold.
+    fn microfacet(self) -> Microfacet {
+        Microfacet::mitsuba(self.alpha, self.distribution)
+    }
+
+    /// The rough coat of a `roughplastic`, `None` for a smooth one.
+    fn coat(self) -> Option<Microfacet> {
+        (self.alpha > 0.0).then(|| self.microfacet())
+    }
 }
 
 fn conductor(fresnel: simd_tracer::ids::AngularId, rough: Roughness) -> Bsdf {
-    let _ = rough.distribution;
     Bsdf::Conductor {
         fresnel,
-        roughness: rough.alpha,
+        microfacet: rough.microfacet(),
     }
 }
 
 fn dielectric(
     importer: &mut Importer<'_, '_>,
-    spot: &crate::scene_file::source::Spot,
+    spot: &Spot,
     eta: f64,
     rough: Roughness,
 ) -> Result<Bsdf, CliError> {
     importer
         .cx
-        .dielectric(spot, Ior::Constant(eta), rough.alpha)
-}
-
-fn plastic(albedo: Albedo, eta: f64, rough: Roughness, nonlinear: bool) -> Bsdf {
-    let _ = nonlinear;
-    coated(albedo, Ior::Constant(eta), rough.alpha)
+        .dielectric(spot, Ior::Constant(eta), rough.microfacet())
 }

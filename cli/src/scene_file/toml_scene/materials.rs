@@ -10,6 +10,7 @@ use crate::scene_file::toml_reader::{Item, Table};
 use crate::texture_file::TextureUse;
 use simd_tracer::ids::MaterialId;
 use simd_tracer::shading::material::{Albedo, Bsdf, Material, Sides};
+use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
 use spectral_core::table::MAX_LAYERS;
@@ -369,7 +370,7 @@ impl Loader<'_> {
         let fresnel = self.cx.conductor_fresnel(&table.spot(), &origin, n, k)?;
         Ok(Bsdf::Conductor {
             fresnel,
-            roughness: self.roughness(table)?,
+            microfacet: Microfacet::ggx(self.roughness(table)?),
         })
     }
 
@@ -377,14 +378,15 @@ impl Loader<'_> {
         let item = table.require(&self.src, "ior", "a dielectric needs `ior`")?;
         let ior = self.ior(&item, true)?;
         let roughness = self.roughness(table)?;
-        self.cx.dielectric(&table.spot(), ior, roughness)
+        self.cx
+            .dielectric(&table.spot(), ior, Microfacet::ggx(roughness))
     }
 
     fn coated(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
         let albedo = self.albedo(table, "coated")?;
         let item = table.require(&self.src, "ior", "a coated material needs `ior`")?;
         let ior = self.ior(&item, false)?;
-        Ok(coated(albedo, ior, self.roughness(table)?))
+        Ok(coated(albedo, ior, Microfacet::ggx(self.roughness(table)?)))
     }
 
     fn thin_film(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
@@ -548,7 +550,10 @@ impl Loader<'_> {
                     thickness_range_nm: (0.0, 0.0),
                 },
             )?;
-            return Ok(Bsdf::Conductor { fresnel, roughness });
+            return Ok(Bsdf::Conductor {
+                fresnel,
+                microfacet: Microfacet::ggx(roughness),
+            });
         }
         match (fixed, texture, range) {
             (Some(t), None, None) => {
@@ -561,7 +566,10 @@ impl Loader<'_> {
                         thickness_range_nm: (t, t),
                     },
                 )?;
-                Ok(Bsdf::Conductor { fresnel, roughness })
+                Ok(Bsdf::Conductor {
+                    fresnel,
+                    microfacet: Microfacet::ggx(roughness),
+                })
             }
             (None, Some(texture), Some(range)) => {
                 let r = range.numbers(&self.src, 2)?;

@@ -1,5 +1,5 @@
 //! Smooth and rough dielectric interfaces: the lobe choice, the smooth
-//! interface's reflection or refraction, and the rough (GGX) interface's
+//! interface's reflection or refraction, and the rough (microfacet) interface's
 //! evaluation, shared by the dielectric and the film materials; and the
 //! reflectance of a thin dielectric slab (two parallel interfaces).
 
@@ -7,7 +7,7 @@ use super::MaterialTables;
 use super::lane_spectrum::LaneSpectrum;
 use super::{BsdfEval, BsdfSample, angular_mean, angular_ref};
 use crate::ids::AngularId;
-use crate::shading::microfacet::{self};
+use crate::shading::microfacet::{self, Microfacet};
 use glam::Vec3;
 use spectral_core::optics::fresnel_dielectric;
 
@@ -113,12 +113,13 @@ pub(super) fn sample_smooth_interface(
 }
 
 /// Rough dielectric `f cos θ_i` and pdf (Walter et al. 2007, pbrt-v4's
-/// generalised half vector `m ∝ wo + η' wi`).
+/// generalised half vector `m ∝ wo + η' wi`), the model of Mitsuba 3.9.1's
+/// `roughdielectric` (`src/bsdfs/roughdielectric.cpp`) with its `G2`.
 pub(super) fn eval_rough_dielectric(
     tables: &MaterialTables<'_>,
     wo: Vec3,
     wi: Vec3,
-    alpha: f32,
+    model: &Microfacet,
     table: AngularId,
     eta: f32,
 ) -> BsdfEval {
@@ -138,9 +139,9 @@ pub(super) fn eval_rough_dielectric(
     }
     let p_reflect = reflect_probability(tables, table, None, cos_om, 0.0);
     let fresnel = angular_ref(table, cos_om, 0.0);
-    let d = microfacet::distribution(m, alpha);
-    let g = microfacet::g2(wo, wi, alpha);
-    let pdf_m = microfacet::visible_normal_pdf(wo, m, alpha);
+    let d = model.ndf(m);
+    let g = model.g2(wo, wi);
+    let pdf_m = model.visible_normal_pdf(wo, m);
     if reflection {
         BsdfEval {
             value: d * g / (4.0 * wo.z),

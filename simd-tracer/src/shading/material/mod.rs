@@ -10,9 +10,9 @@
 //! | BSDF | model |
 //! | --- | --- |
 //! | Lambert | `f = ρ/π`, cosine sampling (Shirley–Chiu), weight `ρ` |
-//! | Conductor | GGX (see [`crate::shading::microfacet`]) with visible-normal sampling, `f = D G2 F/(4 cos θo cos θi)`, weight `F G2/G1`; `α < 10⁻³` is a mirror (delta); `F` from an angular spectrum (Fourier table / exact) |
-//! | Dielectric | smooth (delta) or GGX (Walter et al. 2007) reflection and transmission; the lobe is chosen with the mean Fresnel `c_0` of the table (Fourier mode, and sampled mode without dispersion) and the throughput carries the spectral `F` or `1 − F`; transmitted radiance is scaled by `1/η²`; with a dispersive IOR and a hero wavelength, refraction follows the hero's IOR and terminates the secondary wavelengths |
-//! | Coated | a smooth or GGX dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic): specular `F(θo)` plus diffuse `ρ (1 − F_i)(1 − F_o)/(π η² (1 − F_dr,int))`, which conserves energy exactly for `ρ = 1` (the coat's Fresnel is achromatic, so it rides in the scalar part) |
+//! | Conductor | GGX or Beckmann (see [`crate::shading::microfacet`]) with visible-normal sampling, `f = D G2 F/(4 cos θo cos θi)`, weight `F G2/G1`; `α < 10⁻³` is a mirror (delta); `F` from an angular spectrum (Fourier table / exact) |
+//! | Dielectric | smooth (delta) or microfacet (Walter et al. 2007) reflection and transmission; the lobe is chosen with the mean Fresnel `c_0` of the table (Fourier mode, and sampled mode without dispersion) and the throughput carries the spectral `F` or `1 − F`; transmitted radiance is scaled by `1/η²`; with a dispersive IOR and a hero wavelength, refraction follows the hero's IOR and terminates the secondary wavelengths |
+//! | Coated | a smooth or rough dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic and roughplastic): specular `s F(θo)` plus diffuse `ρ T_i T_o/(π η² (1 − F_dr,int))` with the coat's transmittances `T` (flat `1 − F`, or tabulated for a rough coat) and optionally Mitsuba's nonlinear internal scattering; for the smooth coat and `ρ = 1` energy is conserved exactly (the coat's Fresnel is achromatic, so it rides in the scalar part); formulas in `coated.rs` |
 //! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
 //! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1; achromatic, delta, the same from both faces |
 //!
@@ -31,6 +31,7 @@
 //! triangles' shading records ([`crate::shading::surface`]).
 
 use crate::ids::{AngularId, SpectrumId, TextureId};
+use crate::shading::microfacet::Microfacet;
 use crate::spectra::SceneSpectrum;
 use crate::spectra::angular::AngularSpectrum;
 use crate::spectra::angular::{Ior, REFERENCE_WAVELENGTH_NM};
@@ -43,6 +44,12 @@ pub use lane_spectrum::{LaneSpectrum, SpectralRef};
 mod frame;
 pub use frame::{basis, sample_cosine, sample_cosine_x8};
 mod coated;
+pub use coated::{CoatParams, CoatTransmittance, LobeChoice, MIN_LOBE_PROBABILITY};
+mod plastic;
+pub use plastic::{
+    MitsubaPlastic, PreparedPlastic, ROUGH_COAT_ROWS, RoughCoat, diffuse_fresnel_fit,
+    nonlinear_albedo,
+};
 mod interface;
 pub use interface::thin_dielectric_reflectance;
 mod packet;
@@ -97,8 +104,8 @@ pub enum Bsdf {
     Conductor {
         /// Fresnel reflectance from outside.
         fresnel: AngularId,
-        /// GGX `α` (below 10⁻³: a mirror).
-        roughness: f32,
+        /// Roughness (smooth: a mirror).
+        microfacet: Microfacet,
     },
     /// A (rough) dielectric interface.
     Dielectric {
@@ -108,8 +115,8 @@ pub enum Bsdf {
         inside: AngularId,
         /// `n_inside / n_outside`.
         ior: Ior,
-        /// GGX `α` (below 10⁻³: smooth).
-        roughness: f32,
+        /// Roughness (smooth: a delta interface).
+        microfacet: Microfacet,
     },
     /// A dielectric coat over a Lambertian base.
     Coated {
@@ -117,10 +124,12 @@ pub enum Bsdf {
         albedo: Albedo,
         /// Coat index (constant).
         ior: f32,
-        /// Coat GGX `α` (below 10⁻³: smooth).
-        roughness: f32,
+        /// Coat roughness (smooth: a delta specular lobe).
+        microfacet: Microfacet,
         /// Diffuse Fresnel reflectance of the coat seen from inside.
         fdr_inside: f32,
+        /// Internal scattering, specular scale, lobe choice, transmittance.
+        params: CoatParams,
     },
     /// A thin dielectric slab (module docs), the same from both faces.
     ThinDielectric {
@@ -384,8 +393,9 @@ mod tests {
 
     /// `eval_packet` and `sample_packet` against `Bsdf::eval` and
     /// `Bsdf::sample` lane by lane, for all-Lambert packets (the 8-wide
-    /// path) and packets with a coated or a thin-dielectric lane (the
-    /// per-lane path), with `wo`
+    /// path) and packets with other lanes (a GGX coat, a thin dielectric, a
+    /// Beckmann roughplastic and a Beckmann conductor: the per-lane path),
+    /// with `wo`
     /// strictly above each lane's normal (as the integrator provides it).
     #[test]
     fn packet_bsdfs_match_the_scalar_oracle() -> Result<(), Box<dyn std::error::Error>> {
@@ -394,20 +404,49 @@ mod tests {
         use crate::spectra::SpectrumSource;
         let mut b = SceneBuilder::new(spectral_core::SpectralRange::VISIBLE);
         let grey = b.add_spectrum("grey", SpectrumSource::Constant(0.5))?;
+        let grey_spectrum = Box::new(b.spectrum(grey).cloned().ok_or("grey")?);
+        let metal = b.add_angular(
+            "metal",
+            crate::spectra::angular::AngularFunction::Conductor {
+                n: grey_spectrum.clone(),
+                k: grey_spectrum,
+                outside: 1.0,
+            },
+        )?;
         let lambert = b.add_material(Material::lambert("grey", grey));
         b.add_triangle([Vec3::ZERO, Vec3::X, Vec3::Y], lambert);
         b.set_camera(Camera::look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 40.0)?);
         let scene = b.build()?;
+        let beckmann_metal = Bsdf::Conductor {
+            fresnel: metal,
+            microfacet: Microfacet::mitsuba(
+                0.3,
+                crate::shading::microfacet::Distribution::Beckmann,
+            ),
+        };
         let lambert = Bsdf::Lambert {
             albedo: Albedo::Spectrum(grey),
         };
         let coated = Bsdf::Coated {
             albedo: Albedo::Spectrum(grey),
             ior: 1.5,
-            roughness: 0.2,
+            microfacet: Microfacet::ggx(0.2),
             fdr_inside: 0.6,
+            params: CoatParams::default(),
         };
         let thin = Bsdf::ThinDielectric { eta: 1.5 };
+        let rough_plastic = MitsubaPlastic {
+            eta: 1.5,
+            microfacet: Some(Microfacet::mitsuba(
+                0.2,
+                crate::shading::microfacet::Distribution::Beckmann,
+            )),
+            specular_scale: 0.7,
+            nonlinear: false,
+            albedo_mean: 0.5,
+        }
+        .prepare()
+        .bsdf(Albedo::Spectrum(grey));
         let mut rng = Rng::new(77, 3);
         for round in 0..1000 {
             let normals: [Vec3; LANES] = core::array::from_fn(|_| random_unit(&mut rng));
@@ -426,6 +465,8 @@ mod tests {
                 Some(match (round % 3, lane) {
                     (1, 3) => &coated,
                     (2, 5) => &thin,
+                    (1, 5) => &rough_plastic,
+                    (1, 6) => &beckmann_metal,
                     _ => &lambert,
                 })
             });

@@ -2,7 +2,7 @@
 //! packet forms).
 
 use super::MaterialTables;
-use super::coated::CoatLobes;
+use super::coated::{CoatLobes, CoatSpec};
 use super::frame::{Frame, sample_cosine};
 use super::interface::{
     SmoothInterface, eval_rough_dielectric, reflect_probability, sample_smooth_interface,
@@ -10,7 +10,7 @@ use super::interface::{
 };
 use super::lane_spectrum::LaneSpectrum;
 use super::{Bsdf, BsdfEval, BsdfSample, ShadingPoint, angular_ref, direction_ior};
-use crate::shading::microfacet::{self, SMOOTH_ALPHA};
+use crate::shading::microfacet;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -42,8 +42,11 @@ impl Bsdf {
                     terminate_secondary: false,
                 })
             }
-            Self::Conductor { fresnel, roughness } => {
-                if *roughness < SMOOTH_ALPHA {
+            Self::Conductor {
+                fresnel,
+                microfacet: model,
+            } => {
+                if model.is_smooth() {
                     let wi = microfacet::reflect(wo, p.n);
                     return Some(BsdfSample {
                         wi,
@@ -53,8 +56,7 @@ impl Bsdf {
                         terminate_secondary: false,
                     });
                 }
-                let alpha = *roughness;
-                let m = microfacet::sample_visible_normal(wo_local, alpha, u, v);
+                let m = model.sample_visible_normal(wo_local, u, v);
                 let wi_local = microfacet::reflect(wo_local, m);
                 if wi_local.z <= 0.0 {
                     return None;
@@ -62,9 +64,8 @@ impl Bsdf {
                 let cos_om = wo_local.dot(m);
                 Some(BsdfSample {
                     wi: frame.to_world(wi_local),
-                    pdf: microfacet::visible_normal_pdf(wo_local, m, alpha) / (4.0 * cos_om),
-                    weight: microfacet::g2(wo_local, wi_local, alpha)
-                        / microfacet::g1(wo_local, alpha),
+                    pdf: model.visible_normal_pdf(wo_local, m) / (4.0 * cos_om),
+                    weight: model.g2(wo_local, wi_local) / model.g1(wo_local),
                     spectrum: LaneSpectrum::of(angular_ref(*fresnel, cos_om, 0.0)),
                     terminate_secondary: false,
                 })
@@ -73,7 +74,7 @@ impl Bsdf {
                 outside,
                 inside,
                 ior,
-                roughness,
+                microfacet: model,
             } => {
                 let (ior_value, dispersed) = direction_ior(ior, p.hero_nm);
                 let (table, eta) = if p.front {
@@ -81,7 +82,7 @@ impl Bsdf {
                 } else {
                     (*inside, 1.0 / ior_value)
                 };
-                if *roughness < SMOOTH_ALPHA {
+                if model.is_smooth() {
                     let interface = SmoothInterface {
                         r: table,
                         t: None,
@@ -93,15 +94,14 @@ impl Bsdf {
                         tables, p.n, wo, wo_local.z, u_lobe, &interface,
                     );
                 }
-                let alpha = *roughness;
-                let m = microfacet::sample_visible_normal(wo_local, alpha, u, v);
+                let m = model.sample_visible_normal(wo_local, u, v);
                 let cos_om = wo_local.dot(m);
                 if cos_om <= 0.0 {
                     return None;
                 }
                 let p_reflect = reflect_probability(tables, table, None, cos_om, 0.0);
                 let fresnel = angular_ref(table, cos_om, 0.0);
-                let pdf_m = microfacet::visible_normal_pdf(wo_local, m, alpha);
+                let pdf_m = model.visible_normal_pdf(wo_local, m);
                 if u_lobe < p_reflect {
                     let wi_local = microfacet::reflect(wo_local, m);
                     if wi_local.z <= 0.0 {
@@ -110,9 +110,7 @@ impl Bsdf {
                     Some(BsdfSample {
                         wi: frame.to_world(wi_local),
                         pdf: p_reflect * pdf_m / (4.0 * cos_om),
-                        weight: microfacet::g2(wo_local, wi_local, alpha)
-                            / microfacet::g1(wo_local, alpha)
-                            / p_reflect,
+                        weight: model.g2(wo_local, wi_local) / model.g1(wo_local) / p_reflect,
                         spectrum: LaneSpectrum::of(fresnel),
                         terminate_secondary: false,
                     })
@@ -127,22 +125,16 @@ impl Bsdf {
                     Some(BsdfSample {
                         wi: frame.to_world(wi_local),
                         pdf: p_transmit * pdf_m * cos_im.abs() / denominator,
-                        weight: microfacet::g2(wo_local, wi_local, alpha)
-                            / (microfacet::g1(wo_local, alpha) * eta * eta * p_transmit),
+                        weight: model.g2(wo_local, wi_local)
+                            / (model.g1(wo_local) * eta * eta * p_transmit),
                         spectrum: LaneSpectrum::complement(fresnel),
                         terminate_secondary: dispersed,
                     })
                 }
             }
-            Self::Coated {
-                albedo,
-                ior,
-                roughness,
-                fdr_inside,
-            } => {
-                let coat = CoatLobes::new(tables, albedo, *ior, *roughness, *fdr_inside, p.uv);
-                coat.sample(frame, wo_local, u_lobe, u, v)
-            }
+            Self::Coated { .. } => self
+                .coat(tables, p)
+                .and_then(|coat| coat.sample(frame, wo_local, u_lobe, u, v)),
             Self::ThinDielectric { eta } => {
                 // Lobe by `R'`: each weight `R'/R'` or `(1 − R')/(1 − R')`
                 // is exactly 1 (`u_lobe < R'` keeps the chosen lobe's
@@ -223,30 +215,32 @@ impl Bsdf {
                     pdf: wi_local.z * FRAC_1_PI,
                 }
             }
-            Self::Conductor { fresnel, roughness } => {
-                if *roughness < SMOOTH_ALPHA || wi_local.z <= 0.0 {
+            Self::Conductor {
+                fresnel,
+                microfacet: model,
+            } => {
+                if model.is_smooth() || wi_local.z <= 0.0 {
                     return BsdfEval::ZERO;
                 }
-                let alpha = *roughness;
                 let m = (wo_local + wi_local).normalize();
                 let cos_om = wo_local.dot(m);
                 if cos_om.is_nan() || cos_om <= 0.0 {
                     return BsdfEval::ZERO;
                 }
-                let d = microfacet::distribution(m, alpha);
+                let d = model.ndf(m);
                 BsdfEval {
-                    value: d * microfacet::g2(wo_local, wi_local, alpha) / (4.0 * wo_local.z),
+                    value: d * model.g2(wo_local, wi_local) / (4.0 * wo_local.z),
                     spectrum: LaneSpectrum::of(angular_ref(*fresnel, cos_om, 0.0)),
-                    pdf: microfacet::visible_normal_pdf(wo_local, m, alpha) / (4.0 * cos_om),
+                    pdf: model.visible_normal_pdf(wo_local, m) / (4.0 * cos_om),
                 }
             }
             Self::Dielectric {
                 outside,
                 inside,
                 ior,
-                roughness,
+                microfacet: model,
             } => {
-                if *roughness < SMOOTH_ALPHA || wi_local.z == 0.0 {
+                if model.is_smooth() || wi_local.z == 0.0 {
                     return BsdfEval::ZERO;
                 }
                 let (ior_value, _) = direction_ior(ior, p.hero_nm);
@@ -255,16 +249,37 @@ impl Bsdf {
                 } else {
                     (*inside, 1.0 / ior_value)
                 };
-                eval_rough_dielectric(tables, wo_local, wi_local, *roughness, table, eta)
+                eval_rough_dielectric(tables, wo_local, wi_local, model, table, eta)
             }
-            Self::Coated {
-                albedo,
-                ior,
-                roughness,
-                fdr_inside,
-            } => CoatLobes::new(tables, albedo, *ior, *roughness, *fdr_inside, p.uv)
-                .eval(wo_local, wi_local),
+            Self::Coated { .. } => self
+                .coat(tables, p)
+                .map_or(BsdfEval::ZERO, |coat| coat.eval(wo_local, wi_local)),
             Self::ThinFilm { .. } | Self::ThinDielectric { .. } => BsdfEval::ZERO,
         }
+    }
+}
+
+impl Bsdf {
+    /// The lobes of a coated BSDF at `p` (`None` for other BSDFs).
+    fn coat<'a>(&'a self, tables: &MaterialTables<'_>, p: &ShadingPoint) -> Option<CoatLobes<'a>> {
+        let Self::Coated {
+            albedo,
+            ior,
+            microfacet,
+            fdr_inside,
+            params,
+        } = self
+        else {
+            return None;
+        };
+        let spec = CoatSpec {
+            albedo,
+            eta: *ior,
+            microfacet: *microfacet,
+            fdr_inside: *fdr_inside,
+            params,
+            uv: p.uv,
+        };
+        Some(CoatLobes::new(tables, &spec))
     }
 }
