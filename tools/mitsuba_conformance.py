@@ -176,12 +176,13 @@ GREYS = [
 def led_spd():
     """A white-LED-like radiance: a blue emitter line (450 nm, 12 nm
     standard deviation) and a broad phosphor band (570 nm, 55 nm), 0 at
-    380 and 780 nm, sampled every 10 nm."""
+    380 and 780 nm, sampled every 10 nm; about as bright as the stage's
+    RGB light."""
     lines = ["# White-LED-like radiance for the conformance scene spectrum_spd_file.",
              "# Written by tools/mitsuba_conformance.py: wavelength (nm), value."]
     for wavelength in range(380, 781, 10):
-        blue = 22.0 * math.exp(-0.5 * ((wavelength - 450) / 12.0) ** 2)
-        phosphor = 14.0 * math.exp(-0.5 * ((wavelength - 570) / 55.0) ** 2)
+        blue = 3.0 * math.exp(-0.5 * ((wavelength - 450) / 12.0) ** 2)
+        phosphor = 1.95 * math.exp(-0.5 * ((wavelength - 570) / 55.0) ** 2)
         edge = 0.0 if wavelength in (380, 780) else 1.0
         lines.append(f"{wavelength} {edge * (blue + phosphor):.4f}")
     return "\n".join(lines) + "\n"
@@ -233,8 +234,12 @@ def write_assets():
 
 # ----------------------------------------------------------------- metrics
 # The same comparison as cli/tests/mitsuba_conformance.rs: image-mean
-# channel ratios, and CIEDE2000 of 8 x 8-pixel block means in CIELAB with
-# the white of linear sRGB (1, 1, 1), i.e. D65 with Y = 1.
+# channel ratios, and CIEDE2000 of 8 x 8-pixel block means of the image as
+# displayed (each channel clamped to [0, DISPLAY_WHITE]) in CIELAB with the
+# white of linear sRGB (1, 1, 1), i.e. D65 with Y = 1.
+
+#: Linear sRGB value shown as white (the clamp of the ΔE comparison).
+DISPLAY_WHITE = 1.0
 
 LINEAR_SRGB_TO_XYZ = np.array([
     [0.4123908, 0.3575843, 0.1804808],
@@ -306,7 +311,8 @@ def block_means(image):
 def metrics(image, reference):
     """Image-mean channel ratios and the mean and largest block ΔE2000."""
     ratios = image.reshape(-1, 3).mean(0) / reference.reshape(-1, 3).mean(0)
-    de = delta_e2000(lab(block_means(image)), lab(block_means(reference)))
+    displayed = [np.clip(x, 0.0, DISPLAY_WHITE) for x in (image, reference)]
+    de = delta_e2000(lab(block_means(displayed[0])), lab(block_means(displayed[1])))
     return {"ratios": [float(r) for r in ratios], "mean_de": float(de.mean()),
             "max_de": float(de.max())}
 
