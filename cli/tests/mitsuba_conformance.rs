@@ -65,17 +65,23 @@
 //! * M: Mitsuba's own noise at [`SPP`], 8 seeds against the reference
 //!   (`tools/mitsuba_conformance.py --only calibrate`, `noise` in the
 //!   manifest);
-//! * F: fspec's, by `fspec_noise` (8 seeds, each against the mean of the
-//!   others) on a TOML twin of the scene — the same geometry, lights,
+//! * F: fspec's, by `fspec_noise_on_twins` (8 seeds, each against the
+//!   mean of the others) on a TOML twin of the scene
+//!   (`cli/tests/conformance/twins/NAME.toml`) — the same geometry, lights,
 //!   camera and depth written in fspec's own format, materials as close as
 //!   it allows (fspec's measured gold and copper for `Au` and `Cu`,
-//!   `coated` for the plastics, GGX for Beckmann). Scenes that TOML cannot
+//!   `coated` for the plastics, GGX for Beckmann; each file says how it
+//!   differs). Scenes that TOML cannot
 //!   state (filters, crop window, twosided, raw textures, instances of a
 //!   group, absolute blackbodies, OBJ vertex normals, thin dielectrics)
 //!   have M only.
 //!
 //! fspec's noise is 2–6 times lower than Mitsuba's on the open scenes (no
-//! wavelength sampling noise) and close to it in the stage. Once the files
+//! wavelength sampling noise) and close to it in the stage. The twins also
+//! previewed the comparison: rendered by fspec at [`SPP`] they pass their
+//! scenes' tolerances, except where the twin is known to differ (plastic
+//! `nonlinear`, Beckmann, the unnormalised rotation axis, the spectrum
+//! zero outside its range), which fail. Once the files
 //! load, `noise_over_seeds` (ignored: a measurement, not a check) prints
 //! fspec's rows on the scenes themselves, in the table's format, to replace
 //! the F part (keep the larger of the two).
@@ -739,4 +745,21 @@ fn fspec_noise(path: &Path, reference: &Image) -> TestResult<(Noise, Vec<Compari
         max_de_sigma,
     };
     Ok((noise, against_reference))
+}
+
+/// fspec's noise on the TOML twins of the scenes (`conformance/twins/`,
+/// module docs), printed as rows of the table in [`conformance!`]: the F
+/// part of its numbers (`cargo test -p cli --test mitsuba_conformance --
+/// --ignored --nocapture fspec_noise_on_twins`).
+#[test]
+#[ignore = "measurement, not a check"]
+fn fspec_noise_on_twins() -> TestResult {
+    let dir = suite_dir().join("twins");
+    for name in entries(&dir)? {
+        if let Some(scene) = name.strip_suffix(".toml") {
+            let (noise, _) = fspec_noise(&dir.join(&name), &reference(scene)?)?;
+            println!("{}", noise.row(scene));
+        }
+    }
+    Ok(())
 }
