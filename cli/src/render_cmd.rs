@@ -377,7 +377,7 @@ const DEFAULT_RR_DEPTH: u32 = 5;
 
 /// The filter a scene file names (Mitsuba's Gaussian of σ 0.5 px is our
 /// tabulated default, bit for bit).
-fn filter_of(choice: FilterChoice) -> Result<Filter, CliError> {
+pub fn filter_of(choice: FilterChoice) -> Result<Filter, CliError> {
     match choice {
         FilterChoice::Box => Ok(Filter::Box),
         FilterChoice::Tent { radius_px } => Filter::tent(radius_px),

@@ -267,10 +267,18 @@ pub struct CropWindow {
     pub height: u32,
 }
 
-/// Parses and validates a scene file (module docs); every reference is
-/// checked; textures and OBJ files are loaded. The builder is returned
+/// Parses and validates a scene file (module docs; a `.xml` file is read
+/// as a Mitsuba 3 scene with default [`MitsubaOptions`]); every reference
+/// is checked; textures and OBJ files are loaded. The builder is returned
 /// un-built (call `.build()`); the range is 360–830 nm.
 pub fn load_scene_file(path: &Path) -> Result<LoadedScene, CliError> {
+    let xml = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    if xml {
+        return load_mitsuba_scene(path, &MitsubaOptions::default());
+    }
     let text = read_text(path, MAX_SCENE_FILE_BYTES)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     load_scene_text(&path.display().to_string(), &text, Some(dir))

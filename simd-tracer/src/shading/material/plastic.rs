@@ -156,7 +156,7 @@ pub fn diffuse_fresnel_fit(eta: f32) -> f32 {
 }
 
 /// The albedo of a nonlinear coat, `ρ/(1 − ρ F_dr,int)` at every
-/// [`NONLINEAR_ALBEDO_STEP_NM`] over the spectrum's range (linear between,
+/// `NONLINEAR_ALBEDO_STEP_NM` (1 nm) over the spectrum's range (linear between,
 /// like every tabulated spectrum), to be added to the scene as the
 /// material's albedo.
 pub fn nonlinear_albedo(albedo: &SceneSpectrum, fdr_inside: f32) -> SpectrumSource {
