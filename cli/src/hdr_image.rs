@@ -1030,6 +1030,37 @@ mod tests {
         std::fs::remove_dir_all(dir).unwrap();
     }
 
+    /// `tests/data/two-colours-8x8.jpg` (written by Mitsuba 3.9.1's
+    /// `Bitmap.write` from 8-bit sRGB values (200, 40, 40) left and
+    /// (40, 40, 200) right): decoded within JPEG's error, sRGB-decoded or raw.
+    #[test]
+    fn jpeg_files_load_decoded_or_raw() -> Result<(), CliError> {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/two-colours-8x8.jpg");
+        let srgb = load_rgb_image(&path)?;
+        let raw = load_rgb_image_as(&path, super::Encoding::Raw)?;
+        assert_eq!((srgb.width, srgb.height), (8, 8));
+        // JPEG's chroma subsampling blurs the edge: check columns 0-1, 6-7.
+        let tolerance = 10.0 / 255.0;
+        for row in 0..8 {
+            for (column, expected) in [(0, [200.0, 40.0, 40.0]), (7, [40.0, 40.0, 200.0])] {
+                let i = row * 8 + column;
+                for c in 0..3 {
+                    let stored = expected[c] / 255.0;
+                    assert!(
+                        (raw.texels[i][c] - stored).abs() < tolerance,
+                        "{:?}",
+                        raw.texels[i]
+                    );
+                    let linear = srgb_decode(f64::from(raw.texels[i][c])) as f32;
+                    assert!((srgb.texels[i][c] - linear).abs() < 1e-6);
+                }
+            }
+        }
+        // The decoding is applied: sRGB 200/255 is 0.58 linear, not 0.78.
+        assert!(srgb.texels[0][0] < 0.65 && raw.texels[0][0] > 0.7);
+        Ok(())
+    }
+
     #[test]
     fn rgbe_files_load_and_errors_name_the_path() {
         let dir = scratch("rgbe");
@@ -1051,7 +1082,7 @@ mod tests {
         let text = dir.join("notes.hdr");
         std::fs::write(&text, "hello").unwrap();
         let message = load_rgb_image(&text).unwrap_err().to_string();
-        assert!(message.contains("not a Radiance HDR (RGBE), OpenEXR or PNG file"));
+        assert!(message.contains("not a Radiance HDR (RGBE), OpenEXR, PNG or JPEG file"));
         let message = load_rgb_image(&dir.join("missing.hdr"))
             .unwrap_err()
             .to_string();
