@@ -1044,8 +1044,8 @@ mod tests {
         for row in 0..8 {
             for (column, expected) in [(0, [200.0, 40.0, 40.0]), (7, [40.0, 40.0, 200.0])] {
                 let i = row * 8 + column;
-                for c in 0..3 {
-                    let stored = expected[c] / 255.0;
+                for (c, value) in expected.iter().enumerate() {
+                    let stored = value / 255.0;
                     assert!(
                         (raw.texels[i][c] - stored).abs() < tolerance,
                         "{:?}",
