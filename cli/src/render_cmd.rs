@@ -328,12 +328,7 @@ fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSe
         return Err(CliError::input("--threads must be at least 1"));
     }
     // The flag wins over the scene's crop window (Mitsuba's film crop).
-    let scene_crop = defaults.crop.map(|c| PixelWindow {
-        x: c.x,
-        y: c.y,
-        width: c.width,
-        height: c.height,
-    });
+    let scene_crop = defaults.crop.map(PixelWindow::from);
     let window = match args.crop {
         Some(window) => Some(
             window

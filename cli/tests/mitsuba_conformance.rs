@@ -375,12 +375,7 @@ fn settings(defaults: &RenderDefaults, seed: u64) -> TestResult<RenderSettings> 
         },
         threads: Some(THREADS),
         time_limit: None,
-        window: defaults.crop.map(|c| PixelWindow {
-            x: c.x,
-            y: c.y,
-            width: c.width,
-            height: c.height,
-        }),
+        window: defaults.crop.map(PixelWindow::from),
     })
 }
 

@@ -384,3 +384,14 @@ pub fn load_obj_scene(path: &Path) -> Result<LoadedScene, CliError> {
         instances: InstanceCount::default(),
     })
 }
+
+impl From<CropWindow> for simd_tracer::render::PixelWindow {
+    fn from(c: CropWindow) -> Self {
+        Self {
+            x: c.x,
+            y: c.y,
+            width: c.width,
+            height: c.height,
+        }
+    }
+}

@@ -42,6 +42,22 @@ pub(crate) struct Mesher {
 }
 
 impl Mesher {
+    /// Why the scene cannot render when no triangle was kept (`empty` says
+    /// what to add, in the front end's words); `None` when some were.
+    pub(crate) fn no_geometry(&self, empty: &str) -> Option<String> {
+        if self.triangles > 0 {
+            return None;
+        }
+        Some(if self.degenerate > 0 {
+            format!(
+                "the scene has no usable triangle ({} degenerate ones skipped)",
+                self.degenerate
+            )
+        } else {
+            empty.to_string()
+        })
+    }
+
     /// Adds a triangle; `false` if the builder will skip it as degenerate.
     pub(crate) fn triangle(
         &mut self,

@@ -366,16 +366,7 @@ impl<'e> Importer<'e, '_> {
                 "the scene has no <integrator> (Mitsuba refuses to render it): rendering with path's defaults (max_depth -1, rr_depth 5)",
             );
         }
-        let mesher = self.cx.mesher();
-        if mesher.triangles == 0 {
-            let message = if mesher.degenerate > 0 {
-                format!(
-                    "the scene has no usable triangle ({} degenerate ones skipped)",
-                    mesher.degenerate
-                )
-            } else {
-                "the scene has no shape".to_string()
-            };
+        if let Some(message) = self.cx.mesher().no_geometry("the scene has no shape") {
             return Err(root.error(message));
         }
         let mut unused: Vec<(&str, &Element)> = self

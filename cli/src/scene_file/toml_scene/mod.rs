@@ -109,16 +109,11 @@ impl Loader<'_> {
         if let Some(item) = root.get("lights") {
             self.lights_section(&item)?;
         }
-        let mesher = self.cx.mesher();
-        if mesher.triangles == 0 {
-            let message = if mesher.degenerate > 0 {
-                format!(
-                    "the scene has no usable triangle ({} degenerate ones skipped)",
-                    mesher.degenerate
-                )
-            } else {
-                "the scene has no geometry (add [[meshes]], [[shapes]] or [[quads]])".to_string()
-            };
+        if let Some(message) = self
+            .cx
+            .mesher()
+            .no_geometry("the scene has no geometry (add [[meshes]], [[shapes]] or [[quads]])")
+        {
             return Err(self.src.error(&root.span, "meshes", message));
         }
         let unlit = self.cx.is_unlit();
