@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 use fspec_cli::CliError;
 use fspec_cli::experiment::{self, ExperimentArgs};
+use fspec_cli::merge_cmd::{self, MergeArgs};
 use fspec_cli::render_cmd::{self, RenderArgs};
 use fspec_cli::spectrum_cmd::{self, SpectrumArgs};
 use fspec_cli::train::{self, TrainArgs};
@@ -21,6 +22,10 @@ enum Command {
     /// Reproduce the paper's experiments (and three beyond it): CSV,
     /// Markdown and PNG plots in --out.
     Experiment(Box<ExperimentArgs>),
+    /// Merge partial films (.fspart) of one frame, rendered over disjoint
+    /// crops or pass ranges by separate processes or machines, into its
+    /// image (PNG, EXR, spectral EXR) or one partial film.
+    Merge(MergeArgs),
     /// Render a built-in scene, a TOML scene file or an OBJ to PNG/EXR.
     Render(Box<RenderArgs>),
     /// List the built-in scenes.
@@ -40,6 +45,11 @@ fn run(cli: &Cli) -> Result<ExitCode, CliError> {
     match &cli.command {
         Command::Experiment(args) => experiment::run(args, &mut out),
         Command::Render(args) => return render(args),
+        Command::Merge(args) => {
+            let summary = merge_cmd::run(args)?;
+            println!("{}", merge_cmd::summary_line(&summary));
+            Ok(())
+        }
         Command::Scenes => {
             print!("{}", fspec_cli::scene_source::list_scenes());
             Ok(())

@@ -14,14 +14,19 @@ use crate::error::CliError;
 use crate::image_out::{
     Exposure, Tone, XyzImage, write_by_extension, write_coefficients_exr, write_spectral_exr,
 };
+use crate::partial_file::{self, FrameIdentity, PartialFilm};
 use crate::scene_file::{FilterChoice, MitsubaOptions};
 use crate::scene_source::{SceneDefaults, resolve_scene};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
 use simd_tracer::film::filter::{Filter, GAUSSIAN_SIGMA_PX, TENT_RADIUS_PX};
 use simd_tracer::film::{AlphaMode, Buffer};
 use simd_tracer::integrator::IntegratorSettings;
-use simd_tracer::render::{PixelWindow, Progress, RenderResult, RenderSettings, render};
+use simd_tracer::render::{
+    FilmState, PassJob, PixelWindow, Progress, RenderResult, RenderSettings, render_passes,
+    resolve_state,
+};
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::SceneOptions;
 use simd_tracer::transport::{
@@ -77,7 +82,8 @@ pub enum TransportKind {
 }
 
 /// How the sampled wavelengths are chosen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Sampling {
     /// Independent uniform wavelengths.
     Uniform,
@@ -90,7 +96,8 @@ pub enum Sampling {
 }
 
 /// How coefficients become colour.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum ToColor {
     /// Reconstruct at the CIE table wavelengths (one cos per wavelength).
     Series,
@@ -103,7 +110,8 @@ pub enum ToColor {
 }
 
 /// Where samples are converted to colour.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum BufferKind {
     /// Per-pixel coefficient sums, converted once at the end.
     Spectral,
@@ -203,6 +211,19 @@ pub struct RenderArgs {
     /// --cv-alpha-per-pixel for exact crops).
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_window)]
     pub crop: Option<PixelWindow>,
+    /// Render only passes A..B (A included, B not) of the seeded sequence
+    /// instead of --spp passes from 0: parts of one frame rendered apart
+    /// (e.g. by a job array) merge exactly with `fspec merge` when written
+    /// as partial films (`--out part.fspart`).
+    #[arg(long, value_name = "A..B", value_parser = parse_passes, conflicts_with = "spp")]
+    pub passes: Option<std::ops::Range<u32>>,
+    /// Continue the render of this partial film (.fspart, written by an
+    /// earlier `--out part.fspart` that was stopped by --time-limit or
+    /// Ctrl-C) from its last pass up to --passes, or else to the passes it
+    /// was asked for; the scene and settings must be the same. The result
+    /// equals the uninterrupted render bit for bit.
+    #[arg(long, value_name = "PART.fspart", conflicts_with = "spp")]
+    pub resume: Option<PathBuf>,
     /// Worker threads (default: all cores; the image does not depend on it).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -210,7 +231,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub time_limit: Option<f64>,
     /// Output files; the format follows the extension (.png: 8-bit sRGB,
-    /// .exr: float linear sRGB). May be given several times.
+    /// .exr: float linear sRGB, .fspart: the film's sums for `fspec merge`
+    /// and --resume). May be given several times.
     /// Default: render.png and render.exr.
     #[arg(long = "out", short)]
     pub out: Vec<PathBuf>,
@@ -264,6 +286,25 @@ fn parse_window(text: &str) -> Result<PixelWindow, String> {
         width: number(width)?,
         height: number(height)?,
     })
+}
+
+/// `A..B` as the pass range `A .. B` (non-empty).
+fn parse_passes(text: &str) -> Result<std::ops::Range<u32>, String> {
+    let Some((start, end)) = text.split_once("..") else {
+        return Err(format!(
+            "{text}: expected A..B, passes A to B - 1 (e.g. 0..256)"
+        ));
+    };
+    let number = |part: &str| {
+        part.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("{text}: {part} is not a whole number of passes"))
+    };
+    let (start, end) = (number(start)?, number(end)?);
+    if start >= end {
+        return Err(format!("{text}: the range is empty (A must be below B)"));
+    }
+    Ok(start..end)
 }
 
 /// The built-in scene that `--illuminant` lights.
@@ -525,7 +566,8 @@ pub fn predict_memory(
         let bytes = match output_format(path) {
             Some(OutputFormat::Png) => per_pixel(PNG_BYTES_PER_PIXEL * PNG_COPIES),
             Some(OutputFormat::Exr) => exr(exr_channels),
-            None => 0,
+            // The film's state, kept beside the film and written as it is.
+            Some(OutputFormat::Partial) | None => 0,
         };
         writer = writer.max(bytes);
     }
@@ -625,26 +667,75 @@ impl Reporter {
 /// and of the transport, the memory prediction (or the refusal).
 type Preflight<'a> = &'a dyn Fn(u64, u64) -> Result<MemoryPrediction, CliError>;
 
-fn run_render<T: Transport>(
-    transport: &T,
-    scene: &Scene,
-    settings: &RenderSettings,
-    quiet: bool,
-    preflight: Preflight,
-) -> Result<(RenderResult, MemoryPrediction), CliError> {
-    let memory = preflight(
-        size_of::<simd_tracer::transport::FilmPixel<T>>() as u64,
-        size_of::<T>() as u64,
-    )?;
-    let reporter = Reporter::new(settings.spp, quiet);
-    let result = render(transport, scene, settings, &mut |p| reporter.update(p))
-        .map_err(|e| CliError::input(e.to_string()));
-    reporter.finish();
-    Ok((result?, memory))
+/// A transport and its sizes, as chosen on the command line and recorded
+/// in partial films (only what the transport reads: a Fourier render's
+/// wavelength options are not part of it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum TransportSpec {
+    /// N Fourier coefficients per path.
+    Fourier {
+        /// N.
+        coeffs: usize,
+        /// Where samples become colour.
+        buffer: BufferKind,
+        /// How coefficients become colour.
+        to_color: ToColor,
+    },
+    /// C sampled wavelengths per path.
+    Sampled {
+        /// C.
+        wavelengths: usize,
+        /// How the wavelengths are drawn.
+        sampling: Sampling,
+    },
+    /// Sampled wavelengths with the Fourier estimate as a control variate.
+    Cv {
+        /// C.
+        wavelengths: usize,
+        /// N.
+        coeffs: usize,
+        /// How the wavelengths are drawn.
+        sampling: Sampling,
+        /// `α` per pixel instead of pooled.
+        alpha_per_pixel: bool,
+    },
 }
 
-fn strategy(args: &RenderArgs) -> WavelengthStrategy {
-    match args.sampling {
+impl TransportSpec {
+    /// The transport `args` ask for (default wavelength counts filled in).
+    pub fn of(args: &RenderArgs) -> Self {
+        match args.transport {
+            TransportKind::Fourier => Self::Fourier {
+                coeffs: args.coeffs,
+                buffer: args.buffer,
+                to_color: args.to_color,
+            },
+            TransportKind::Sampled => Self::Sampled {
+                wavelengths: args.wavelengths.unwrap_or(4),
+                sampling: args.sampling,
+            },
+            TransportKind::Cv => Self::Cv {
+                wavelengths: args.wavelengths.unwrap_or(8),
+                coeffs: args.coeffs,
+                sampling: args.sampling,
+                alpha_per_pixel: args.cv_alpha_per_pixel,
+            },
+        }
+    }
+}
+
+/// Work that needs the transport's concrete type (its sizes are const
+/// generics): [`with_transport`] builds the transport and runs the task.
+pub trait TransportTask {
+    /// What the task gives.
+    type Output;
+    /// Runs with the built transport.
+    fn run<T: Transport>(self, transport: &T) -> Result<Self::Output, CliError>;
+}
+
+fn strategy(sampling: Sampling) -> WavelengthStrategy {
+    match sampling {
         Sampling::Uniform => WavelengthStrategy::Uniform,
         Sampling::Stratified => WavelengthStrategy::Stratified,
         Sampling::Hero => WavelengthStrategy::Hero,
@@ -652,8 +743,8 @@ fn strategy(args: &RenderArgs) -> WavelengthStrategy {
     }
 }
 
-fn route(args: &RenderArgs) -> XyzRoute {
-    match args.to_color {
+fn route(to_color: ToColor) -> XyzRoute {
+    match to_color {
         ToColor::Series => XyzRoute::Series,
         ToColor::Lut => XyzRoute::Lut,
         ToColor::Zeroth => XyzRoute::Zeroth,
@@ -661,97 +752,165 @@ fn route(args: &RenderArgs) -> XyzRoute {
     }
 }
 
-fn fourier<const N: usize>(
-    args: &RenderArgs,
-    scene: &Scene,
-    settings: &RenderSettings,
-    preflight: Preflight,
-) -> Result<(RenderResult, MemoryPrediction), CliError> {
-    let buffer = match args.buffer {
+fn range_error(e: spectral_core::SpectralError) -> CliError {
+    CliError::input(format!("spectral range: {e}"))
+}
+
+fn fourier<const N: usize, K: TransportTask>(
+    range: SpectralRange,
+    buffer: BufferKind,
+    to_color: ToColor,
+    task: K,
+) -> Result<K::Output, CliError> {
+    let buffer = match buffer {
         BufferKind::Spectral => Buffer::Spectral,
         BufferKind::Rgb => Buffer::Xyz,
     };
-    let transport = FourierTransport::<N>::new(scene.range(), buffer, route(args))
-        .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
-    run_render(&transport, scene, settings, args.quiet, preflight)
+    let transport =
+        FourierTransport::<N>::new(range, buffer, route(to_color)).map_err(range_error)?;
+    task.run(&transport)
 }
 
-fn sampled<const C: usize>(
-    args: &RenderArgs,
-    scene: &Scene,
-    settings: &RenderSettings,
-    preflight: Preflight,
-) -> Result<(RenderResult, MemoryPrediction), CliError> {
-    run_render(
-        &SampledTransport::<C>::new(scene.range(), strategy(args)),
-        scene,
-        settings,
-        args.quiet,
-        preflight,
-    )
+fn sampled<const C: usize, K: TransportTask>(
+    range: SpectralRange,
+    sampling: Sampling,
+    task: K,
+) -> Result<K::Output, CliError> {
+    task.run(&SampledTransport::<C>::new(range, strategy(sampling)))
 }
 
-fn cv<const C: usize, const N: usize>(
-    args: &RenderArgs,
-    scene: &Scene,
-    settings: &RenderSettings,
-    preflight: Preflight,
-) -> Result<(RenderResult, MemoryPrediction), CliError> {
-    let alpha = if args.cv_alpha_per_pixel {
+fn cv<const C: usize, const N: usize, K: TransportTask>(
+    range: SpectralRange,
+    sampling: Sampling,
+    alpha_per_pixel: bool,
+    task: K,
+) -> Result<K::Output, CliError> {
+    let alpha = if alpha_per_pixel {
         AlphaMode::PerPixel
     } else {
         AlphaMode::Shared
     };
-    let transport = ControlVariateTransport::<C, N>::new(scene.range(), strategy(args), alpha)
-        .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
-    run_render(&transport, scene, settings, args.quiet, preflight)
+    let transport = ControlVariateTransport::<C, N>::new(range, strategy(sampling), alpha)
+        .map_err(range_error)?;
+    task.run(&transport)
 }
 
-fn dispatch(
-    args: &RenderArgs,
-    scene: &Scene,
-    settings: &RenderSettings,
-    preflight: Preflight,
-) -> Result<(RenderResult, MemoryPrediction), CliError> {
+/// Builds the transport of `spec` over `range` and runs `task` with it;
+/// sizes that are not compiled in are refused.
+pub fn with_transport<K: TransportTask>(
+    spec: &TransportSpec,
+    range: SpectralRange,
+    task: K,
+) -> Result<K::Output, CliError> {
     let unsupported = |what: &str, value: usize, supported: &str| {
         Err(CliError::input(format!(
             "{what} {value} is not supported (supported: {supported})"
         )))
     };
-    match args.transport {
-        TransportKind::Fourier => match args.coeffs {
-            4 => fourier::<4>(args, scene, settings, preflight),
-            8 => fourier::<8>(args, scene, settings, preflight),
-            12 => fourier::<12>(args, scene, settings, preflight),
-            16 => fourier::<16>(args, scene, settings, preflight),
-            24 => fourier::<24>(args, scene, settings, preflight),
-            32 => fourier::<32>(args, scene, settings, preflight),
+    match *spec {
+        TransportSpec::Fourier {
+            coeffs,
+            buffer,
+            to_color,
+        } => match coeffs {
+            4 => fourier::<4, K>(range, buffer, to_color, task),
+            8 => fourier::<8, K>(range, buffer, to_color, task),
+            12 => fourier::<12, K>(range, buffer, to_color, task),
+            16 => fourier::<16, K>(range, buffer, to_color, task),
+            24 => fourier::<24, K>(range, buffer, to_color, task),
+            32 => fourier::<32, K>(range, buffer, to_color, task),
             n => unsupported("--coeffs", n, "4, 8, 12, 16, 24, 32"),
         },
-        TransportKind::Sampled => match args.wavelengths.unwrap_or(4) {
-            1 => sampled::<1>(args, scene, settings, preflight),
-            2 => sampled::<2>(args, scene, settings, preflight),
-            4 => sampled::<4>(args, scene, settings, preflight),
-            8 => sampled::<8>(args, scene, settings, preflight),
-            12 => sampled::<12>(args, scene, settings, preflight),
-            16 => sampled::<16>(args, scene, settings, preflight),
-            32 => sampled::<32>(args, scene, settings, preflight),
+        TransportSpec::Sampled {
+            wavelengths,
+            sampling,
+        } => match wavelengths {
+            1 => sampled::<1, K>(range, sampling, task),
+            2 => sampled::<2, K>(range, sampling, task),
+            4 => sampled::<4, K>(range, sampling, task),
+            8 => sampled::<8, K>(range, sampling, task),
+            12 => sampled::<12, K>(range, sampling, task),
+            16 => sampled::<16, K>(range, sampling, task),
+            32 => sampled::<32, K>(range, sampling, task),
             c => unsupported("--wavelengths", c, "1, 2, 4, 8, 12, 16, 32"),
         },
-        TransportKind::Cv => match (args.wavelengths.unwrap_or(8), args.coeffs) {
-            (4, 4) => cv::<4, 4>(args, scene, settings, preflight),
-            (4, 8) => cv::<4, 8>(args, scene, settings, preflight),
-            (4, 12) => cv::<4, 12>(args, scene, settings, preflight),
-            (8, 4) => cv::<8, 4>(args, scene, settings, preflight),
-            (8, 8) => cv::<8, 8>(args, scene, settings, preflight),
-            (8, 12) => cv::<8, 12>(args, scene, settings, preflight),
-            (12, 4) => cv::<12, 4>(args, scene, settings, preflight),
-            (12, 8) => cv::<12, 8>(args, scene, settings, preflight),
-            (12, 12) => cv::<12, 12>(args, scene, settings, preflight),
-            (c, n) => Err(CliError::input(format!(
-                "--transport cv with --wavelengths {c} --coeffs {n} is not supported (C and N in 4, 8, 12)"
-            ))),
-        },
+        TransportSpec::Cv {
+            wavelengths,
+            coeffs,
+            sampling,
+            alpha_per_pixel,
+        } => {
+            let a = alpha_per_pixel;
+            match (wavelengths, coeffs) {
+                (4, 4) => cv::<4, 4, K>(range, sampling, a, task),
+                (4, 8) => cv::<4, 8, K>(range, sampling, a, task),
+                (4, 12) => cv::<4, 12, K>(range, sampling, a, task),
+                (8, 4) => cv::<8, 4, K>(range, sampling, a, task),
+                (8, 8) => cv::<8, 8, K>(range, sampling, a, task),
+                (8, 12) => cv::<8, 12, K>(range, sampling, a, task),
+                (12, 4) => cv::<12, 4, K>(range, sampling, a, task),
+                (12, 8) => cv::<12, 8, K>(range, sampling, a, task),
+                (12, 12) => cv::<12, 12, K>(range, sampling, a, task),
+                (c, n) => Err(CliError::input(format!(
+                    "--transport cv with --wavelengths {c} --coeffs {n} is not supported (C and N in 4, 8, 12)"
+                ))),
+            }
+        }
+    }
+}
+
+/// Copies of a pixel's state alive at once when a render keeps or resumes
+/// one: the state read from the file and the state written at the end.
+const STATE_COPIES: u64 = 2;
+
+/// `fspec render`'s task: render the passes of `job`.
+struct RenderTask<'a> {
+    scene: &'a Scene,
+    settings: &'a RenderSettings,
+    quiet: bool,
+    preflight: Preflight<'a>,
+    job: PassJob<'a>,
+}
+
+impl TransportTask for RenderTask<'_> {
+    type Output = (RenderResult, Option<FilmState>, MemoryPrediction);
+
+    fn run<T: Transport>(self, transport: &T) -> Result<Self::Output, CliError> {
+        use simd_tracer::film::Film;
+        let film_pixel = size_of::<simd_tracer::transport::FilmPixel<T>>() as u64;
+        let state_pixel =
+            transport.film().state_len().unwrap_or(0) as u64 * size_of::<f64>() as u64;
+        let (resumes, keeps) = (self.job.resume.is_some(), self.job.keep_state);
+        // A resumed render also holds the pixels loaded from the state.
+        let pixel_bytes = film_pixel * (1 + u64::from(resumes))
+            + if resumes || keeps {
+                STATE_COPIES * state_pixel
+            } else {
+                0
+            };
+        let memory = (self.preflight)(pixel_bytes, size_of::<T>() as u64)?;
+        let reporter = Reporter::new(self.settings.spp, self.quiet);
+        let result = render_passes(transport, self.scene, self.settings, &self.job, &mut |p| {
+            reporter.update(p)
+        })
+        .map_err(|e| CliError::input(e.to_string()));
+        reporter.finish();
+        let (result, state) = result?;
+        Ok((result, state, memory))
+    }
+}
+
+/// `fspec merge`'s task: the image of a film state.
+pub struct ResolveTask<'a> {
+    /// The state to resolve.
+    pub state: &'a FilmState,
+}
+
+impl TransportTask for ResolveTask<'_> {
+    type Output = RenderResult;
+
+    fn run<T: Transport>(self, transport: &T) -> Result<RenderResult, CliError> {
+        resolve_state(transport, self.state).map_err(|e| CliError::input(e.to_string()))
     }
 }
 
@@ -760,6 +919,7 @@ fn dispatch(
 enum OutputFormat {
     Png,
     Exr,
+    Partial,
 }
 
 /// The format of an output path, by its extension (case-insensitive).
@@ -768,6 +928,7 @@ fn output_format(path: &Path) -> Option<OutputFormat> {
     match extension.as_str() {
         "png" => Some(OutputFormat::Png),
         "exr" => Some(OutputFormat::Exr),
+        partial_file::EXTENSION => Some(OutputFormat::Partial),
         _ => None,
     }
 }
@@ -796,49 +957,157 @@ fn check_writable(path: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Checks the output options before rendering (so a typo fails fast).
-fn check_outputs(args: &RenderArgs, outputs: &[PathBuf]) -> Result<(), CliError> {
-    for path in outputs {
-        if output_format(path).is_none() {
-            return Err(CliError::input(format!(
-                "{}: unsupported output format (use .png or .exr)",
-                path.display()
-            )));
+/// The image outputs of a render or a merge and how they are made.
+#[derive(Debug, Clone)]
+pub struct OutputOptions {
+    /// `--out` files (PNG, EXR, partial films).
+    pub outputs: Vec<PathBuf>,
+    /// X, Y, Z channels in EXR outputs too.
+    pub exr_xyz: bool,
+    /// The spectral EXR, if asked for.
+    pub spectral_exr: Option<PathBuf>,
+    /// Its wavelength step, nm.
+    pub spectral_step_nm: f64,
+    /// The coefficient EXR, if asked for.
+    pub coefficients_exr: Option<PathBuf>,
+    /// PNG exposure.
+    pub exposure: Exposure,
+    /// PNG tone mapping.
+    pub tone: Tone,
+}
+
+impl OutputOptions {
+    /// The outputs of `fspec render` (`render.png` and `render.exr` when no
+    /// `--out` is given).
+    pub fn of(args: &RenderArgs) -> Self {
+        Self {
+            outputs: if args.out.is_empty() {
+                vec![PathBuf::from("render.png"), PathBuf::from("render.exr")]
+            } else {
+                args.out.clone()
+            },
+            exr_xyz: args.exr_xyz,
+            spectral_exr: args.spectral_exr.clone(),
+            spectral_step_nm: args.spectral_step_nm,
+            coefficients_exr: args.coefficients_exr.clone(),
+            exposure: Exposure {
+                stops: args.exposure,
+            },
+            tone: match args.tone {
+                ToneKind::Clamp => Tone::Clamp,
+                ToneKind::Reinhard => Tone::Reinhard,
+            },
         }
-        check_writable(path)?;
     }
-    for (option, path) in [
-        ("--spectral-exr", &args.spectral_exr),
-        ("--coefficients-exr", &args.coefficients_exr),
-    ] {
-        if let Some(path) = path {
-            if output_format(path) != Some(OutputFormat::Exr) {
+
+    /// Whether a partial film is among the outputs.
+    pub fn keeps_state(&self) -> bool {
+        self.outputs
+            .iter()
+            .any(|path| output_format(path) == Some(OutputFormat::Partial))
+    }
+
+    /// Checks the outputs before rendering (so a typo fails fast): known
+    /// formats, writable paths, finite exposure, a positive wavelength
+    /// step, and spectral outputs only where the film keeps coefficients
+    /// (`spectral`).
+    pub fn check(&self, spectral: bool) -> Result<(), CliError> {
+        for path in &self.outputs {
+            if output_format(path).is_none() {
                 return Err(CliError::input(format!(
-                    "{option} {}: must be an .exr file",
+                    "{}: unsupported output format (use .png, .exr or .fspart)",
                     path.display()
                 )));
             }
             check_writable(path)?;
         }
+        for (option, path) in [
+            ("--spectral-exr", &self.spectral_exr),
+            ("--coefficients-exr", &self.coefficients_exr),
+        ] {
+            if let Some(path) = path {
+                if output_format(path) != Some(OutputFormat::Exr) {
+                    return Err(CliError::input(format!(
+                        "{option} {}: must be an .exr file",
+                        path.display()
+                    )));
+                }
+                check_writable(path)?;
+            }
+        }
+        if !self.exposure.stops.is_finite() {
+            return Err(CliError::input(format!(
+                "--exposure {}: must be a finite number of stops",
+                self.exposure.stops
+            )));
+        }
+        if (self.spectral_exr.is_some() || self.coefficients_exr.is_some()) && !spectral {
+            return Err(CliError::input(
+                "--spectral-exr and --coefficients-exr need --transport fourier with --buffer spectral",
+            ));
+        }
+        if !(self.spectral_step_nm.is_finite() && self.spectral_step_nm > 0.0) {
+            return Err(CliError::input(
+                "--spectral-step-nm must be a positive number",
+            ));
+        }
+        Ok(())
     }
-    if !args.exposure.is_finite() {
-        return Err(CliError::input(format!(
-            "--exposure {}: must be a finite number of stops",
-            args.exposure
-        )));
+
+    /// Writes the image outputs of `result` (partial films are written by
+    /// their caller), returning the paths written.
+    pub fn write_images(
+        &self,
+        result: &RenderResult,
+        range: &SpectralRange,
+    ) -> Result<Vec<PathBuf>, CliError> {
+        let image = XyzImage {
+            width: result.width,
+            height: result.height,
+            xyz: &result.xyz,
+        };
+        let mut written = Vec::new();
+        for path in &self.outputs {
+            if output_format(path) == Some(OutputFormat::Partial) {
+                continue;
+            }
+            write_by_extension(path, &image, self.exposure, self.tone, self.exr_xyz)?;
+            written.push(path.clone());
+        }
+        if let Some((n, coeffs)) = &result.coefficients {
+            if let Some(path) = &self.coefficients_exr {
+                let bounds = (range.min_nm(), range.max_nm());
+                write_coefficients_exr(path, result.width, result.height, *n, coeffs, bounds)?;
+                written.push(path.clone());
+            }
+            if let Some(path) = &self.spectral_exr {
+                let wavelengths = spectral_wavelengths(range, self.spectral_step_nm);
+                let radiance = spectral_planes(range, *n, coeffs, &wavelengths);
+                write_spectral_exr(
+                    path,
+                    result.width,
+                    result.height,
+                    &wavelengths,
+                    &radiance,
+                    &image,
+                )?;
+                written.push(path.clone());
+            }
+        }
+        Ok(written)
     }
-    let spectral = args.transport == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
-    if (args.spectral_exr.is_some() || args.coefficients_exr.is_some()) && !spectral {
-        return Err(CliError::input(
-            "--spectral-exr and --coefficients-exr need --transport fourier with --buffer spectral",
-        ));
+
+    /// Writes `film` to every partial-film output, returning their paths.
+    pub fn write_partials(&self, film: &PartialFilm) -> Result<Vec<PathBuf>, CliError> {
+        let mut written = Vec::new();
+        for path in &self.outputs {
+            if output_format(path) == Some(OutputFormat::Partial) {
+                film.write(path)?;
+                written.push(path.clone());
+            }
+        }
+        Ok(written)
     }
-    if !(args.spectral_step_nm.is_finite() && args.spectral_step_nm > 0.0) {
-        return Err(CliError::input(
-            "--spectral-step-nm must be a positive number",
-        ));
-    }
-    Ok(())
 }
 
 /// Spectral radiance at `wavelengths` from the coefficient planes (series,
@@ -882,14 +1151,139 @@ fn parse_define(text: &str) -> Result<(String, String), CliError> {
     }
 }
 
+/// The pass range, the state to resume and the frame identity of a render
+/// (`--passes`, `--resume`, partial films).
+struct Parts {
+    job_first_pass: u32,
+    spp: u32,
+    resume: Option<PartialFilm>,
+    identity: FrameIdentity,
+}
+
+/// What a part is checked against: the frame `fspec render` is asked for.
+fn frame_identity(
+    args: &RenderArgs,
+    settings: &RenderSettings,
+    frame: PixelWindow,
+    scene: &Scene,
+) -> FrameIdentity {
+    let range = scene.range();
+    FrameIdentity {
+        scene: args.scene.clone(),
+        scene_fingerprint: format!("{:016x}", scene.fingerprint()),
+        fspec_version: env!("CARGO_PKG_VERSION").to_string(),
+        width: settings.width,
+        height: settings.height,
+        frame: partial_file::window_array(&frame),
+        range_nm: [range.min_nm(), range.max_nm()],
+        seed: settings.seed,
+        max_depth: settings.integrator.max_depth,
+        rr_depth: settings.integrator.rr_depth,
+        hide_emitters: settings.integrator.hide_emitters,
+        filter: filter_name(&settings.filter),
+        transport: TransportSpec::of(args),
+    }
+}
+
+/// A filter's kind and size (its radius: the Gaussian's is 4σ).
+fn filter_name(filter: &Filter) -> String {
+    let kind = match filter {
+        Filter::Box => "box",
+        Filter::Tent { .. } => "tent",
+        Filter::Gaussian(_) => "gaussian",
+    };
+    format!("{kind}, radius {} px", filter.radius_px())
+}
+
+/// The first field in which two frame identities differ, with both values.
+pub fn identity_difference(a: &FrameIdentity, b: &FrameIdentity) -> Option<String> {
+    let (Ok(serde_json::Value::Object(a)), Ok(serde_json::Value::Object(b))) =
+        (serde_json::to_value(a), serde_json::to_value(b))
+    else {
+        return (a != b).then(|| "the settings".to_string());
+    };
+    // The scene's name is for messages: its fingerprint decides.
+    a.iter()
+        .filter(|(key, _)| key.as_str() != "scene")
+        .find(|(key, value)| b.get(key.as_str()) != Some(value))
+        .map(|(key, value)| {
+            let other = b
+                .get(key.as_str())
+                .map_or("nothing".to_string(), ToString::to_string);
+            format!("{key} ({value} against {other})")
+        })
+}
+
+/// The pass range and the resumed part of a render, checked against the
+/// frame.
+fn plan_parts(
+    args: &RenderArgs,
+    settings: &RenderSettings,
+    identity: FrameIdentity,
+) -> Result<Parts, CliError> {
+    let Some(path) = &args.resume else {
+        let (first, spp) = match &args.passes {
+            Some(passes) => (passes.start, passes.end - passes.start),
+            None => (0, settings.spp),
+        };
+        return Ok(Parts {
+            job_first_pass: first,
+            spp,
+            resume: None,
+            identity,
+        });
+    };
+    let part = PartialFilm::read(path)?;
+    if let Some(difference) = identity_difference(&part.header.identity, &identity) {
+        return Err(CliError::input(format!(
+            "--resume {}: rendered with another {difference}",
+            path.display()
+        )));
+    }
+    let window = settings.film_window();
+    if part.state.window != window {
+        return Err(CliError::input(format!(
+            "--resume {}: it holds the window {:?}, this render {:?} (give the same --crop)",
+            path.display(),
+            part.header.window,
+            partial_file::window_array(&window)
+        )));
+    }
+    let [requested_start, requested_end] = part.header.requested_passes;
+    let passes = args
+        .passes
+        .clone()
+        .unwrap_or(requested_start..requested_end);
+    if passes.start != part.state.passes.start || passes.end < part.state.passes.end {
+        return Err(CliError::input(format!(
+            "--resume {}: it holds passes {}..{}, which do not start --passes {}..{}",
+            path.display(),
+            part.state.passes.start,
+            part.state.passes.end,
+            passes.start,
+            passes.end
+        )));
+    }
+    Ok(Parts {
+        job_first_pass: passes.start,
+        spp: passes.end - passes.start,
+        resume: Some(part),
+        identity,
+    })
+}
+
 /// Runs `fspec render`.
 pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
-    let outputs = if args.out.is_empty() {
-        vec![PathBuf::from("render.png"), PathBuf::from("render.exr")]
-    } else {
-        args.out.clone()
-    };
-    check_outputs(args, &outputs)?;
+    let output = OutputOptions::of(args);
+    let spectral = args.transport == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
+    output.check(spectral)?;
+    if (args.passes.is_some() || args.resume.is_some() || output.keeps_state())
+        && args.transport == TransportKind::Cv
+    {
+        return Err(CliError::input(
+            "--passes, --resume and .fspart outputs need --transport fourier or sampled: control variates weight each pass by every earlier pass",
+        ));
+    }
     let options = SceneOptions {
         illuminant: args
             .illuminant
@@ -915,7 +1309,7 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
     for warning in &warnings {
         eprintln!("fspec: warning: {warning}");
     }
-    let settings = settings_from(args, &defaults)?;
+    let mut settings = settings_from(args, &defaults)?;
     let scene = builder
         .build()
         .map_err(|e| CliError::input(format!("{}: {e}", args.scene)))?;
@@ -937,6 +1331,21 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
             scene.memory_bytes() as f64 / f64::from(1 << 20),
         );
     }
+    // The frame: the scene's crop window, or the whole film; a part's
+    // --crop lies inside it.
+    let frame = defaults
+        .crop
+        .map(PixelWindow::from)
+        .unwrap_or_else(|| PixelWindow::full(settings.width, settings.height));
+    let splitting = args.passes.is_some() || args.resume.is_some() || output.keeps_state();
+    if splitting && !frame.covers(&settings.film_window()) {
+        return Err(CliError::input(
+            "--crop must lie inside the scene's crop window for --passes, --resume and .fspart outputs",
+        ));
+    }
+    let identity = frame_identity(args, &settings, frame, &scene);
+    let parts = plan_parts(args, &settings, identity)?;
+    settings.spp = parts.spp;
     let wavelengths = spectral_wavelengths(&scene.range(), args.spectral_step_nm);
     let scene_bytes = scene.memory_bytes() as u64;
     let limit_bytes = memory_limit_bytes();
@@ -944,7 +1353,7 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
         let prediction = predict_memory(
             args,
             &settings,
-            &outputs,
+            &output.outputs,
             film_pixel_bytes,
             transport_bytes,
             scene_bytes,
@@ -953,42 +1362,23 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
         check_memory(&prediction, &settings, limit_bytes)?;
         Ok(prediction)
     };
-    let (result, memory) = dispatch(args, &scene, &settings, &preflight)?;
-    let image = XyzImage {
-        width: result.width,
-        height: result.height,
-        xyz: &result.xyz,
+    let task = RenderTask {
+        scene: &scene,
+        settings: &settings,
+        quiet: args.quiet,
+        preflight: &preflight,
+        job: PassJob {
+            first_pass: parts.job_first_pass,
+            resume: parts.resume.as_ref().map(|part| &part.state),
+            keep_state: output.keeps_state(),
+        },
     };
-    let exposure = Exposure {
-        stops: args.exposure,
-    };
-    let tone = match args.tone {
-        ToneKind::Clamp => Tone::Clamp,
-        ToneKind::Reinhard => Tone::Reinhard,
-    };
-    let mut written = Vec::new();
-    for path in &outputs {
-        write_by_extension(path, &image, exposure, tone, args.exr_xyz)?;
-        written.push(path.clone());
-    }
-    if let Some((n, coeffs)) = &result.coefficients {
-        if let Some(path) = &args.coefficients_exr {
-            let range = (scene.range().min_nm(), scene.range().max_nm());
-            write_coefficients_exr(path, result.width, result.height, *n, coeffs, range)?;
-            written.push(path.clone());
-        }
-        if let Some(path) = &args.spectral_exr {
-            let radiance = spectral_planes(&scene.range(), *n, coeffs, &wavelengths);
-            write_spectral_exr(
-                path,
-                result.width,
-                result.height,
-                &wavelengths,
-                &radiance,
-                &image,
-            )?;
-            written.push(path.clone());
-        }
+    let (result, state, memory) = with_transport(&TransportSpec::of(args), scene.range(), task)?;
+    let mut written = output.write_images(&result, &scene.range())?;
+    if let Some(state) = state {
+        let requested = [parts.job_first_pass, parts.job_first_pass + parts.spp];
+        let film = PartialFilm::new(parts.identity, state, requested);
+        written.extend(output.write_partials(&film)?);
     }
     Ok(RenderSummary {
         passes: result.passes,

@@ -124,3 +124,34 @@ fn rgbe_seeds_parse_or_fail_as_named() -> TestResult {
     assert!(seen >= 10, "only {seen} named seeds");
     Ok(())
 }
+
+#[test]
+fn partial_film_corpus() -> TestResult {
+    let count = replay_corpus("partial_film", fspec_cli::partial_file::fuzz_partial_film)?;
+    assert!(count >= 5, "only {count} seeds");
+    Ok(())
+}
+
+/// The partial-film seeds are what their names say: `valid-*` files parse,
+/// `broken-*` files are refused.
+#[test]
+fn partial_film_seeds_parse_or_fail_as_named() -> TestResult {
+    let mut seen = 0;
+    for entry in std::fs::read_dir(corpus_dir("partial_film"))? {
+        let path = entry?.path();
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let parsed = fspec_cli::partial_file::PartialFilm::from_bytes(&std::fs::read(&path)?);
+        if name.starts_with("valid-") {
+            assert!(parsed.is_ok(), "{name}: {:?}", parsed.err());
+            seen += 1;
+        } else if name.starts_with("broken-") {
+            assert!(parsed.is_err(), "{name}");
+            seen += 1;
+        }
+    }
+    assert!(seen >= 8, "{seen}");
+    Ok(())
+}

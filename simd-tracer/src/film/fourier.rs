@@ -1,7 +1,7 @@
 //! [`FourierFilm<N>`]: per-pixel coefficient sums converted to XYZ once by
 //! the chosen route (spectral buffer), or XYZ converted per sample.
 
-use super::{Buffer, Film, all_finite};
+use super::{Buffer, Film, all_finite, is_sample_count};
 use spectral_core::color::Xyz;
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, SpectralError, SpectralRange};
@@ -115,6 +115,51 @@ impl<const N: usize> Film for FourierFilm<N> {
             }
             Buffer::Spectral => Some(vec![0.0; N]),
             Buffer::Xyz => None,
+        }
+    }
+
+    /// The sums the buffer fills (`N` coefficient sums, or 3 XYZ sums),
+    /// then the sample count.
+    fn state_len(&self) -> Option<usize> {
+        Some(self.sums_len() + 1)
+    }
+
+    fn save_state(&self, pixel: &Self::Pixel, out: &mut [f64]) {
+        let sums: &[f64] = match self.buffer {
+            Buffer::Spectral => &pixel.coeffs,
+            Buffer::Xyz => &pixel.xyz,
+        };
+        debug_assert_eq!(out.len(), sums.len() + 1);
+        for (slot, &value) in out.iter_mut().zip(sums.iter().chain([&pixel.count])) {
+            *slot = value;
+        }
+    }
+
+    fn load_state(&self, values: &[f64]) -> Option<Self::Pixel> {
+        let (&count, sums) = values.split_last()?;
+        if sums.len() != self.sums_len() || !is_sample_count(count) {
+            return None;
+        }
+        if !sums.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let mut pixel = self.empty_pixel();
+        let target: &mut [f64] = match self.buffer {
+            Buffer::Spectral => &mut pixel.coeffs,
+            Buffer::Xyz => &mut pixel.xyz,
+        };
+        target.copy_from_slice(sums);
+        pixel.count = count;
+        Some(pixel)
+    }
+}
+
+impl<const N: usize> FourierFilm<N> {
+    /// How many sums the buffer fills per pixel.
+    fn sums_len(&self) -> usize {
+        match self.buffer {
+            Buffer::Spectral => N,
+            Buffer::Xyz => 3,
         }
     }
 }

@@ -14,6 +14,16 @@
 //!
 //! Films know nothing of paths or transports: the transport depends on its
 //! film, never the other way.
+//!
+//! **Pixel state.** The Fourier and sampled films keep nothing but sums
+//! (coefficient or XYZ sums and the sample count), so a pixel is a short
+//! list of `f64` ([`Film::state_len`], [`Film::save_state`],
+//! [`Film::load_state`]): renders of disjoint ranges of passes of the same
+//! seeded sequence merge by adding their states, and a stopped render
+//! continues from its saved state exactly (the sums go on in pass order,
+//! as if it had never stopped). The control-variate film has no such
+//! state: each pass is weighted by `α` from every earlier pass (of every
+//! pixel, when pooled), so its passes cannot be rendered apart.
 
 pub mod filter;
 
@@ -78,6 +88,26 @@ pub trait Film: Sync {
     fn coefficients(&self, _pixel: &Self::Pixel) -> Option<Vec<f64>> {
         None
     }
+    /// How many `f64` a pixel's state holds, if the film's pixels are sums
+    /// that merge by adding their states element by element (module docs);
+    /// `None` for films whose pixels cannot be split or continued.
+    fn state_len(&self) -> Option<usize> {
+        None
+    }
+    /// Writes a pixel's state into `out` ([`Film::state_len`] values; does
+    /// nothing for films without a state).
+    fn save_state(&self, _pixel: &Self::Pixel, _out: &mut [f64]) {}
+    /// The pixel a state describes, if `values` is one: the film's length,
+    /// every value finite and the sample count a whole number `≥ 0`.
+    fn load_state(&self, _values: &[f64]) -> Option<Self::Pixel> {
+        None
+    }
+}
+
+/// Whether `count` can be a pixel's sample count: a finite whole number
+/// `≥ 0` (the last value of the Fourier and sampled films' states).
+pub(crate) fn is_sample_count(count: f64) -> bool {
+    count >= 0.0 && count.is_finite() && count.fract() == 0.0
 }
 
 /// Whether every value is finite (without early exit: the check is a

@@ -1,6 +1,6 @@
 //! [`XyzFilm`]: the sampled transports' per-sample XYZ estimates, averaged.
 
-use super::{Film, all_finite};
+use super::{Film, all_finite, is_sample_count};
 use spectral_core::color::Xyz;
 
 /// The film of the sampled transports: each sample is already an XYZ
@@ -41,4 +41,28 @@ impl Film for XyzFilm {
         }
         Xyz::from_array(pixel.xyz.map(|v| v / pixel.count))
     }
+
+    /// X, Y and Z sums, then the sample count.
+    fn state_len(&self) -> Option<usize> {
+        Some(XYZ_STATE_LEN)
+    }
+
+    fn save_state(&self, pixel: &Self::Pixel, out: &mut [f64]) {
+        debug_assert_eq!(out.len(), XYZ_STATE_LEN);
+        for (slot, &value) in out.iter_mut().zip(pixel.xyz.iter().chain([&pixel.count])) {
+            *slot = value;
+        }
+    }
+
+    fn load_state(&self, values: &[f64]) -> Option<Self::Pixel> {
+        let [x, y, z, count] = *values else {
+            return None;
+        };
+        let xyz = [x, y, z];
+        (xyz.iter().all(|v| v.is_finite()) && is_sample_count(count))
+            .then_some(XyzPixel { xyz, count })
+    }
 }
+
+/// Values of a sampled pixel's state: three sums and the count.
+const XYZ_STATE_LEN: usize = 4;

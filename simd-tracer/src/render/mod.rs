@@ -31,11 +31,20 @@
 //! so their crop is a render of the window, not a cut of the full image
 //! (per-pixel α crops bit for bit).
 //!
+//! A render may also cover a range of passes of the seeded sequence, keep
+//! its film as plain sums, or continue from such sums ([`PassJob`],
+//! [`render_passes`], [`FilmState`]): parts of a frame rendered apart,
+//! over disjoint windows or pass ranges, merge into the frame.
+//!
 //! After each batch the `progress` callback sees the totals and may stop
 //! the render; a time limit stops after the batch that crosses it (batches
 //! are sized not to run past the limit at the measured speed). Samples with
 //! NaN or infinite values never reach the film: they are counted in
 //! [`RenderResult::rejected`].
+
+mod film_state;
+
+pub use film_state::FilmState;
 
 use crate::film::Film;
 use crate::film::filter::{Filter, FilterError};
@@ -123,6 +132,13 @@ impl PixelWindow {
         x >= self.x && y >= self.y && u64::from(x) < x_end && u64::from(y) < y_end
     }
 
+    /// Whether every pixel of `other` lies in this window.
+    pub fn covers(&self, other: &PixelWindow) -> bool {
+        let (x_end, y_end) = self.end();
+        let (other_x_end, other_y_end) = other.end();
+        other.x >= self.x && other.y >= self.y && other_x_end <= x_end && other_y_end <= y_end
+    }
+
     /// Pixels in the window.
     pub fn pixel_count(&self) -> u64 {
         u64::from(self.width) * u64::from(self.height)
@@ -201,6 +217,11 @@ pub enum RenderError {
     Threads(String),
     /// A filter parameter is out of range.
     Filter(FilterError),
+    /// The transport's film cannot render a range of passes apart or keep
+    /// its state (control variates weight each pass by all earlier ones).
+    NotSplittable,
+    /// A film state to continue from does not fit the render (why).
+    State(String),
     /// The crop window is empty or leaves the film.
     Window {
         /// The window asked for.
@@ -218,6 +239,11 @@ impl core::fmt::Display for RenderError {
             Self::EmptyImage => write!(f, "width, height and samples per pixel must be at least 1"),
             Self::Threads(e) => write!(f, "cannot start worker threads: {e}"),
             Self::Filter(e) => write!(f, "{e}"),
+            Self::NotSplittable => write!(
+                f,
+                "control variates weight each pass by every earlier pass: this transport cannot render a range of passes apart, continue a render or keep its film"
+            ),
+            Self::State(why) => write!(f, "the film state to continue from does not fit: {why}"),
             Self::Window {
                 window,
                 width,
@@ -453,6 +479,22 @@ fn render_tile<T: Transport>(
     }
 }
 
+/// Which passes a render takes and what it starts from (module docs):
+/// passes `first_pass .. first_pass + spp` of the seeded sequence
+/// ([`RenderSettings::spp`] counts them), continuing `resume` (which must
+/// cover `first_pass ..` some pass of that range, for the same window), and
+/// whether to return the film's state.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PassJob<'a> {
+    /// Index of the first pass.
+    pub first_pass: u32,
+    /// The state of a render of the same window and settings over passes
+    /// `first_pass .. k`, to continue from pass `k`.
+    pub resume: Option<&'a FilmState>,
+    /// Return the film's state with the result.
+    pub keep_state: bool,
+}
+
 /// Renders `scene` with `transport`. `progress` runs after every batch of
 /// passes (module docs) and returns whether to continue.
 pub fn render<T: Transport>(
@@ -461,6 +503,19 @@ pub fn render<T: Transport>(
     settings: &RenderSettings,
     progress: &mut dyn FnMut(&Progress) -> bool,
 ) -> Result<RenderResult, RenderError> {
+    render_passes(transport, scene, settings, &PassJob::default(), progress).map(|(r, _)| r)
+}
+
+/// Renders the passes of `job` (module docs), returning the film's state
+/// when `job.keep_state`: the state's passes are those of `job.resume`
+/// followed by the passes done here (fewer than asked when stopped early).
+pub fn render_passes<T: Transport>(
+    transport: &T,
+    scene: &Scene,
+    settings: &RenderSettings,
+    job: &PassJob,
+    progress: &mut dyn FnMut(&Progress) -> bool,
+) -> Result<(RenderResult, Option<FilmState>), RenderError> {
     if settings.width == 0 || settings.height == 0 || settings.spp == 0 {
         return Err(RenderError::EmptyImage);
     }
@@ -468,6 +523,42 @@ pub fn render<T: Transport>(
     let window = settings
         .film_window()
         .validate(settings.width, settings.height)?;
+    let film = transport.film();
+    let state_len = film.state_len();
+    if (job.first_pass != 0 || job.resume.is_some() || job.keep_state) && state_len.is_none() {
+        return Err(RenderError::NotSplittable);
+    }
+    let last_pass = job.first_pass.checked_add(settings.spp).ok_or_else(|| {
+        RenderError::State(format!(
+            "pass {} + {} passes overflows",
+            job.first_pass, settings.spp
+        ))
+    })?;
+    let resumed = match job.resume {
+        None => None,
+        Some(state) => {
+            if state.window != window {
+                return Err(RenderError::State(format!(
+                    "it holds the window {}×{} at ({}, {}), the render {}×{} at ({}, {})",
+                    state.window.width,
+                    state.window.height,
+                    state.window.x,
+                    state.window.y,
+                    window.width,
+                    window.height,
+                    window.x,
+                    window.y
+                )));
+            }
+            if state.passes.start != job.first_pass || state.passes.end > last_pass {
+                return Err(RenderError::State(format!(
+                    "it holds passes {}..{}, not a start of {}..{last_pass}",
+                    state.passes.start, state.passes.end, job.first_pass
+                )));
+            }
+            Some((state, state.load(film)?))
+        }
+    };
     let mut builder = rayon::ThreadPoolBuilder::new().stack_size(RENDER_THREAD_STACK_BYTES);
     if let Some(threads) = settings.threads {
         builder = builder.num_threads(threads.max(1));
@@ -495,7 +586,7 @@ pub fn render<T: Transport>(
                 y0,
                 width,
                 height,
-                pixels: vec![transport.film().empty_pixel(); (width * height) as usize],
+                pixels: vec![film.empty_pixel(); (width * height) as usize],
                 rejected: 0,
                 rays: RayCounts::default(),
             });
@@ -503,10 +594,24 @@ pub fn render<T: Transport>(
     }
     let pixel_count = window.pixel_count();
     let mut passes = 0;
+    let mut resumed_rejected = 0;
+    if let Some((state, pixels)) = resumed {
+        for tile in &mut tiles {
+            let (x0, y0, width) = (tile.x0, tile.y0, tile.width);
+            for (index, pixel) in tile.pixels.iter_mut().enumerate() {
+                let (x, y) = (x0 + index as u32 % width, y0 + index as u32 / width);
+                if window.contains(x, y) {
+                    *pixel = pixels[window_index(&window, x, y)].clone();
+                }
+            }
+        }
+        passes = state.passes.end - state.passes.start;
+        resumed_rejected = state.rejected;
+    }
     let mut batch = 1;
     while passes < settings.spp {
-        let first = passes;
-        let end = first.saturating_add(batch).min(settings.spp);
+        let first = job.first_pass + passes;
+        let end = first.saturating_add(batch).min(last_pass);
         let batch_start = Instant::now();
         pool.install(|| {
             tiles.par_iter_mut().for_each_init(
@@ -518,9 +623,9 @@ pub fn render<T: Transport>(
                 },
             );
         });
-        if transport.film().passes_interact() {
+        if film.passes_interact() {
             debug_assert_eq!(end, first + 1);
-            let shared = transport.film().pass_shared(
+            let shared = film.pass_shared(
                 &mut tiles
                     .iter()
                     .flat_map(|tile| tile.window_pixels(&window).map(|(_, pixel)| pixel)),
@@ -530,12 +635,12 @@ pub fn render<T: Transport>(
                 for (index, pixel) in tile.pixels.iter_mut().enumerate() {
                     let (lx, ly) = (index as u32 % width, index as u32 / width);
                     if window.contains(x0 + lx, y0 + ly) {
-                        transport.film().end_pass(pixel, &shared);
+                        film.end_pass(pixel, &shared);
                     }
                 }
             }
         }
-        passes = end;
+        passes = end - job.first_pass;
         let elapsed = start.elapsed();
         let keep_going = progress(&Progress {
             passes_done: passes,
@@ -546,38 +651,104 @@ pub fn render<T: Transport>(
         if !keep_going || settings.time_limit.is_some_and(|limit| elapsed >= limit) {
             break;
         }
-        if !transport.film().passes_interact() {
+        if !film.passes_interact() {
             batch = next_batch(batch, batch_start.elapsed(), settings, elapsed);
         }
     }
-    let mut xyz = vec![Xyz::default(); pixel_count as usize];
-    let mut planes: Option<(usize, Vec<f32>)> = None;
-    let mut rejected = 0;
+    let mut rejected = resumed_rejected;
     let mut rays = RayCounts::default();
     for tile in &tiles {
         rejected += tile.rejected;
         rays.add(&tile.rays);
-        for ((x, y), pixel) in tile.window_pixels(&window) {
-            let index = ((y - window.y) * window.width + x - window.x) as usize;
-            xyz[index] = transport.film().resolve(pixel);
-            if let Some(c) = transport.film().coefficients(pixel) {
-                let (n, data) = planes
-                    .get_or_insert_with(|| (c.len(), vec![0.0; pixel_count as usize * c.len()]));
-                for (j, &v) in c.iter().enumerate().take(*n) {
-                    data[index * *n + j] = v as f32;
+    }
+    let pixels = tiles
+        .iter()
+        .flat_map(|tile| tile.window_pixels(&window))
+        .map(|((x, y), pixel)| (window_index(&window, x, y), pixel));
+    let (xyz, coefficients) = resolve_pixels(film, &window, pixels);
+    let state = match (job.keep_state, state_len) {
+        (true, Some(values_per_pixel)) => {
+            let mut state = FilmState::empty(window, job.first_pass, values_per_pixel);
+            state.passes.end = job.first_pass + passes;
+            state.rejected = rejected;
+            for tile in &tiles {
+                for ((x, y), pixel) in tile.window_pixels(&window) {
+                    let at = window_index(&window, x, y) * values_per_pixel;
+                    film.save_state(pixel, &mut state.values[at..at + values_per_pixel]);
                 }
             }
+            Some(state)
         }
-    }
-    Ok(RenderResult {
+        _ => None,
+    };
+    let result = RenderResult {
         width: window.width,
         height: window.height,
         xyz,
-        coefficients: planes,
+        coefficients,
         passes,
-        samples: pixel_count * u64::from(passes) - rejected,
+        samples: (pixel_count * u64::from(passes)).saturating_sub(rejected),
         rejected,
         rays,
+        elapsed: start.elapsed(),
+    };
+    Ok((result, state))
+}
+
+/// The index of film pixel `(x, y)` in `window`, row-major from its corner.
+fn window_index(window: &PixelWindow, x: u32, y: u32) -> usize {
+    ((y - window.y) * window.width + x - window.x) as usize
+}
+
+/// XYZ and, if the film keeps them, the mean coefficients of `window`'s
+/// pixels, given with their row-major indices in the window.
+fn resolve_pixels<'a, F: Film>(
+    film: &F,
+    window: &PixelWindow,
+    pixels: impl Iterator<Item = (usize, &'a F::Pixel)>,
+) -> (Vec<Xyz>, Option<(usize, Vec<f32>)>)
+where
+    F::Pixel: 'a,
+{
+    let pixel_count = window.pixel_count() as usize;
+    let mut xyz = vec![Xyz::default(); pixel_count];
+    let mut planes: Option<(usize, Vec<f32>)> = None;
+    for (index, pixel) in pixels {
+        xyz[index] = film.resolve(pixel);
+        if let Some(c) = film.coefficients(pixel) {
+            let (n, data) =
+                planes.get_or_insert_with(|| (c.len(), vec![0.0; pixel_count * c.len()]));
+            for (j, &v) in c.iter().enumerate().take(*n) {
+                data[index * *n + j] = v as f32;
+            }
+        }
+    }
+    (xyz, planes)
+}
+
+/// The image of a film state, as [`render`] would resolve it (nothing is
+/// traced: the rays are zero, the time is that of the resolve).
+pub fn resolve_state<T: Transport>(
+    transport: &T,
+    state: &FilmState,
+) -> Result<RenderResult, RenderError> {
+    let start = Instant::now();
+    let film = transport.film();
+    if film.state_len().is_none() {
+        return Err(RenderError::NotSplittable);
+    }
+    let pixels = state.load(film)?;
+    let (xyz, coefficients) = resolve_pixels(film, &state.window, pixels.iter().enumerate());
+    let passes = state.passes.end - state.passes.start;
+    Ok(RenderResult {
+        width: state.window.width,
+        height: state.window.height,
+        xyz,
+        coefficients,
+        passes,
+        samples: (state.window.pixel_count() * u64::from(passes)).saturating_sub(state.rejected),
+        rejected: state.rejected,
+        rays: RayCounts::default(),
         elapsed: start.elapsed(),
     })
 }

@@ -9,6 +9,7 @@
 pub mod analytic;
 pub mod builtin;
 pub mod camera;
+mod fingerprint;
 pub mod mesh;
 pub mod obj;
 pub mod ply;
