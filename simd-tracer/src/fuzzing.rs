@@ -240,7 +240,7 @@ pub fn obj(bytes: &[u8]) {
     match builder.build() {
         Ok(scene) => {
             assert!(scene.bvh().validate().is_ok());
-            assert!(scene.normals().iter().all(|n| n.is_finite()));
+            assert!(scene.normals().all(|n| n.is_finite()));
             assert!(scene.validate_surfaces().is_ok());
         }
         // A tree that fails its own validation is a bug, never the input's

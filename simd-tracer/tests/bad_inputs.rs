@@ -186,8 +186,9 @@ fn scene_memory_counts_geometry_and_textures() -> TestResult {
     let small = b.build()?.memory_bytes();
     assert!(small > 0);
 
-    // 1000 more triangles: at least their vertices, normals, areas,
-    // materials, texture coordinates and BVH entries.
+    // 1000 more triangles: at least their vertices, materials, packed
+    // shading records (normal, area, ...), light indices and BVH entries
+    // (no texture coordinates: all are zero).
     let (mut b, m) = builder()?;
     b.set_camera(camera()?);
     for i in 0..1001 {
@@ -195,7 +196,7 @@ fn scene_memory_counts_geometry_and_textures() -> TestResult {
         b.add_triangle(TRIANGLE.map(|v| v + offset), m);
     }
     let many = b.build()?.memory_bytes();
-    let per_triangle = (36 + 12 + 4 + 4 + 24) + simd_tracer::scene::BVH_TRIANGLE_BYTES;
+    let per_triangle = (36 + 4 + 32 + 4) + simd_tracer::scene::BVH_TRIANGLE_BYTES;
     assert!(many - small >= 1000 * per_triangle, "{small} {many}");
 
     // A scalar texture adds its texels.

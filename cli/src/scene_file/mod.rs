@@ -321,7 +321,7 @@ pub fn fuzz_scene_toml(bytes: &[u8]) {
                 "{:?}",
                 scene.bvh().validate()
             );
-            assert!(scene.normals().iter().all(|n| n.is_finite()));
+            assert!(scene.normals().all(|n| n.is_finite()));
         }
         // A tree that fails its own validation is a bug, not bad input.
         Err(SceneError::Bvh(message)) => panic!("BVH validation failed: {message}"),

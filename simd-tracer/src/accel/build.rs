@@ -4,11 +4,12 @@
 use super::triangle::{DEGENERATE_SINE, PreparedTriangle, dot, fan_pairs};
 use super::{Bvh, Traversal, WIDE_MIN_TRIANGLES, WideBvh, index_u32};
 use glam::{Vec3, Vec3A};
-use obvhs::BvhBuildParams;
-use obvhs::bvh2::builder::build_bvh2_from_tris;
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::builder::build_bvh2;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::{Bvh2, DEFAULT_MAX_STACK_DEPTH};
-use obvhs::triangle::Triangle as ObvhsTriangle;
+use obvhs::{Boundable, BvhBuildParams};
+use rayon::prelude::*;
 use std::time::Duration;
 
 /// Scenes up to this many triangles get the thorough build of
@@ -87,12 +88,30 @@ pub(super) fn pair_triangles(
         .collect()
 }
 
-pub(super) fn to_obvhs_triangle(vertices: &[Vec3; 3]) -> ObvhsTriangle {
-    ObvhsTriangle {
-        v0: Vec3A::from(vertices[0]),
-        v1: Vec3A::from(vertices[1]),
-        v2: Vec3A::from(vertices[2]),
+/// A triangle's box, as obvhs computes it for its own triangles
+/// (`Aabb::from_points` of the three vertices).
+pub(super) fn triangle_aabb(vertices: &[Vec3; 3]) -> Aabb {
+    Aabb::from_points(&vertices.map(Vec3A::from))
+}
+
+/// An input triangle handed to obvhs' builder by reference: the build
+/// reads only its box, so the input needs no copy in obvhs' own triangle
+/// type (48 bytes per triangle at a million triangles).
+struct BuildTriangle<'a>(&'a [Vec3; 3]);
+
+impl Boundable for BuildTriangle<'_> {
+    fn aabb(&self) -> Aabb {
+        triangle_aabb(self.0)
     }
+}
+
+/// Whether the flat test keeps its own copies of the fan pairs' triangles
+/// (`Bvh::flat_pair_triangles`): only where bounce rays use it
+/// ([`WIDE_MIN_TRIANGLES`]); larger trees answer flat queries (tests,
+/// benchmarks) from the slots, without a second copy of up to 256 bytes
+/// per pair.
+pub(super) fn keeps_flat_copies(kept_triangles: usize) -> bool {
+    kept_triangles <= WIDE_MIN_TRIANGLES
 }
 
 // ---------------------------------------------------------------------------
@@ -102,27 +121,27 @@ impl Bvh {
     /// Degenerate (zero-area or non-finite) triangles are skipped (never hit)
     /// and counted, see [`Bvh::skipped_triangles`].
     pub fn build(triangles: &[[Vec3; 3]]) -> Bvh {
-        let mut kept_vertices = Vec::with_capacity(triangles.len());
-        let mut kept_original = Vec::with_capacity(triangles.len());
-        for (index, vertices) in triangles.iter().enumerate() {
-            if !is_degenerate(vertices) {
-                kept_vertices.push(*vertices);
-                kept_original.push(index_u32(index));
-            }
-        }
-        let skipped = triangles.len() - kept_vertices.len();
+        // Input indices of the kept triangles, ascending.
+        let kept: Vec<u32> = triangles
+            .par_iter()
+            .enumerate()
+            .filter(|(_, vertices)| !is_degenerate(vertices))
+            .map(|(index, _)| index_u32(index))
+            .collect();
+        let skipped = triangles.len() - kept.len();
+        let input = |kept_index: usize| {
+            kept.get(kept_index)
+                .and_then(|&i| triangles.get(i as usize))
+        };
 
-        let bvh2 = if kept_vertices.is_empty() {
+        let bvh2 = if kept.is_empty() {
             Bvh2::default()
         } else {
-            let obvhs_triangles: Vec<ObvhsTriangle> =
-                kept_vertices.iter().map(to_obvhs_triangle).collect();
+            let primitives: Vec<BuildTriangle<'_>> = (0..kept.len())
+                .filter_map(|k| input(k).map(BuildTriangle))
+                .collect();
             let mut build_time = Duration::ZERO;
-            let mut bvh2 = build_bvh2_from_tris(
-                &obvhs_triangles,
-                build_params(obvhs_triangles.len()),
-                &mut build_time,
-            );
+            let mut bvh2 = build_bvh2(&primitives, build_params(primitives.len()), &mut build_time);
             // obvhs' PLOC build leaves `max_depth` (the size of its traversal
             // stack) at the default of 96 even when the tree is deeper, as it
             // is over many coincident triangles (found by fuzzing: depth 129);
@@ -132,35 +151,35 @@ impl Bvh {
             bvh2
         };
 
-        // Reorder into leaf order so that leaves index the triangles directly.
-        let mut vertices = Vec::with_capacity(kept_vertices.len());
-        let mut original = Vec::with_capacity(kept_vertices.len());
-        let mut slot_of_kept = vec![usize::MAX; kept_vertices.len()];
-        for (slot, &kept) in bvh2.primitive_indices.iter().enumerate() {
-            let kept = kept as usize;
-            if let (Some(v), Some(&o), Some(s)) = (
-                kept_vertices.get(kept),
-                kept_original.get(kept),
-                slot_of_kept.get_mut(kept),
-            ) {
-                vertices.push(*v);
+        // Leaf order, so that leaves index the triangles directly.
+        let mut original = Vec::with_capacity(kept.len());
+        let mut slot_of_kept = vec![u32::MAX; kept.len()];
+        for (slot, &k) in bvh2.primitive_indices.iter().enumerate() {
+            if let (Some(&o), Some(s)) = (kept.get(k as usize), slot_of_kept.get_mut(k as usize)) {
                 original.push(o);
-                *s = slot;
+                *s = index_u32(slot);
             }
         }
-        let mut triangles_prepared: Vec<PreparedTriangle> =
-            vertices.iter().map(PreparedTriangle::new).collect();
+        let mut triangles_prepared: Vec<PreparedTriangle> = original
+            .par_iter()
+            .map(|&o| {
+                triangles.get(o as usize).map_or_else(
+                    || PreparedTriangle::new(&[Vec3::ZERO; 3]),
+                    PreparedTriangle::new,
+                )
+            })
+            .collect();
         // Fan pairs (consecutive in the input): the second takes the
         // first's plane.
         let mut flat_pairs = Vec::new();
-        let mut paired = vec![false; vertices.len()];
-        for kept in fan_pairs(&kept_vertices) {
-            let (Some(&first), Some(&second)) =
-                (slot_of_kept.get(kept), slot_of_kept.get(kept + 1))
+        let mut paired = vec![false; original.len()];
+        for k in fan_pairs(kept.len(), input) {
+            let (Some(&first), Some(&second)) = (slot_of_kept.get(k), slot_of_kept.get(k + 1))
             else {
                 continue;
             };
-            if let (Some(&plane), Some(v)) = (triangles_prepared.get(first), vertices.get(second)) {
+            let (first, second) = (first as usize, second as usize);
+            if let (Some(&plane), Some(v)) = (triangles_prepared.get(first), input(k + 1)) {
                 if let Some(prepared) = triangles_prepared.get_mut(second) {
                     *prepared = PreparedTriangle::on_plane_of(v, &plane);
                 }
@@ -172,9 +191,15 @@ impl Bvh {
                 }
             }
         }
+        drop(slot_of_kept);
+        drop(kept);
         flat_pairs.sort_unstable();
-        let flat_pair_triangles = pair_triangles(&flat_pairs, &triangles_prepared);
-        let flat_singles = (0..vertices.len())
+        let flat_pair_triangles = if keeps_flat_copies(triangles_prepared.len()) {
+            pair_triangles(&flat_pairs, &triangles_prepared)
+        } else {
+            Vec::new()
+        };
+        let flat_singles = (0..original.len())
             .filter(|&slot| !paired[slot])
             .map(index_u32)
             .collect();
@@ -194,7 +219,6 @@ impl Bvh {
             flat_pairs,
             flat_pair_triangles,
             flat_singles,
-            vertices,
             original,
             input_count: triangles.len(),
             skipped,

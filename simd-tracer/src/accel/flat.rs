@@ -2,11 +2,12 @@
 //! acceptance folded into selects, no tree and no data-dependent branch.
 
 use super::packet_traversal::PacketRays;
-use super::triangle::weight;
+use super::triangle::{PreparedTriangle, weight};
 use super::{Bvh, WideStack, index_u32};
 use crate::ids::NO_TRIANGLE;
 use crate::packet::{PacketHit, RayPacket};
 use crate::simd::LaneMask;
+use core::ops::ControlFlow;
 use wide::f32x8;
 
 /// A slot's bits in every lane (the flat tests select them per lane).
@@ -98,6 +99,32 @@ impl TriangleSubset {
     }
 }
 impl Bvh {
+    /// Calls `f` with each fan pair's slots and prepared triangles, in
+    /// order, until it breaks: from the flat test's copies where the tree
+    /// keeps them (`build::keeps_flat_copies`), else by slot.
+    #[inline(always)]
+    fn try_for_each_pair<B>(
+        &self,
+        mut f: impl FnMut([u32; 2], &PreparedTriangle, &PreparedTriangle) -> ControlFlow<B>,
+    ) -> ControlFlow<B> {
+        if self.flat_pair_triangles.is_empty() {
+            for &[first, second] in &self.flat_pairs {
+                let pair = (
+                    self.triangles.get(first as usize),
+                    self.triangles.get(second as usize),
+                );
+                if let (Some(a), Some(b)) = pair {
+                    f([first, second], a, b)?;
+                }
+            }
+        } else {
+            for (&pair, [a, b]) in self.flat_pairs.iter().zip(&self.flat_pair_triangles) {
+                f(pair, a, b)?;
+            }
+        }
+        ControlFlow::Continue(())
+    }
+
     /// Closest hits of a packet against every triangle, without the tree
     /// and without branches on the data: each fan pair
     /// (one plane test, five edge functions) and each single triangle is the packet
@@ -107,11 +134,12 @@ impl Bvh {
     pub fn intersect_packet_flat(&self, packet: &RayPacket) -> PacketHit {
         let rays = PacketRays::new(packet);
         let mut best = FlatBest::new(packet);
-        for (&[first, second], [a, b]) in self.flat_pairs.iter().zip(&self.flat_pair_triangles) {
+        let _: ControlFlow<()> = self.try_for_each_pair(|[first, second], a, b| {
             let (accept, t, w1, w2, sum, take_first) = rays.pair_all(a, b, best.t_max);
             let slot = take_first.select(slot_lanes(first), slot_lanes(second));
             best.keep((accept, t, w1, w2, sum), slot);
-        }
+            ControlFlow::Continue(())
+        });
         for &single in &self.flat_singles {
             if let Some(triangle) = self.triangles.get(single as usize) {
                 best.keep(rays.terms_all(triangle, best.t_max), slot_lanes(single));
@@ -167,11 +195,16 @@ impl Bvh {
             .active
             .to_simd()
             .select(packet.t_max, f32x8::NEG_INFINITY);
-        for [a, b] in &self.flat_pair_triangles {
+        let all_blocked = self.try_for_each_pair(|_, a, b| {
             blocked |= rays.pair_all(a, b, t_max).0.to_bitmask();
             if blocked & wanted == wanted {
-                return LaneMask((blocked & wanted) as u8);
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
             }
+        });
+        if all_blocked.is_break() {
+            return LaneMask((blocked & wanted) as u8);
         }
         for &single in &self.flat_singles {
             if let Some(triangle) = self.triangles.get(single as usize) {

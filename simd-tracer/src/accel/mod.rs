@@ -202,12 +202,12 @@ pub enum Traversal {
 /// `docs/performance.md`.
 pub const WIDE_MIN_TRIANGLES: usize = WIDE_WIDTH * WIDE_WIDTH;
 
-/// Bytes the BVH keeps per non-degenerate triangle: the prepared edge-test
-/// triangle, a copy of its vertices (for validation), its input index,
-/// obvhs' primitive index and primitive-to-node entries, and its entry in
-/// the flat test's lists (fan pairs or singles).
-pub const BYTES_PER_TRIANGLE: usize =
-    size_of::<PreparedTriangle>() + size_of::<[Vec3; 3]>() + 4 * size_of::<u32>();
+/// The least the BVH keeps per non-degenerate triangle: the prepared
+/// edge-test triangle (its vertices included), its input index, obvhs'
+/// primitive index and its entry in the flat test's lists (fan pairs or
+/// singles). The 8-wide tree and the nodes come on top
+/// ([`Bvh::memory_bytes`] counts everything).
+pub const BYTES_PER_TRIANGLE: usize = size_of::<PreparedTriangle>() + 3 * size_of::<u32>();
 
 /// A closest hit.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -238,14 +238,13 @@ pub struct Bvh {
     /// Slots of the fan pairs (first, second) whose second triangle takes
     /// the first one's plane ([`COPLANAR_SINE`]), in order of the first.
     flat_pairs: Vec<[u32; 2]>,
-    /// The prepared triangles of `flat_pairs`, in the same order: the flat
-    /// test reads them one after the other, without slot lookups and their
-    /// bounds checks.
+    /// The prepared triangles of `flat_pairs`, in the same order, in trees
+    /// whose bounce rays go flat (`build::keeps_flat_copies`; empty in
+    /// larger ones): the flat test reads them one after the other, without
+    /// slot lookups and their bounds checks.
     flat_pair_triangles: Vec<[PreparedTriangle; 2]>,
     /// Slots of the triangles in no pair, ascending.
     flat_singles: Vec<u32>,
-    /// Their vertices, same order (for validation).
-    vertices: Vec<[Vec3; 3]>,
     /// BVH slot → index in the input.
     original: Vec<u32>,
     /// Number of input triangles.
@@ -381,6 +380,28 @@ impl Bvh {
     /// Bytes held by the flat test's copies of the fan pairs' triangles.
     pub fn flat_memory_bytes(&self) -> usize {
         self.flat_pair_triangles.capacity() * size_of::<[PreparedTriangle; 2]>()
+    }
+
+    /// Bytes held: obvhs' tree (nodes and its index lists), the prepared
+    /// triangles, the flat test's lists and copies, the map back to the
+    /// input and the 8-wide tree, all exactly (vector capacities).
+    pub fn memory_bytes(&self) -> usize {
+        fn vec_bytes<T>(v: &Vec<T>) -> usize {
+            v.capacity() * size_of::<T>()
+        }
+        let tree = vec_bytes(&self.bvh2.nodes)
+            + vec_bytes(&self.bvh2.primitive_indices)
+            + vec_bytes(&self.bvh2.primitive_indices_freelist)
+            + vec_bytes(&self.bvh2.primitives_to_nodes)
+            + vec_bytes(&self.bvh2.parents);
+        size_of::<Self>()
+            + tree
+            + vec_bytes(&self.triangles)
+            + vec_bytes(&self.flat_pairs)
+            + self.flat_memory_bytes()
+            + vec_bytes(&self.flat_singles)
+            + vec_bytes(&self.original)
+            + self.wide_memory_bytes()
     }
 
     /// How bounce rays find their hits ([`WIDE_MIN_TRIANGLES`]).
@@ -575,7 +596,7 @@ mod tests {
                 (a.normal, a.plane, a.grazing),
                 (b.normal, b.plane, b.grazing)
             );
-            assert_eq!(*a, PreparedTriangle::new(&bvh.vertices[first as usize]));
+            assert_eq!(*a, PreparedTriangle::new(&a.corners()));
         }
 
         // Not pairs: a quad bent out of its plane, and neighbours that share
@@ -619,7 +640,7 @@ mod tests {
         assert_eq!(parallelogram.flat_pairs.len(), 1);
         let mut broken = parallelogram;
         let second = broken.flat_pairs[0][1] as usize;
-        let own = PreparedTriangle::new(&broken.vertices[second]);
+        let own = PreparedTriangle::new(&broken.triangles[second].corners());
         assert_ne!(own.normal, broken.triangles[second].normal);
         broken.triangles[second] = own;
         assert!(broken.validate().is_err());

@@ -52,6 +52,11 @@ impl PreparedTriangle {
         }
     }
 
+    /// Its vertices as given (bit for bit).
+    pub(super) fn corners(&self) -> [Vec3; 3] {
+        self.vertices.map(Vec3::from_array)
+    }
+
     pub(super) fn new(vertices: &[Vec3; 3]) -> Self {
         let [a, b, c] = vertices.map(|v| v.to_array());
         let normal = cross(sub3(b, a), sub3(c, a));
@@ -229,12 +234,18 @@ pub(super) fn is_fan_pair(first: &[Vec3; 3], second: &[Vec3; 3]) -> bool {
     normal.dot(off_plane).abs() <= COPLANAR_SINE * normal.length() * off_plane.length()
 }
 
-/// Fan pairs among consecutive triangles (greedy, in order): the indices of
-/// the pairs' first triangles.
-pub(super) fn fan_pairs(vertices: &[[Vec3; 3]]) -> Vec<usize> {
+/// Fan pairs among the consecutive triangles `vertices(0..count)` (greedy,
+/// in order): the indices of the pairs' first triangles.
+pub(super) fn fan_pairs<'a>(
+    count: usize,
+    vertices: impl Fn(usize) -> Option<&'a [Vec3; 3]>,
+) -> Vec<usize> {
     let mut firsts = Vec::new();
     let mut k = 0;
-    while let (Some(first), Some(second)) = (vertices.get(k), vertices.get(k + 1)) {
+    while k + 1 < count {
+        let (Some(first), Some(second)) = (vertices(k), vertices(k + 1)) else {
+            break;
+        };
         if is_fan_pair(first, second) {
             firsts.push(k);
             k += 2;

@@ -2,11 +2,13 @@
 //! obvhs' own validation for trees of moderate depth).
 
 use super::Bvh;
-use super::build::{is_degenerate, pair_triangles, to_obvhs_triangle, tree_depth};
+use super::build::{
+    THOROUGH_BUILD_MAX_TRIANGLES, is_degenerate, keeps_flat_copies, pair_triangles, tree_depth,
+    triangle_aabb,
+};
 use super::triangle::{PreparedTriangle, is_fan_pair};
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
-use obvhs::triangle::Triangle as ObvhsTriangle;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 /// Deepest tree handed to obvhs' recursive `Bvh2::validate` (one stack
@@ -15,21 +17,30 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 /// checks, which cover the same invariants.
 pub(super) const OBVHS_VALIDATE_MAX_DEPTH: usize = 1024;
 
+/// Largest tree (in triangles) handed to obvhs' `Bvh2::validate` as well:
+/// its hash sets of every node and primitive made it the slowest part of
+/// loading a million-triangle mesh (over a second, and 120 bytes per
+/// triangle on top of the scene; figures in `docs/performance.md`).
+/// [`Bvh::validate`]'s own checks cover the same invariants at every size;
+/// obvhs' second opinion runs on every tree the tests and fuzz targets
+/// build, all far smaller.
+pub(super) const OBVHS_VALIDATE_MAX_TRIANGLES: usize = THOROUGH_BUILD_MAX_TRIANGLES;
+
 impl Bvh {
     /// Checks the invariants: every inner node bounds its children, every
     /// leaf bounds its triangles, every node is reached exactly once from
     /// the root, every non-degenerate input triangle is referenced exactly
     /// once, obvhs' traversal stack covers the tree's depth, and `obvhs`'s
-    /// own validation (for trees up to 1024 levels deep). `Err` says what is
+    /// own validation (for trees up to 1024 levels deep and
+    /// [`OBVHS_VALIDATE_MAX_TRIANGLES`] triangles). `Err` says what is
     /// wrong.
     pub fn validate(&self) -> Result<(), String> {
         let n = self.triangles.len();
         let nodes = &self.bvh2.nodes;
-        if self.vertices.len() != n || self.original.len() != n {
+        if self.original.len() != n {
             return Err(format!(
-                "{} prepared triangles, {} vertex triples, {} original indices",
+                "{} prepared triangles, {} original indices",
                 n,
-                self.vertices.len(),
                 self.original.len()
             ));
         }
@@ -84,14 +95,14 @@ impl Bvh {
                         "leaf {index} references slots {first}..{end} of {n}"
                     ));
                 }
-                for (slot, (count, vertices)) in references[first..end]
+                for (slot, (count, prepared)) in references[first..end]
                     .iter_mut()
-                    .zip(&self.vertices[first..end])
+                    .zip(&self.triangles[first..end])
                     .enumerate()
                     .map(|(k, pair)| (first + k, pair))
                 {
                     *count += 1;
-                    let [a, b, c] = vertices.map(Vec3A::from);
+                    let [a, b, c] = prepared.corners().map(Vec3A::from);
                     if !contains(aabb, a.min(b).min(c), a.max(b).max(c)) {
                         return Err(format!(
                             "leaf {index} does not bound triangle slot {slot} (input {})",
@@ -137,13 +148,13 @@ impl Bvh {
                 self.bvh2.max_depth
             ));
         }
-        if depth <= OBVHS_VALIDATE_MAX_DEPTH {
-            let mut build_order = vec![ObvhsTriangle::default(); n];
+        if depth <= OBVHS_VALIDATE_MAX_DEPTH && n <= OBVHS_VALIDATE_MAX_TRIANGLES {
+            let mut build_order = vec![Aabb::INVALID; n];
             for (slot, &primitive) in self.bvh2.primitive_indices.iter().enumerate() {
                 let target = build_order
                     .get_mut(primitive as usize)
                     .ok_or_else(|| format!("primitive index {primitive} out of range"))?;
-                *target = to_obvhs_triangle(&self.vertices[slot]);
+                *target = triangle_aabb(&self.triangles[slot].corners());
             }
             catch_unwind(AssertUnwindSafe(|| {
                 self.bvh2.validate(&build_order, false, false);
@@ -159,12 +170,13 @@ impl Bvh {
         }
 
         self.wide
-            .validate(&self.triangles, &self.vertices)
+            .validate(&self.triangles)
             .map_err(|e| format!("wide BVH: {e}"))?;
 
         // Fan pairs and singles: every slot once; each pair a coplanar fan
         // whose second triangle carries the first one's plane.
-        let mut plane_of = vec![None; n];
+        // Per slot, the first triangle of its pair if it is a pair's second.
+        let mut first_of = vec![u32::MAX; n];
         let mut listed = vec![0u32; n];
         let mut count = |slot: u32| {
             listed
@@ -176,17 +188,24 @@ impl Bvh {
             count(first)?;
             count(second)?;
             let (a, b) = (first as usize, second as usize);
-            if !is_fan_pair(&self.vertices[a], &self.vertices[b]) {
+            let (first_corners, second_corners) =
+                (self.triangles[a].corners(), self.triangles[b].corners());
+            if !is_fan_pair(&first_corners, &second_corners) {
                 return Err(format!(
                     "slots {first} and {second} are not a coplanar fan pair"
                 ));
             }
-            plane_of[b] = Some(PreparedTriangle::new(&self.vertices[a]));
+            first_of[b] = first;
         }
         for &single in &self.flat_singles {
             count(single)?;
         }
-        if self.flat_pair_triangles != pair_triangles(&self.flat_pairs, &self.triangles) {
+        let copies = if keeps_flat_copies(n) {
+            pair_triangles(&self.flat_pairs, &self.triangles)
+        } else {
+            Vec::new()
+        };
+        if self.flat_pair_triangles != copies {
             return Err("the flat pairs' triangle copies are stale".to_owned());
         }
         if let Some(slot) = listed.iter().position(|&c| c != 1) {
@@ -206,12 +225,15 @@ impl Bvh {
                 return Err(format!("input triangle {input} appears twice"));
             }
             *flag = true;
-            let vertices = &self.vertices[slot];
+            let vertices = &self.triangles[slot].corners();
             if is_degenerate(vertices) {
                 return Err(format!("degenerate input triangle {input} is in the tree"));
             }
-            let prepared = match &plane_of[slot] {
-                Some(first) => PreparedTriangle::on_plane_of(vertices, first),
+            let prepared = match self.triangles.get(first_of[slot] as usize) {
+                Some(first) => PreparedTriangle::on_plane_of(
+                    vertices,
+                    &PreparedTriangle::new(&first.corners()),
+                ),
                 None => PreparedTriangle::new(vertices),
             };
             if prepared != self.triangles[slot] {

@@ -493,16 +493,12 @@ impl WideBvh {
         }
     }
 
-    /// Checks the invariants against the parent's prepared triangles and
-    /// their vertices: every node is reached once from the root, every child
+    /// Checks the invariants against the parent's prepared triangles
+    /// (with their vertices): every node is reached once from the root, every child
     /// box bounds its subtree (node boxes, leaf triangles), unused child and
     /// triangle lanes are empty, every triangle slot is in exactly one block
     /// and its block data equals its prepared triangle.
-    pub(super) fn validate(
-        &self,
-        prepared: &[PreparedTriangle],
-        vertices: &[[Vec3; 3]],
-    ) -> Result<(), String> {
+    pub(super) fn validate(&self, prepared: &[PreparedTriangle]) -> Result<(), String> {
         if prepared.is_empty() {
             return if self.nodes.is_empty() && self.blocks.is_empty() {
                 Ok(())
@@ -586,7 +582,7 @@ impl WideBvh {
                         if std::mem::replace(seen, true) {
                             return Err(format!("triangle slot {slot} is in two blocks"));
                         }
-                        let [a, bb, c] = vertices[slot as usize];
+                        let [a, bb, c] = prepared[slot as usize].corners();
                         if !inside(a.min(bb).min(c), a.max(bb).max(c)) {
                             return Err(format!(
                                 "wide node {index} child {k} does not bound triangle slot {slot}"

@@ -159,8 +159,9 @@ mod tests {
                 let closest = scene.bvh().intersect_incoherent(packet);
                 for lane in 0..LANES {
                     let emissive = closest.hit.contains(lane)
-                        && scene.surfaces()[closest.triangle[lane] as usize].emission
-                            != SpectrumId::NONE;
+                        && scene
+                            .surface(closest.triangle[lane] as usize)
+                            .is_some_and(|s| s.emission != SpectrumId::NONE);
                     let lane_bits = |h: &PacketHit| {
                         (
                             h.hit.contains(lane),

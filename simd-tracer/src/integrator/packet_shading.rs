@@ -294,9 +294,8 @@ pub(super) fn shading_normals(
         // The vertex normals lie on the front side of the triangle; the
         // geometric normal here may have been turned to the back.
         let front = scene
-            .normals()
-            .get(hit.triangle[lane] as usize)
-            .is_none_or(|&ng| ng.dot(g) >= 0.0);
+            .normal(hit.triangle[lane] as usize)
+            .is_none_or(|ng| ng.dot(g) >= 0.0);
         let n = if front { n } else { -n };
         if n.dot(wo_lanes[lane]) > 0.0 {
             lanes[lane] = n;

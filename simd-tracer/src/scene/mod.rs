@@ -31,6 +31,7 @@ use crate::spectra::environment::EnvironmentMap;
 use crate::spectra::texture::Texture;
 use crate::spectra::{SceneSpectrum, SpectrumRegisters, SpectrumSource};
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 use spectral_core::{SpectralError, SpectralRange};
 
 /// Why a scene could not be built.
@@ -99,11 +100,10 @@ pub struct Scene {
     materials: Vec<Material>,
     /// Triangle vertices (non-degenerate ones only).
     triangles: Vec<[Vec3; 3]>,
-    /// Unit geometric normal of each triangle (right-handed, CCW front).
-    normals: Vec<Vec3>,
     /// Material of each triangle.
     triangle_material: Vec<MaterialId>,
-    /// Texture coordinates of each triangle's vertices (zero if none).
+    /// Texture coordinates of each triangle's vertices, or empty when every
+    /// triangle's are zero (then nothing is stored per triangle).
     uvs: Vec<[Vec2; 3]>,
     /// Per triangle, the index of its vertex normals in
     /// [`Scene::vertex_normals`], or [`NO_ID`] (flat shaded). Empty if no
@@ -124,23 +124,23 @@ pub struct Scene {
     bvh: Bvh,
     /// Emissive triangles and their sampling distribution.
     lights: LightSet,
-    /// One shading record per triangle (derived from the fields above).
-    surfaces: Vec<Surface>,
     /// The emissive triangles in the BVH, for the last segment of a path
     /// (only an emitter hit counts there: [`crate::integrator`]).
     emitters: TriangleSubset,
     /// The first spectra's coefficients in registers (derived from
     /// [`Scene::spectra`]).
     spectrum_registers: SpectrumRegisters,
-    /// [`Scene::surfaces`] packed for packet gathers.
+    /// One shading record per triangle (derived from the fields above),
+    /// packed for packet gathers; the only copy of the records and of the
+    /// geometric normals ([`Scene::surface`], [`Scene::normal`]).
     packed_surfaces: PackedSurfaces,
     skipped_triangles: usize,
 }
 
 /// The triangles whose records emit, as a subset of `bvh`.
-fn emitters(bvh: &Bvh, surfaces: &[Surface]) -> TriangleSubset {
+fn emitters(bvh: &Bvh, surfaces: &PackedSurfaces) -> TriangleSubset {
     let emissive: Vec<u32> = (0..surfaces.len())
-        .filter(|&k| !surfaces[k].emission.is_none())
+        .filter(|&k| surfaces.emits(k))
         .filter_map(|k| u32::try_from(k).ok())
         .collect();
     bvh.subset(&emissive)
@@ -177,9 +177,16 @@ impl Scene {
         &self.triangles
     }
 
-    /// normals
-    pub fn normals(&self) -> &[Vec3] {
-        &self.normals
+    /// The unit geometric normal of triangle `index` (right-handed, CCW
+    /// front), from its shading record.
+    #[inline]
+    pub fn normal(&self, index: usize) -> Option<Vec3> {
+        self.packed_surfaces.normal(index)
+    }
+
+    /// Every triangle's unit geometric normal, in order.
+    pub fn normals(&self) -> impl Iterator<Item = Vec3> + '_ {
+        (0..self.triangle_material.len()).filter_map(|index| self.normal(index))
     }
 
     /// triangle_material
@@ -187,7 +194,8 @@ impl Scene {
         &self.triangle_material
     }
 
-    /// uvs
+    /// Texture coordinates per triangle; empty when every triangle's are
+    /// zero.
     pub fn uvs(&self) -> &[[Vec2; 3]] {
         &self.uvs
     }
@@ -243,9 +251,10 @@ impl Scene {
         &self.lights
     }
 
-    /// surfaces
-    pub fn surfaces(&self) -> &[Surface] {
-        &self.surfaces
+    /// The shading record of triangle `index`.
+    pub fn surface(&self, index: usize) -> Option<Surface> {
+        let material = *self.triangle_material.get(index)?;
+        self.packed_surfaces.unpack(index, material)
     }
 
     /// emitters
@@ -267,31 +276,34 @@ impl Scene {
         self.skipped_triangles
     }
 
-    /// Checks [`Scene::surfaces`] against the triangles, materials and
-    /// lights they were derived from (one record per triangle, each equal
-    /// to [`Surface::new`] of its triangle with the light set's selection
-    /// probability).
+    /// Checks the shading records ([`Scene::surface`]) against the
+    /// triangles, materials and lights they were derived from (one record
+    /// per triangle, each equal to [`Surface::new`] of its triangle with the
+    /// light set's selection probability).
     /// Also checks [`Scene::emitters`] against the records, the light
-    /// set's own invariants ([`LightSet::validate`]), the packed records
-    /// against the records and the spectrum registers against
+    /// set's own invariants ([`LightSet::validate`]), the texture
+    /// coordinates' count and the spectrum registers against
     /// [`Scene::spectra`].
     pub fn validate_surfaces(&self) -> Result<(), String> {
         validate_surface_records(
-            &self.surfaces,
+            &self.packed_surfaces,
             &self.triangles,
-            &self.normals,
             &self.triangle_material,
             &self.materials,
             &self.lights,
         )?;
         self.lights.validate()?;
-        if !self.packed_surfaces.packs(&self.surfaces) {
-            return Err("the packed shading records do not match the records".to_owned());
+        if !(self.uvs.is_empty() || self.uvs.len() == self.triangles.len()) {
+            return Err(format!(
+                "{} texture coordinate triples for {} triangles",
+                self.uvs.len(),
+                self.triangles.len()
+            ));
         }
         if self.spectrum_registers != SpectrumRegisters::new(&self.spectra) {
             return Err("the spectrum registers do not hold the scene's spectra".to_owned());
         }
-        if self.emitters != emitters(&self.bvh, &self.surfaces) {
+        if self.emitters != emitters(&self.bvh, &self.packed_surfaces) {
             return Err("the emitter subset does not match the shading records".to_owned());
         }
         Ok(())
@@ -309,34 +321,27 @@ impl Scene {
 
     /// Area of triangle `index` (0 for an unknown index).
     pub fn area(&self, index: usize) -> f32 {
-        self.surfaces.get(index).map_or(0.0, |s| s.area)
+        self.packed_surfaces.area(index).unwrap_or(0.0)
     }
 
     /// Bytes of memory the scene holds: geometry, BVH, light distribution,
     /// spectra (with their dense tables), angular Fourier tables or network
-    /// weights, textures and materials. Exact for the vectors owned here;
-    /// the BVH and light set are counted per node, triangle and light (see
-    /// [`BVH_NODE_BYTES`], [`BVH_TRIANGLE_BYTES`], [`LIGHT_BYTES`]), the
-    /// BVH's 8-wide tree exactly.
+    /// weights, textures and materials. Exact for the vectors owned here
+    /// and the BVH ([`Bvh::memory_bytes`]); the light set is counted per
+    /// light ([`LIGHT_BYTES`]).
     pub fn memory_bytes(&self) -> usize {
         fn vec_bytes<T>(v: &Vec<T>) -> usize {
             v.capacity() * size_of::<T>()
         }
         let geometry = vec_bytes(&self.triangles)
-            + vec_bytes(&self.normals)
             + vec_bytes(&self.triangle_material)
             + vec_bytes(&self.uvs)
             + vec_bytes(&self.shading_index)
             + vec_bytes(&self.vertex_normals)
-            + vec_bytes(&self.surfaces)
             + self.packed_surfaces.memory_bytes();
-        let kept = self.bvh.input_triangles() - self.bvh.skipped_triangles();
-        let bvh = self.bvh.node_count() * BVH_NODE_BYTES
-            + kept * BVH_TRIANGLE_BYTES
-            + self.bvh.wide_memory_bytes()
-            + self.bvh.flat_memory_bytes();
+        let bvh = self.bvh.memory_bytes();
         let lights = self.lights.len() * LIGHT_BYTES
-            + self.triangles.len() * size_of::<u32>()
+            + self.lights.index_memory_bytes()
             + self.emitters.len() * size_of::<u32>()
             + self.light_sampler.memory_bytes()
             + self
@@ -372,39 +377,31 @@ impl Scene {
     }
 }
 
-/// Checks a record table against its sources: one record per triangle,
-/// each equal to [`Surface::new`] of its triangle with the light set's
-/// selection probability.
+/// Checks the packed records against their sources: one record per
+/// triangle, each equal to [`Surface::new`] of its triangle (the normal as
+/// [`SceneBuilder::build`] computes it) with the light set's selection
+/// probability.
 pub(crate) fn validate_surface_records(
-    surfaces: &[Surface],
+    surfaces: &PackedSurfaces,
     triangles: &[[Vec3; 3]],
-    normals: &[Vec3],
     triangle_material: &[MaterialId],
     materials: &[Material],
     lights: &LightSet,
 ) -> Result<(), String> {
-    if surfaces.len() != normals.len() {
+    if surfaces.len() != triangles.len() || triangle_material.len() != triangles.len() {
         return Err(format!(
-            "{} surface records for {} triangles",
+            "{} surface records and {} materials for {} triangles",
             surfaces.len(),
-            normals.len()
+            triangle_material.len(),
+            triangles.len()
         ));
     }
-    for (index, surface) in surfaces.iter().enumerate() {
-        let expected = match (
-            normals.get(index),
-            triangles.get(index),
-            triangle_material.get(index),
-        ) {
-            (Some(&normal), Some(vertices), Some(&id)) => {
-                materials.get(id.index()).map(|m| Surface {
-                    light_pmf: lights.pmf_of_triangle(index as u32),
-                    ..Surface::new(normal, triangle_area(vertices), id, m)
-                })
-            }
-            _ => None,
-        };
-        if expected.as_ref() != Some(surface) {
+    for (index, (vertices, &id)) in triangles.iter().zip(triangle_material).enumerate() {
+        let expected = materials.get(id.index()).map(|m| Surface {
+            light_pmf: lights.pmf_of_triangle(index as u32),
+            ..Surface::new(geometric_normal(vertices), triangle_area(vertices), id, m)
+        });
+        if expected.is_none() || expected != surfaces.unpack(index, id) {
             return Err(format!(
                 "surface record {index} does not match its triangle"
             ));
@@ -413,10 +410,12 @@ pub(crate) fn validate_surface_records(
     Ok(())
 }
 
-/// Bytes the BVH keeps per node: obvhs' `Bvh2Node` and its parent index.
-pub const BVH_NODE_BYTES: usize = size_of::<obvhs::bvh2::node::Bvh2Node>() + size_of::<u32>();
+/// The unit geometric normal of a triangle, `(b − a) × (c − a)` normalised.
+fn geometric_normal([a, b, c]: &[Vec3; 3]) -> Vec3 {
+    (*b - *a).cross(*c - *a).normalize()
+}
 
-/// Bytes the BVH keeps per (non-degenerate) triangle
+/// The least the BVH keeps per (non-degenerate) triangle
 /// ([`crate::accel::BYTES_PER_TRIANGLE`], derived from the BVH's own types).
 pub const BVH_TRIANGLE_BYTES: usize = crate::accel::BYTES_PER_TRIANGLE;
 
@@ -622,9 +621,16 @@ impl SceneBuilder {
         } else if !self.shading_index.is_empty() {
             self.shading_index.push(NO_ID);
         }
+        // Texture coordinates are stored once a triangle has non-zero ones
+        // (bits: a -0 would interpolate differently from the 0 of an empty
+        // table), then for every triangle.
+        let zero_uvs = uvs.iter().all(|t| t.x.to_bits() == 0 && t.y.to_bits() == 0);
+        if !zero_uvs || !self.uvs.is_empty() {
+            self.uvs.resize(self.triangles.len(), [Vec2::ZERO; 3]);
+            self.uvs.push(uvs);
+        }
         self.triangles.push(vertices);
         self.triangle_material.push(material);
-        self.uvs.push(uvs);
         true
     }
 
@@ -640,6 +646,8 @@ impl SceneBuilder {
         placement: &MeshPlacement<'_>,
     ) -> Result<MeshAdded, SceneError> {
         mesh.validate().map_err(SceneError::Mesh)?;
+        self.triangles.reserve(mesh.triangles.len());
+        self.triangle_material.reserve(mesh.triangles.len());
         let transform = placement.transform;
         let positions: Vec<Vec3> = mesh.positions.iter().map(|&p| transform.point(p)).collect();
         let smooth = !placement.face_normals && !mesh.normals.is_empty();
@@ -735,7 +743,11 @@ impl SceneBuilder {
     }
 
     /// Builds the BVH and the light distribution.
-    pub fn build(self) -> Result<Scene, SceneError> {
+    pub fn build(mut self) -> Result<Scene, SceneError> {
+        // Pushes left up to twice the space the soup needs.
+        self.triangles.shrink_to_fit();
+        self.triangle_material.shrink_to_fit();
+        self.uvs.shrink_to_fit();
         let camera = self.camera.ok_or(SceneError::NoCamera)?;
         if self.triangles.is_empty() {
             return Err(SceneError::Empty);
@@ -774,11 +786,6 @@ impl SceneBuilder {
                 env.0,
             ));
         }
-        let normals: Vec<Vec3> = self
-            .triangles
-            .iter()
-            .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize())
-            .collect();
         let bvh = Bvh::build(&self.triangles);
         bvh.validate().map_err(SceneError::Bvh)?;
         let mut shading_index = self.shading_index;
@@ -786,12 +793,13 @@ impl SceneBuilder {
             shading_index.resize(self.triangles.len(), NO_ID);
         }
         // Material ids were checked above, so every triangle has a record.
-        let mut surfaces: Vec<Surface> = normals
-            .iter()
-            .zip(&self.triangles)
-            .zip(&self.triangle_material)
-            .filter_map(|((&normal, vertices), &id)| {
+        let mut surfaces: Vec<Surface> = self
+            .triangles
+            .par_iter()
+            .zip(self.triangle_material.par_iter())
+            .filter_map(|(vertices, &id)| {
                 let material = self.materials.get(id.index())?;
+                let normal = geometric_normal(vertices);
                 Some(Surface::new(normal, triangle_area(vertices), id, material))
             })
             .collect();
@@ -825,9 +833,10 @@ impl SceneBuilder {
         if light_sampler.has_others() {
             lights.scale_selection(light_sampler.triangle_share(), &mut surfaces);
         }
-        let emitters = emitters(&bvh, &surfaces);
-        let spectrum_registers = SpectrumRegisters::new(&self.spectra);
         let packed_surfaces = PackedSurfaces::new(&surfaces);
+        drop(surfaces);
+        let emitters = emitters(&bvh, &packed_surfaces);
+        let spectrum_registers = SpectrumRegisters::new(&self.spectra);
         Ok(Scene {
             range: self.range,
             spectra: self.spectra,
@@ -835,7 +844,6 @@ impl SceneBuilder {
             textures: self.textures,
             materials: self.materials,
             triangles: self.triangles,
-            normals,
             triangle_material: self.triangle_material,
             uvs: self.uvs,
             shading_index,
@@ -846,7 +854,6 @@ impl SceneBuilder {
             light_sampler,
             bvh,
             lights,
-            surfaces,
             emitters,
             spectrum_registers,
             packed_surfaces,
@@ -861,6 +868,27 @@ mod tests {
     use spectral_core::SpectralRange;
 
     #[test]
+    fn texture_coordinates_are_stored_from_the_first_non_zero_ones()
+    -> Result<(), Box<dyn std::error::Error>> {
+        use super::{SceneBuilder, camera::Camera};
+        use glam::{Vec2, Vec3};
+        let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
+        let grey = b.add_spectrum("grey", crate::spectra::SpectrumSource::Constant(0.5))?;
+        let m = b.add_material(crate::shading::material::Material::lambert("grey", grey));
+        let triangle = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        b.add_triangle(triangle, m);
+        assert!(b.uvs.is_empty());
+        let uv = [Vec2::ZERO, Vec2::X, Vec2::Y];
+        b.add_triangle_uv(triangle.map(|v| v + Vec3::Z), uv, m);
+        b.add_triangle(triangle.map(|v| v - Vec3::Z), m);
+        b.set_camera(Camera::look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 40.0)?);
+        let scene = b.build()?;
+        assert_eq!(scene.uvs(), [[Vec2::ZERO; 3], uv, [Vec2::ZERO; 3]]);
+        assert_eq!(scene.validate_surfaces(), Ok(()));
+        Ok(())
+    }
+
+    #[test]
     fn stale_derived_data_fails_validation() -> Result<(), Box<dyn std::error::Error>> {
         let scene = cornell_box(SpectralRange::VISIBLE)?;
         scene.validate_surfaces()?;
@@ -868,7 +896,10 @@ mod tests {
         stale.emitters = scene.bvh.subset(&[0, 1]);
         assert!(stale.validate_surfaces().is_err());
         let mut stale = cornell_box(SpectralRange::VISIBLE)?;
-        stale.surfaces.swap(0, 1);
+        stale.triangle_material.swap(0, 8);
+        assert!(stale.validate_surfaces().is_err());
+        let mut stale = cornell_box(SpectralRange::VISIBLE)?;
+        stale.uvs.push([glam::Vec2::ZERO; 3]);
         assert!(stale.validate_surfaces().is_err());
         Ok(())
     }

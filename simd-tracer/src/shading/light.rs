@@ -286,6 +286,11 @@ impl LightSet {
         Ok(())
     }
 
+    /// Bytes of the per-triangle index into the lights.
+    pub fn index_memory_bytes(&self) -> usize {
+        self.light_of_triangle.capacity() * size_of::<u32>()
+    }
+
     /// Number of emissive triangles.
     pub fn len(&self) -> usize {
         self.lights.len()

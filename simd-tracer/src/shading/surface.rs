@@ -17,7 +17,10 @@
 //!
 //! Packets read the records from [`PackedSurfaces`], the same records as
 //! eight 32-bit words each: one 32-byte load per lane and one `8 × 8`
-//! transpose give the packet's eight fields.
+//! transpose give the packet's eight fields. The scene keeps only the
+//! packed form (at a million triangles a second layout cost 36 MB); a
+//! [`Surface`] is unpacked from it, bit for bit, where one is wanted
+//! ([`PackedSurfaces::unpack`]).
 
 use crate::ids::{MaterialId, NO_ID, SpectrumId};
 use crate::shading::material::{Albedo, Bsdf, Material};
@@ -169,14 +172,56 @@ impl PackedSurfaces {
         ])
     }
 
-    /// Whether these are exactly the packed `surfaces` (bit for bit).
-    pub fn packs(&self, surfaces: &[Surface]) -> bool {
-        self.0.len() == surfaces.len()
-            && self
-                .0
-                .iter()
-                .zip(surfaces)
-                .all(|(&words, surface)| words.to_array() == Self::pack(surface).to_array())
+    /// Number of records.
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Whether there is no record.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// The record of triangle `index`, whose material (not packed) is
+    /// `material`: the packed words bit for bit.
+    pub fn unpack(&self, index: usize, material: MaterialId) -> Option<Surface> {
+        let [x, y, z, emission, sides, light_pmf, area, lambert_albedo] =
+            self.0.get(index)?.to_array();
+        Some(Surface {
+            normal: Vec3::new(f32::from_bits(x), f32::from_bits(y), f32::from_bits(z)),
+            material,
+            emission: SpectrumId(emission),
+            two_sided: sides & SideFlags::TWO_SIDED != 0,
+            front_only: sides & SideFlags::FRONT_ONLY != 0,
+            light_pmf: f32::from_bits(light_pmf),
+            area: f32::from_bits(area),
+            lambert_albedo: SpectrumId(lambert_albedo),
+        })
+    }
+
+    /// The geometric normal of record `index`.
+    #[inline]
+    pub fn normal(&self, index: usize) -> Option<Vec3> {
+        let words = self.0.get(index)?.to_array();
+        Some(Vec3::new(
+            f32::from_bits(words[0]),
+            f32::from_bits(words[1]),
+            f32::from_bits(words[2]),
+        ))
+    }
+
+    /// The area of record `index`.
+    pub fn area(&self, index: usize) -> Option<f32> {
+        self.0
+            .get(index)
+            .map(|words| f32::from_bits(words.to_array()[6]))
+    }
+
+    /// Whether record `index` emits.
+    pub fn emits(&self, index: usize) -> bool {
+        self.0
+            .get(index)
+            .is_some_and(|words| words.to_array()[3] != NO_ID)
     }
 
     /// Bytes held.
@@ -372,7 +417,9 @@ mod tests {
     fn records_match_their_sources() -> Result<(), Box<dyn std::error::Error>> {
         let scene = scene()?;
         scene.validate_surfaces()?;
-        let s = &scene.surfaces();
+        let s: Vec<Surface> = (0..scene.triangles().len())
+            .filter_map(|index| scene.surface(index))
+            .collect();
         assert_eq!(s.len(), 6);
         let front_only: Vec<bool> = s.iter().map(|r| r.front_only).collect();
         assert_eq!(front_only, [false, false, true, false, true, false]);
@@ -390,7 +437,7 @@ mod tests {
         let lambert: Vec<u32> = s.iter().map(|r| r.lambert_albedo.0).collect();
         assert_eq!(lambert, [0, 0, 0, NO_ID, NO_ID, NO_ID]);
         for (index, surface) in s.iter().enumerate() {
-            assert_eq!(surface.normal, scene.normals()[index]);
+            assert_eq!(Some(surface.normal), scene.normal(index));
             assert_eq!(surface.area, triangle_area(&scene.triangles()[index]));
             assert_eq!(scene.area(index), surface.area);
             assert_eq!(surface.material, scene.triangle_material()[index]);
@@ -404,18 +451,19 @@ mod tests {
         // The emitter subset: triangles 0, 1 and 4; a stale one is caught.
         assert_eq!(scene.emitters(), &scene.bvh().subset(&[0, 1, 4]));
 
-        // Each kind of corruption is caught.
-        let check = |surfaces: &[Surface]| {
+        // Each kind of corruption is caught (the material is not packed:
+        // a record with another one is the triangle's material changed).
+        let check = |surfaces: &[Surface], materials: &[MaterialId]| {
             crate::scene::validate_surface_records(
-                surfaces,
+                &PackedSurfaces::new(surfaces),
                 scene.triangles(),
-                scene.normals(),
-                scene.triangle_material(),
+                materials,
                 scene.materials(),
                 scene.lights(),
             )
         };
-        assert!(check(&s[..4]).is_err());
+        check(&s, scene.triangle_material())?;
+        assert!(check(&s[..4], scene.triangle_material()).is_err());
         let corruptions: [fn(&mut Surface); 8] = [
             |r| r.normal = -r.normal,
             |r| r.material = MaterialId(3),
@@ -426,15 +474,14 @@ mod tests {
             |r| r.area += 1.0,
             |r| r.lambert_albedo = SpectrumId::NONE,
         ];
-        assert!(scene.packed_surfaces().packs(s));
-        assert!(!scene.packed_surfaces().packs(&s[..4]));
         for corrupt in corruptions {
-            let mut bad = s.to_vec();
+            let mut bad = s.clone();
             corrupt(&mut bad[0]);
-            assert!(check(&bad).is_err());
-            // The material is not packed; every other field is.
-            let material_only = bad[0].material != s[0].material;
-            assert_eq!(scene.packed_surfaces().packs(&bad), material_only);
+            let materials: Vec<MaterialId> = bad.iter().map(|r| r.material).collect();
+            assert!(check(&bad, &materials).is_err());
+            // The packed words round-trip bit for bit.
+            let packed = PackedSurfaces::new(&bad);
+            assert_eq!(packed.unpack(0, bad[0].material), Some(bad[0]));
         }
         Ok(())
     }
@@ -466,8 +513,8 @@ mod tests {
                 .to_array();
             let lambert = packet.all_lambert(active);
             for lane in 0..LANES {
-                let record = match scene.surfaces().get(triangles[lane] as usize) {
-                    Some(r) if active.contains(lane) => *r,
+                let record = match scene.surface(triangles[lane] as usize) {
+                    Some(r) if active.contains(lane) => r,
                     _ => Surface::NONE,
                 };
                 assert_eq!(packet.normal.lane(lane), record.normal);
