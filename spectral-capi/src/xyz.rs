@@ -217,7 +217,7 @@ fn convert_once<const N: usize>(
 }
 
 /// The 3×n matrix of the zeroth route, `XYZ = K c`: a plain struct a
-/// renderer keeps per film (800 bytes), applied per pixel or per sample in
+/// renderer keeps per film (776 bytes), applied per pixel or per sample in
 /// `O(n)`. Filled by `fspec_xyz_kernel_init`; row `r` (X, Y, Z) holds
 /// `rows[r][0..n]`, the rest is zero.
 #[repr(C)]

@@ -478,3 +478,12 @@ fn fourier_tables_equal_the_core() {
     assert_eq!(status, FspecStatus::Ok);
     assert_eq!(coeffs, core.lookup(0.3).coeffs);
 }
+
+/// The sizes the header's users rely on (README: the plain structs).
+#[test]
+fn abi_struct_sizes() {
+    assert_eq!(size_of::<FspecXyzKernel>(), 776);
+    assert_eq!(size_of::<FspecControlVariate>(), 128);
+    assert_eq!(size_of::<FspecRange>(), 16);
+    assert_eq!(size_of::<FspecStatus>(), 4);
+}
