@@ -99,6 +99,21 @@ pub(crate) unsafe fn write<T: Copy>(pointer: *mut T, values: &[T]) -> Result<(),
     Ok(())
 }
 
+/// [`write`] for numeric results: `Err(NonFiniteResult)`, and nothing
+/// written, if any value is NaN or infinite (finite input can overflow).
+///
+/// # Safety
+///
+/// As [`write`].
+pub(crate) unsafe fn write_finite<T: Copy + Into<f64>>(
+    pointer: *mut T,
+    values: &[T],
+) -> Result<(), FspecStatus> {
+    crate::check_finite_result(values)?;
+    // SAFETY: forwarded to the caller of this function.
+    unsafe { write(pointer, values) }
+}
+
 /// The header at the start of every caller-allocated buffer that holds a
 /// value of this crate (an XYZ converter, a Fourier table, a control
 /// variate): which kind of value, for how many coefficients.

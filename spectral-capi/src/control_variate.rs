@@ -5,7 +5,7 @@
 
 use crate::boundary::{self, Kind};
 use crate::status::status_of;
-use crate::{FspecStatus, check_finite_input};
+use crate::{FspecStatus, check_finite_input, check_finite_result};
 use core::ffi::c_void;
 use spectral_core::control_variate::ControlVariate;
 
@@ -120,12 +120,16 @@ pub unsafe extern "C" fn fspec_cv_estimate(
         }
         // SAFETY: the header says the buffer holds a `ControlVariate`.
         let estimator = unsafe { boundary::load::<ControlVariate>(cv.cast()) }?;
+        let [estimate, alpha, samples] =
+            [estimator.estimate(), estimator.alpha(), estimator.samples()];
+        // All checked before any is written: on failure nothing is.
+        check_finite_result(&[estimate, alpha, samples])?;
         // SAFETY: the caller guarantees one writable double at each.
-        unsafe { boundary::write(estimate_out, &[estimator.estimate()]) }?;
+        unsafe { boundary::write(estimate_out, &[estimate]) }?;
         // SAFETY: as above.
-        unsafe { boundary::write(alpha_out, &[estimator.alpha()]) }?;
+        unsafe { boundary::write(alpha_out, &[alpha]) }?;
         // SAFETY: as above.
-        unsafe { boundary::write(samples_out, &[estimator.samples()]) }
+        unsafe { boundary::write(samples_out, &[samples]) }
     })())
 }
 

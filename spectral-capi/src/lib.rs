@@ -140,8 +140,8 @@ macro_rules! dispatch {
 pub(crate) use dispatch;
 
 /// `Err(NonFiniteResult)` unless every value is finite.
-fn check_finite_result(values: &[f64]) -> Result<(), FspecStatus> {
-    if values.iter().all(|v| v.is_finite()) {
+fn check_finite_result<T: Copy + Into<f64>>(values: &[T]) -> Result<(), FspecStatus> {
+    if values.iter().all(|&v| v.into().is_finite()) {
         Ok(())
     } else {
         Err(FspecStatus::NonFiniteResult)

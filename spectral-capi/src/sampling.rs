@@ -175,7 +175,7 @@ pub unsafe extern "C" fn fspec_sampled_to_xyz(
         }
         let xyz = dispatch_wavelengths!(count, sampled_xyz(values_in, lambda_in, pdf_in))?;
         // SAFETY: the caller guarantees 3 writable doubles at `xyz_out`.
-        unsafe { boundary::write(xyz_out, &xyz) }
+        unsafe { boundary::write_finite(xyz_out, &xyz) }
     })())
 }
 

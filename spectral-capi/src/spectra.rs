@@ -231,7 +231,7 @@ unsafe fn product_scalar<L: Lane + Default + Into<f64>>(
     dispatch!(n, product_into::<N, _>(a_coeffs, b_coeffs, h))?;
     // SAFETY: the caller guarantees `n` writable elements at `out`; the
     // inputs were copied, so aliasing them is harmless.
-    unsafe { boundary::write(out, h) }
+    unsafe { boundary::write_finite(out, h) }
 }
 
 /// `h = a ⊛ b` for `N` coefficients of lane type `L`.
@@ -275,7 +275,7 @@ pub unsafe extern "C" fn fspec_product_x8(
         let h = prefix(&mut h_scratch, floats)?;
         dispatch!(n, product_x8_into(a_lanes, b_lanes, h))?;
         // SAFETY: the caller guarantees `8 n` writable floats at `out`.
-        unsafe { boundary::write(out, h) }
+        unsafe { boundary::write_finite(out, h) }
     })())
 }
 
@@ -368,7 +368,7 @@ unsafe fn eval_scalar<L: Lane + Default + Into<f64>>(
     check_wavelength(&range, lambda_nm)?;
     let value = dispatch!(n, eval_at::<N, _>(coeffs_in, &range, lambda_nm))?;
     // SAFETY: the caller guarantees one writable element at `value_out`.
-    unsafe { boundary::write(value_out, &[value]) }
+    unsafe { boundary::write_finite(value_out, &[value]) }
 }
 
 /// The series of `N` coefficients at `lambda_nm`.

@@ -237,7 +237,7 @@ pub unsafe extern "C" fn fspec_table_lookup(
         // SAFETY: the header says the buffer holds a `Table<n>`.
         unsafe { dispatch!(n, lookup_into(table, cos_theta, coeffs)) }?;
         // SAFETY: the caller guarantees `n` writable floats at `coeffs_out`.
-        unsafe { boundary::write(coeffs_out, coeffs) }
+        unsafe { boundary::write_finite(coeffs_out, coeffs) }
     })())
 }
 

@@ -151,7 +151,7 @@ pub unsafe extern "C" fn fspec_xyz_converter_apply(
         // SAFETY: the header says the buffer holds an `XyzConverter<n>`.
         let xyz = unsafe { dispatch!(n, apply_stored(converter, route, coeffs_in)) }?;
         // SAFETY: the caller guarantees 3 writable doubles at `xyz_out`.
-        unsafe { boundary::write(xyz_out, &xyz) }
+        unsafe { boundary::write_finite(xyz_out, &xyz) }
     })())
 }
 
@@ -201,7 +201,7 @@ pub unsafe extern "C" fn fspec_xyz(
         check_finite_input(coeffs_in)?;
         let xyz = dispatch!(n, convert_once(range, route, coeffs_in))?;
         // SAFETY: the caller guarantees 3 writable doubles at `xyz_out`.
-        unsafe { boundary::write(xyz_out, &xyz) }
+        unsafe { boundary::write_finite(xyz_out, &xyz) }
     })())
 }
 
@@ -343,7 +343,7 @@ unsafe fn kernel_apply_scalar<L: Lane + Default + Into<f64>>(
     check_finite_input(coeffs_in)?;
     let xyz = dispatch!(n, apply_kernel::<N, _>(&kernel, coeffs_in))?;
     // SAFETY: the caller guarantees 3 writable elements at `xyz_out`.
-    unsafe { boundary::write(xyz_out, &xyz) }
+    unsafe { boundary::write_finite(xyz_out, &xyz) }
 }
 
 /// `K c` for `N` coefficients of lane type `L`.
@@ -385,7 +385,7 @@ pub unsafe extern "C" fn fspec_xyz_kernel_apply_x8(
         check_finite_input(lanes)?;
         let xyz = dispatch!(n, apply_kernel_x8(&kernel, lanes))?;
         // SAFETY: the caller guarantees 24 writable floats at `xyz_out`.
-        unsafe { boundary::write(xyz_out, &xyz) }
+        unsafe { boundary::write_finite(xyz_out, &xyz) }
     })())
 }
 

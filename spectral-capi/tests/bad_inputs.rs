@@ -13,8 +13,8 @@ use core::ptr::{null, null_mut};
 use spectral_capi::FspecRange;
 use spectral_capi::FspecStatus::{
     self, BadLength, BufferTooSmall, InvalidParameter, InvalidRange, InvalidWavelength, Misaligned,
-    NegativeValue, NonFinite, NotIncreasing, NotInitialised, NullPointer, OutOfRange,
-    UnsupportedCount,
+    NegativeValue, NonFinite, NonFiniteResult, NotIncreasing, NotInitialised, NullPointer,
+    OutOfRange, UnsupportedCount,
 };
 use spectral_capi::control_variate::{
     FspecControlVariate, fspec_cv_add, fspec_cv_end_batch, fspec_cv_estimate, fspec_cv_init,
@@ -225,6 +225,9 @@ fn products_and_evaluation() {
         product(misaligned(&buffer), good.as_ptr(), 8, o),
         Misaligned
     );
+    // Finite input whose product overflows.
+    let huge = [1e200f64; 32];
+    assert_eq!(product(huge.as_ptr(), huge.as_ptr(), 8, o), NonFiniteResult);
 
     let good32 = [0.5f32; 256];
     let nan32 = [f32::NAN; 256];
