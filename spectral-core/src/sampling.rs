@@ -149,6 +149,16 @@ impl<const C: usize> SampledWavelengths<C> {
         }
     }
 
+    /// Wavelengths and their densities drawn elsewhere (a renderer's own
+    /// sampler, or buffers handed over through the C ABI), for
+    /// [`SampledSpectrum::to_xyz`].
+    pub fn from_parts(lambda_nm: [f32; C], pdf_per_nm: [f32; C]) -> Self {
+        Self {
+            lambda_nm,
+            pdf_per_nm,
+        }
+    }
+
     /// The wavelengths, nm.
     pub fn lambda_nm(&self) -> &[f32; C] {
         &self.lambda_nm
