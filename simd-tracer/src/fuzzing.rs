@@ -88,7 +88,11 @@ pub fn traversal(bytes: &[u8]) {
         })
         .collect();
     let bvh = Bvh::build(&triangles);
-    assert!(bvh.validate().is_ok(), "{:?}", bvh.validate());
+    assert!(
+        bvh.validate(&triangles).is_ok(),
+        "{:?}",
+        bvh.validate(&triangles)
+    );
     let ray_values: Vec<f32> = floats(&bytes[..split]).collect();
     let rays: Vec<Ray> = ray_values
         .chunks_exact(9)
@@ -239,7 +243,7 @@ pub fn obj(bytes: &[u8]) {
     }
     match builder.build() {
         Ok(scene) => {
-            assert!(scene.bvh().validate().is_ok());
+            assert!(scene.bvh().validate(scene.triangles()).is_ok());
             assert!(scene.normals().all(|n| n.is_finite()));
             assert!(scene.validate_surfaces().is_ok());
         }

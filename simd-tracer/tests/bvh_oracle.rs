@@ -523,23 +523,24 @@ fn packet_from_specs(scene: &Scene, specs: &[RaySpec], active: u8) -> RayPacket 
 #[test]
 fn validate_accepts_random_soups_and_the_cornell_box() {
     for (count, seed) in [(1, 1), (2, 2), (3, 3), (17, 4), (200, 5), (2000, 6)] {
-        let bvh = Bvh::build(&random_soup(count, seed));
+        let soup = random_soup(count, seed);
+        let bvh = Bvh::build(&soup);
         assert_eq!(bvh.skipped_triangles(), 0);
         assert_eq!(bvh.input_triangles(), count);
-        bvh.validate().unwrap();
+        bvh.validate(&soup).unwrap();
     }
     let cornell = cornell_box();
     assert_eq!(cornell.len(), 36);
     let bvh = Bvh::build(&cornell);
     assert_eq!(bvh.skipped_triangles(), 0);
-    bvh.validate().unwrap();
+    bvh.validate(&cornell).unwrap();
     let (lo, hi) = bvh.bounds().unwrap();
     assert_eq!(
         (lo, hi),
         (Vec3::new(-1.0, -1.01, -1.0), Vec3::new(1.0, 1.0, 1.0))
     );
-    box_scene().bvh.validate().unwrap();
-    Bvh::build(&[]).validate().unwrap();
+    box_scene().bvh.validate(&box_scene().triangles).unwrap();
+    Bvh::build(&[]).validate(&[]).unwrap();
 }
 
 #[test]
@@ -632,7 +633,7 @@ fn incoherent_rays_take_flat_or_packet_in_small_scenes_and_wide_in_larger_ones()
         assert!(scene.triangles.len() > WIDE_MIN_TRIANGLES);
         assert_eq!(scene.bvh.bounce_traversal(), Traversal::Wide);
         assert_eq!(scene.bvh.shadow_traversal(), Traversal::Wide);
-        scene.bvh.validate().unwrap();
+        scene.bvh.validate(&scene.triangles).unwrap();
     }
     // Several levels, so inner wide nodes are traversed by the tests below.
     assert!(big_soup_scene().bvh.wide_node_count() > 8);
@@ -866,7 +867,7 @@ fn degenerate_triangles_are_skipped_and_never_hit() {
     let bvh = Bvh::build(&triangles);
     assert_eq!(bvh.skipped_triangles(), degenerate.len());
     assert_eq!(bvh.input_triangles(), triangles.len());
-    bvh.validate().unwrap();
+    bvh.validate(&triangles).unwrap();
 
     let mut rng = SplitMix(3);
     let mut hits = 0;
@@ -928,7 +929,7 @@ fn degenerate_triangles_are_skipped_and_never_hit() {
     // All-degenerate input: an empty tree.
     let bvh = Bvh::build(&degenerate);
     assert_eq!(bvh.skipped_triangles(), degenerate.len());
-    bvh.validate().unwrap();
+    bvh.validate(&degenerate).unwrap();
     let ray = Ray {
         origin: Vec3::new(0.0, 0.0, -5.0),
         direction: Vec3::Z,

@@ -203,7 +203,7 @@ pub enum Traversal {
 pub const WIDE_MIN_TRIANGLES: usize = WIDE_WIDTH * WIDE_WIDTH;
 
 /// The least the BVH keeps per non-degenerate triangle: the prepared
-/// edge-test triangle (its vertices included), its input index, obvhs'
+/// edge-test triangle (without its vertices), its input index, obvhs'
 /// primitive index and its entry in the flat test's lists (fan pairs or
 /// singles). The 8-wide tree and the nodes come on top
 /// ([`Bvh::memory_bytes`] counts everything).
@@ -552,9 +552,15 @@ mod tests {
 
     #[test]
     fn validates_and_detects_corruption() {
-        let bvh = Bvh::build(&scene());
+        let input = scene();
+        let bvh = Bvh::build(&input);
         assert_eq!(bvh.skipped_triangles(), 0);
-        bvh.validate().unwrap();
+        bvh.validate(&input).unwrap();
+        // Input other than the tree's.
+        let mut moved = input.clone();
+        moved[3][1].x += 0.5;
+        assert!(bvh.validate(&moved).is_err());
+        assert!(bvh.validate(&input[1..]).is_err());
 
         // A node box that no longer bounds its triangles.
         let mut broken = bvh.clone();
@@ -562,23 +568,23 @@ mod tests {
         let mut aabb = *broken.bvh2.nodes[leaf].aabb();
         aabb.max = aabb.min;
         broken.bvh2.nodes[leaf].set_aabb(aabb);
-        assert!(broken.validate().is_err());
+        assert!(broken.validate(&input).is_err());
 
         // A triangle referenced twice (and another never).
         let mut broken = bvh.clone();
         broken.original.swap(0, 1);
         broken.original[1] = broken.original[0];
-        assert!(broken.validate().is_err());
+        assert!(broken.validate(&input).is_err());
 
         // Stale prepared data.
         let mut broken = bvh.clone();
-        broken.triangles[3].vertices[1][0] += 0.5;
-        assert!(broken.validate().is_err());
+        broken.triangles[3].plane += 0.5;
+        assert!(broken.validate(&input).is_err());
 
         // Wrong bookkeeping.
         let mut broken = bvh;
         broken.skipped += 1;
-        assert!(broken.validate().is_err());
+        assert!(broken.validate(&input).is_err());
     }
 
     #[test]
@@ -596,7 +602,10 @@ mod tests {
                 (a.normal, a.plane, a.grazing),
                 (b.normal, b.plane, b.grazing)
             );
-            assert_eq!(*a, PreparedTriangle::new(&a.corners()));
+            assert_eq!(
+                *a,
+                PreparedTriangle::new(&tris[bvh.original[first as usize] as usize])
+            );
         }
 
         // Not pairs: a quad bent out of its plane, and neighbours that share
@@ -604,7 +613,9 @@ mod tests {
         let [a, b, c, d] = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
         let bent = d + Vec3::Z * 1e-3;
         let other = Bvh::build(&[[a, b, c], [a, c, bent], [b, c, d], [a, b, d], [c, a, d]]);
-        other.validate().unwrap();
+        other
+            .validate(&[[a, b, c], [a, c, bent], [b, c, d], [a, b, d], [c, a, d]])
+            .unwrap();
         assert_eq!((other.flat_pairs.len(), other.flat_singles.len()), (0, 5));
         // A bend within a few f32 steps still pairs.
         let slight = d + Vec3::Z * 2.0 * f32::EPSILON;
@@ -614,17 +625,17 @@ mod tests {
         // a second triangle whose plane is its own again ...
         let mut broken = bvh.clone();
         broken.flat_pairs[0][1] = broken.flat_pairs[1][1];
-        assert!(broken.validate().is_err());
+        assert!(broken.validate(&tris).is_err());
         let mut broken = bvh.clone();
         broken.flat_singles.push(0);
-        assert!(broken.validate().is_err());
+        assert!(broken.validate(&tris).is_err());
         // ... and stale or missing copies of the pairs' triangles.
         let mut broken = bvh.clone();
         broken.flat_pair_triangles.swap(0, 1);
-        assert!(broken.validate().is_err());
+        assert!(broken.validate(&tris).is_err());
         let mut broken = bvh.clone();
         broken.flat_pair_triangles.pop();
-        assert!(broken.validate().is_err());
+        assert!(broken.validate(&tris).is_err());
         // (A tilted parallelogram, whose halves' own f32 normals differ.)
         let tilted = [
             Vec3::new(0.1, 0.2, 0.3),
@@ -632,18 +643,19 @@ mod tests {
             Vec3::new(1.9, 1.6, 0.75),
             Vec3::new(0.7, 1.1, 0.7),
         ];
-        let parallelogram = Bvh::build(&[
+        let halves = [
             [tilted[0], tilted[1], tilted[2]],
             [tilted[0], tilted[2], tilted[3]],
-        ]);
-        parallelogram.validate().unwrap();
+        ];
+        let parallelogram = Bvh::build(&halves);
+        parallelogram.validate(&halves).unwrap();
         assert_eq!(parallelogram.flat_pairs.len(), 1);
         let mut broken = parallelogram;
         let second = broken.flat_pairs[0][1] as usize;
-        let own = PreparedTriangle::new(&broken.triangles[second].corners());
+        let own = PreparedTriangle::new(&halves[broken.original[second] as usize]);
         assert_ne!(own.normal, broken.triangles[second].normal);
         broken.triangles[second] = own;
-        assert!(broken.validate().is_err());
+        assert!(broken.validate(&halves).is_err());
     }
 
     #[test]
@@ -702,8 +714,9 @@ mod tests {
         };
         let mut deepest = 0;
         for count in [200, 2_000] {
-            let bvh = Bvh::build(&vec![triangle; count]);
-            bvh.validate().unwrap();
+            let input = vec![triangle; count];
+            let bvh = Bvh::build(&input);
+            bvh.validate(&input).unwrap();
             let depth = tree_depth(&bvh.bvh2.nodes);
             assert!(depth < bvh.bvh2.max_depth, "{depth} {}", bvh.bvh2.max_depth);
             deepest = deepest.max(depth);
@@ -723,7 +736,7 @@ mod tests {
     #[test]
     fn empty_and_single_triangle_scenes() {
         let empty = Bvh::build(&[]);
-        empty.validate().unwrap();
+        empty.validate(&[]).unwrap();
         let ray = Ray {
             origin: Vec3::new(0.2, 0.2, 1.0),
             direction: Vec3::NEG_Z,
@@ -736,7 +749,7 @@ mod tests {
         assert!(empty.occluded_packet(&packet).is_empty());
 
         let one = Bvh::build(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]);
-        one.validate().unwrap();
+        one.validate(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]).unwrap();
         let hit = one.intersect(&ray).unwrap();
         assert_eq!((hit.t, hit.triangle), (1.0, 0));
         assert!(

@@ -23,11 +23,11 @@ pub(super) const COPLANAR_SINE: f64 = 8.0 * f32::EPSILON as f64;
 pub(super) const GRAZING: f32 = 1e-5;
 
 /// A triangle prepared for the edge-function test: the Plücker
-/// coordinates of its edges and its plane.
+/// coordinates of its edges and its plane. It keeps no vertices: no
+/// traversal reads them, and validation rebuilds the record from the input
+/// triangles the tree was built from (92 bytes a triangle, not 128).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct PreparedTriangle {
-    /// Vertices 0, 1, 2.
-    pub(super) vertices: [[f32; 3]; 3],
     /// `p × q` of the edges `(v1, v2)`, `(v2, v0)`, `(v0, v1)`.
     pub(super) edge_moment: [[f32; 3]; 3],
     /// `p − q` of the same edges.
@@ -52,17 +52,11 @@ impl PreparedTriangle {
         }
     }
 
-    /// Its vertices as given (bit for bit).
-    pub(super) fn corners(&self) -> [Vec3; 3] {
-        self.vertices.map(Vec3::from_array)
-    }
-
     pub(super) fn new(vertices: &[Vec3; 3]) -> Self {
         let [a, b, c] = vertices.map(|v| v.to_array());
         let normal = cross(sub3(b, a), sub3(c, a));
         let edges = [(b, c), (c, a), (a, b)];
         Self {
-            vertices: [a, b, c],
             edge_moment: edges.map(|(p, q)| cross(p, q)),
             edge_direction: edges.map(|(p, q)| sub3(p, q)),
             normal,

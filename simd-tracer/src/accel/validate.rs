@@ -7,7 +7,7 @@ use super::build::{
     triangle_aabb,
 };
 use super::triangle::{PreparedTriangle, is_fan_pair};
-use glam::Vec3A;
+use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
@@ -32,10 +32,24 @@ impl Bvh {
     /// the root, every non-degenerate input triangle is referenced exactly
     /// once, obvhs' traversal stack covers the tree's depth, and `obvhs`'s
     /// own validation (for trees up to 1024 levels deep and
-    /// [`OBVHS_VALIDATE_MAX_TRIANGLES`] triangles). `Err` says what is
+    /// `OBVHS_VALIDATE_MAX_TRIANGLES` triangles), and every prepared
+    /// record is the one its triangle of `input` (the triangles the tree was
+    /// built from; the tree keeps no vertices) makes. `Err` says what is
     /// wrong.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self, input: &[[Vec3; 3]]) -> Result<(), String> {
         let n = self.triangles.len();
+        if input.len() != self.input_count {
+            return Err(format!(
+                "{} input triangles given, the tree was built from {}",
+                input.len(),
+                self.input_count
+            ));
+        }
+        // The input vertices of a slot.
+        let corners = |slot: usize| -> Option<[Vec3; 3]> {
+            input.get(*self.original.get(slot)? as usize).copied()
+        };
+        let missing = |slot: usize| format!("triangle slot {slot} has no input triangle");
         let nodes = &self.bvh2.nodes;
         if self.original.len() != n {
             return Err(format!(
@@ -95,14 +109,9 @@ impl Bvh {
                         "leaf {index} references slots {first}..{end} of {n}"
                     ));
                 }
-                for (slot, (count, prepared)) in references[first..end]
-                    .iter_mut()
-                    .zip(&self.triangles[first..end])
-                    .enumerate()
-                    .map(|(k, pair)| (first + k, pair))
-                {
+                for (slot, count) in (first..).zip(&mut references[first..end]) {
                     *count += 1;
-                    let [a, b, c] = prepared.corners().map(Vec3A::from);
+                    let [a, b, c] = corners(slot).ok_or_else(|| missing(slot))?.map(Vec3A::from);
                     if !contains(aabb, a.min(b).min(c), a.max(b).max(c)) {
                         return Err(format!(
                             "leaf {index} does not bound triangle slot {slot} (input {})",
@@ -154,7 +163,7 @@ impl Bvh {
                 let target = build_order
                     .get_mut(primitive as usize)
                     .ok_or_else(|| format!("primitive index {primitive} out of range"))?;
-                *target = triangle_aabb(&self.triangles[slot].corners());
+                *target = triangle_aabb(&corners(slot).ok_or_else(|| missing(slot))?);
             }
             catch_unwind(AssertUnwindSafe(|| {
                 self.bvh2.validate(&build_order, false, false);
@@ -170,7 +179,7 @@ impl Bvh {
         }
 
         self.wide
-            .validate(&self.triangles)
+            .validate(&self.triangles, corners)
             .map_err(|e| format!("wide BVH: {e}"))?;
 
         // Fan pairs and singles: every slot once; each pair a coplanar fan
@@ -188,8 +197,10 @@ impl Bvh {
             count(first)?;
             count(second)?;
             let (a, b) = (first as usize, second as usize);
-            let (first_corners, second_corners) =
-                (self.triangles[a].corners(), self.triangles[b].corners());
+            let (first_corners, second_corners) = (
+                corners(a).ok_or_else(|| missing(a))?,
+                corners(b).ok_or_else(|| missing(b))?,
+            );
             if !is_fan_pair(&first_corners, &second_corners) {
                 return Err(format!(
                     "slots {first} and {second} are not a coplanar fan pair"
@@ -225,14 +236,14 @@ impl Bvh {
                 return Err(format!("input triangle {input} appears twice"));
             }
             *flag = true;
-            let vertices = &self.triangles[slot].corners();
+            let vertices = &corners(slot).ok_or_else(|| missing(slot))?;
             if is_degenerate(vertices) {
                 return Err(format!("degenerate input triangle {input} is in the tree"));
             }
-            let prepared = match self.triangles.get(first_of[slot] as usize) {
-                Some(first) => PreparedTriangle::on_plane_of(
+            let prepared = match first_of.get(slot).filter(|&&first| first != u32::MAX) {
+                Some(&first) => PreparedTriangle::on_plane_of(
                     vertices,
-                    &PreparedTriangle::new(&first.corners()),
+                    &PreparedTriangle::new(&corners(first as usize).ok_or_else(|| missing(slot))?),
                 ),
                 None => PreparedTriangle::new(vertices),
             };

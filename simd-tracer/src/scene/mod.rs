@@ -787,7 +787,7 @@ impl SceneBuilder {
             ));
         }
         let bvh = Bvh::build(&self.triangles);
-        bvh.validate().map_err(SceneError::Bvh)?;
+        bvh.validate(&self.triangles).map_err(SceneError::Bvh)?;
         let mut shading_index = self.shading_index;
         if !self.vertex_normals.is_empty() {
             shading_index.resize(self.triangles.len(), NO_ID);
