@@ -161,7 +161,8 @@ fn merge_states(parts: &[Part], frame: PixelWindow) -> Result<FilmState, CliErro
     }
     let passes = passes.ok_or_else(|| CliError::input("the frame holds no pixel"))?;
     let values_per_pixel = parts[0].film.state.values_per_pixel;
-    let mut merged = FilmState::empty(frame, passes.start, values_per_pixel);
+    let mode = parts[0].film.state.mode;
+    let mut merged = FilmState::empty(frame, passes.start, values_per_pixel, mode);
     merged.passes = passes;
     for &k in &order {
         let state = &parts[k].film.state;

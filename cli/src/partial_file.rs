@@ -20,12 +20,15 @@
 //! version, the header's fields (sizes within the renderer's limits, the
 //! window inside the film, the passes in order), the exact byte length of
 //! the data, and every pixel's values (finite sums, a whole sample count no
-//! larger than the passes); each failure is one line naming the file.
+//! larger than the passes, or for splatted films a weight sum within the
+//! bound of `simd_tracer::film::FilmMode::is_weight_sum`); each failure is
+//! one line naming the file.
 
 use crate::error::CliError;
 use crate::image_out::write_atomically;
 use crate::render_cmd::{MAX_SIDE, TransportSpec};
 use serde::{Deserialize, Serialize};
+use simd_tracer::film::FilmMode;
 use simd_tracer::render::{FilmState, PixelWindow};
 use std::io::Write;
 use std::path::Path;
@@ -75,8 +78,17 @@ pub struct FrameIdentity {
     pub hide_emitters: bool,
     /// The pixel filter: its kind and radius.
     pub filter: String,
+    /// How samples reached pixels (`sample` or `splat`,
+    /// `simd_tracer::film::FilmMode::name`; files without it were sampled).
+    #[serde(default = "sampled_film")]
+    pub film: String,
     /// The transport and its sizes.
     pub transport: TransportSpec,
+}
+
+/// The film mode of partial films written before splatting existed.
+fn sampled_film() -> String {
+    FilmMode::Sample.name().to_string()
 }
 
 /// The header line of a partial film.
@@ -208,12 +220,15 @@ impl PartialFilm {
                 f64::from_le_bytes(word)
             })
             .collect();
+        let mode = FilmMode::from_name(&header.identity.film)
+            .ok_or_else(|| format!("film `{}` (sample or splat)", header.identity.film))?;
         let state = FilmState {
             window,
             passes: header.passes[0]..header.passes[1],
             values_per_pixel: header.values_per_pixel,
             values,
             rejected: header.rejected,
+            mode,
         };
         state.validate()?;
         check_values(&state)?;
@@ -264,7 +279,9 @@ fn check_header(header: &PartialHeader) -> Result<(), String> {
     Ok(())
 }
 
-/// Every pixel: finite sums and a whole sample count `0 ≤ count ≤ passes`.
+/// Every pixel: finite sums and a weight sum of the passes in the film's
+/// mode (`FilmMode::is_weight_sum`: a whole sample count
+/// `0 ≤ count ≤ passes` when sampled).
 fn check_values(state: &FilmState) -> Result<(), String> {
     let passes = f64::from(state.passes.end - state.passes.start);
     for (index, values) in state
@@ -273,14 +290,14 @@ fn check_values(state: &FilmState) -> Result<(), String> {
         .enumerate()
     {
         let (&count, sums) = values.split_last().ok_or("a pixel holds no value")?;
-        let count_ok = count >= 0.0 && count <= passes && count.fract() == 0.0;
-        if !count_ok || !sums.iter().all(|v| v.is_finite()) {
+        if !state.mode.is_weight_sum(count, passes) || !sums.iter().all(|v| v.is_finite()) {
             let (x, y) = (
                 state.window.x + index as u32 % state.window.width,
                 state.window.y + index as u32 / state.window.width,
             );
             return Err(format!(
-                "pixel ({x}, {y}) is not a sum of at most {passes} finite samples"
+                "pixel ({x}, {y}) is not a {} sum of {passes} passes of finite samples",
+                state.mode.name()
             ));
         }
     }

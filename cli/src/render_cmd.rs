@@ -21,11 +21,11 @@ use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use simd_tracer::film::filter::{Filter, GAUSSIAN_SIGMA_PX, TENT_RADIUS_PX};
-use simd_tracer::film::{AlphaMode, Buffer};
+use simd_tracer::film::{AlphaMode, Buffer, FilmMode};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{
-    FilmState, PassJob, PixelWindow, Progress, RenderResult, RenderSettings, render_passes,
-    resolve_state,
+    FilmState, PassJob, PixelWindow, Progress, RenderResult, RenderSettings, TILE_SIZE,
+    render_passes, resolve_state,
 };
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::SceneOptions;
@@ -130,6 +130,25 @@ pub enum FilterKind {
     Gaussian,
 }
 
+/// How samples reach pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FilmKind {
+    /// Importance-sample the filter: each sample lands in one pixel.
+    Sample,
+    /// Splat each sample, uniform in its pixel, into every pixel under the
+    /// filter, weighted by its value (Mitsuba's film).
+    Splat,
+}
+
+impl From<FilmKind> for FilmMode {
+    fn from(kind: FilmKind) -> Self {
+        match kind {
+            FilmKind::Sample => Self::Sample,
+            FilmKind::Splat => Self::Splat,
+        }
+    }
+}
+
 /// 8-bit tone mapping.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ToneKind {
@@ -195,6 +214,12 @@ pub struct RenderArgs {
     /// Pixel filter (default: the scene's, else gaussian).
     #[arg(long, value_enum)]
     pub filter: Option<FilterKind>,
+    /// How samples reach pixels: importance-sample the filter (one pixel
+    /// per sample) or splat each sample into every pixel under the filter
+    /// (as Mitsuba; not with --transport cv). Default: the scene's
+    /// `[render] film`, else sample.
+    #[arg(long, value_enum)]
+    pub film: Option<FilmKind>,
     /// Seed of every random stream (same seed, same image).
     #[arg(long)]
     pub seed: Option<u64>,
@@ -405,6 +430,11 @@ fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSe
         threads: args.threads,
         time_limit,
         window,
+        film: args
+            .film
+            .map(FilmMode::from)
+            .or(defaults.film)
+            .unwrap_or(FilmMode::Sample),
     })
 }
 
@@ -887,7 +917,8 @@ impl TransportTask for RenderTask<'_> {
                 STATE_COPIES * state_pixel
             } else {
                 0
-            };
+            }
+            + splat_apron_bytes(self.settings, film_pixel);
         let memory = (self.preflight)(pixel_bytes, size_of::<T>() as u64)?;
         let reporter = Reporter::new(self.settings.spp, self.quiet);
         let result = render_passes(transport, self.scene, self.settings, &self.job, &mut |p| {
@@ -898,6 +929,18 @@ impl TransportTask for RenderTask<'_> {
         let (result, state) = result?;
         Ok((result, state, memory))
     }
+}
+
+/// Bytes per window pixel of a splatting render's aprons: each tile's
+/// grown by the filter's margin `M` on every side, `((T + 2M)/T)²` film
+/// pixels per pixel (`T` = [`TILE_SIZE`]), rounded up; 0 when sampling.
+fn splat_apron_bytes(settings: &RenderSettings, film_pixel_bytes: u64) -> u64 {
+    if settings.film != FilmMode::Splat {
+        return 0;
+    }
+    let tile = u64::from(TILE_SIZE);
+    let apron_side = tile + 2 * u64::from(settings.filter.splat_margin_px());
+    (film_pixel_bytes * apron_side * apron_side).div_ceil(tile * tile)
 }
 
 /// `fspec merge`'s task: the image of a film state.
@@ -1181,6 +1224,7 @@ fn frame_identity(
         rr_depth: settings.integrator.rr_depth,
         hide_emitters: settings.integrator.hide_emitters,
         filter: filter_name(&settings.filter),
+        film: settings.film.name().to_string(),
         transport: TransportSpec::of(args),
     }
 }
@@ -1310,6 +1354,11 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
         eprintln!("fspec: warning: {warning}");
     }
     let mut settings = settings_from(args, &defaults)?;
+    if settings.film == FilmMode::Splat && args.transport == TransportKind::Cv {
+        return Err(CliError::input(
+            "--film splat (or the scene's `film = \"splat\"`) needs --transport fourier or sampled: control variates weight each pass by every earlier pass, so their pixels are no weighted sums to splat into",
+        ));
+    }
     let scene = builder
         .build()
         .map_err(|e| CliError::input(format!("{}: {e}", args.scene)))?;

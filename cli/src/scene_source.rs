@@ -24,6 +24,8 @@ pub struct SceneDefaults {
     pub seed: Option<u64>,
     /// Camera rays do not see emitters.
     pub hide_emitters: Option<bool>,
+    /// How samples reach pixels.
+    pub film: Option<simd_tracer::film::FilmMode>,
     /// Depth from which Russian roulette may end paths.
     pub rr_depth: Option<u32>,
     /// Pixel filter.
@@ -74,6 +76,7 @@ pub fn resolve_scene(
         max_depth: loaded.render.max_depth,
         seed: loaded.render.seed,
         hide_emitters: loaded.render.hide_emitters,
+        film: loaded.render.film,
         rr_depth: loaded.render.rr_depth,
         filter: loaded.render.filter,
         crop: loaded.render.crop,

@@ -347,6 +347,7 @@ fn settings(width: u32, height: u32) -> RenderSettings {
         threads: None,
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     }
 }
 

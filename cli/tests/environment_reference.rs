@@ -66,6 +66,7 @@ fn ours(scene: &Scene, seed: u64) -> TestResult<Vec<f64>> {
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     };
     let result = render(&transport, scene, &settings, &mut |_| true)?;
     Ok(result

@@ -376,6 +376,7 @@ fn settings(defaults: &RenderDefaults, seed: u64) -> TestResult<RenderSettings> 
         threads: Some(THREADS),
         time_limit: None,
         window: defaults.crop.map(PixelWindow::from),
+        film: simd_tracer::film::FilmMode::Sample,
     })
 }
 

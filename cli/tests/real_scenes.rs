@@ -58,6 +58,7 @@ fn render_xyz<T: Transport>(
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     };
     Ok(render(transport, scene, &settings, &mut |_| true)?.xyz)
 }

@@ -110,6 +110,7 @@ fn small_settings() -> RenderSettings {
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     }
 }
 

@@ -131,6 +131,7 @@ fn small_render(scene: &Scene) -> TestResult<f64> {
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     };
     let transport = FourierTransport::<8>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
     let image = render(&transport, scene, &settings, &mut |_| true)?.xyz;

@@ -146,6 +146,7 @@ fn an_empty_image_is_an_error() -> TestResult {
             threads: Some(1),
             time_limit: None,
             window: None,
+            film: simd_tracer::film::FilmMode::Sample,
         };
         let error = render(&transport, &scene, &settings, &mut |_| true)
             .err()

@@ -5,10 +5,12 @@
 //! materials in packets), every transport whose passes do not interact and
 //! control variates with a per-pixel α, for windows that are tile-aligned,
 //! unaligned, at the film's far corner, one pixel, or the whole film.
-//! Windows that are empty or leave the film are errors.
+//! Splatted films (`FilmMode::Splat`) crop bit for bit too, with filters
+//! whose margins are under and over a tile's side. Windows that are empty
+//! or leave the film are errors.
 
 use simd_tracer::film::filter::Filter;
-use simd_tracer::film::{AlphaMode, Buffer};
+use simd_tracer::film::{AlphaMode, Buffer, FilmMode};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{PixelWindow, RenderError, RenderResult, RenderSettings, render};
 use simd_tracer::scene::Scene;
@@ -41,6 +43,7 @@ fn settings(window: Option<PixelWindow>) -> RenderSettings {
         threads: Some(2),
         time_limit: None,
         window,
+        film: FilmMode::Sample,
     }
 }
 
@@ -79,9 +82,19 @@ fn crops_equal_the_full_render<T: Transport>(
     transport: &T,
     scene: &Scene,
 ) -> TestResult {
-    let full = render(transport, scene, &settings(None), &mut |_| true)?;
+    crops_equal_the_full_render_with(name, transport, scene, &settings)
+}
+
+/// [`crops_equal_the_full_render`] with the settings of `make`.
+fn crops_equal_the_full_render_with<T: Transport>(
+    name: &str,
+    transport: &T,
+    scene: &Scene,
+    make: &dyn Fn(Option<PixelWindow>) -> RenderSettings,
+) -> TestResult {
+    let full = render(transport, scene, &make(None), &mut |_| true)?;
     for w in windows() {
-        let crop = render(transport, scene, &settings(Some(w)), &mut |_| true)?;
+        let crop = render(transport, scene, &make(Some(w)), &mut |_| true)?;
         assert_eq!((crop.width, crop.height), (w.width, w.height), "{name}");
         assert_eq!(crop.xyz.len() as u64, w.pixel_count());
         assert_eq!(
@@ -144,8 +157,45 @@ fn crops_equal_the_full_render_in_the_other_transports() -> TestResult {
     Ok(())
 }
 
+/// Splatting: every built-in scene with the default Gaussian (margin 2 px),
+/// and the Cornell box with a tent of radius 2.5 px and a Gaussian of
+/// σ 5 px (radius 20 px: aprons reach over whole tiles), in the Fourier
+/// and sampled transports.
+#[test]
+fn splatted_crops_equal_the_full_render_bit_for_bit() -> TestResult {
+    let range = SpectralRange::VISIBLE;
+    let fourier = FourierTransport::<8>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?;
+    let per_sample = FourierTransport::<4>::new(range, Buffer::Xyz, XyzRoute::Series)?;
+    let sampled = SampledTransport::<4>::new(range, WavelengthStrategy::Hero);
+    for (filter, scenes) in [
+        (
+            Filter::gaussian(),
+            SCENES.iter().map(|s| s.name).collect::<Vec<_>>(),
+        ),
+        (Filter::tent(2.5)?, vec!["cornell"]),
+        (Filter::gaussian_with_stddev(5.0)?, vec!["cornell"]),
+    ] {
+        let make = |window| RenderSettings {
+            film: FilmMode::Splat,
+            filter: filter.clone(),
+            ..settings(window)
+        };
+        for name in scenes {
+            let scene = builtin_scene(name, range, &SceneOptions::default())?.build()?;
+            let label = format!("{name} splat, radius {} px", filter.radius_px());
+            crops_equal_the_full_render_with(&label, &fourier, &scene, &make)?;
+            crops_equal_the_full_render_with(&label, &sampled, &scene, &make)?;
+            if name == "cornell" {
+                crops_equal_the_full_render_with(&label, &per_sample, &scene, &make)?;
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The comparison can fail: a crop at another seed differs from the full
-/// render, and a crop through another filter too.
+/// render, a crop through another filter too, and a splatted crop differs
+/// from the importance-sampled render.
 #[test]
 fn a_crop_of_another_render_differs() -> TestResult {
     let range = SpectralRange::VISIBLE;
@@ -157,7 +207,9 @@ fn a_crop_of_another_render_differs() -> TestResult {
     other_seed.seed += 1;
     let mut other_filter = settings(Some(w));
     other_filter.filter = Filter::Box;
-    for other in [other_seed, other_filter] {
+    let mut splatted = settings(Some(w));
+    splatted.film = FilmMode::Splat;
+    for other in [other_seed, other_filter, splatted] {
         let crop = render(&fourier, &scene, &other, &mut |_| true)?;
         let same = (0..w.height)
             .flat_map(|y| (0..w.width).map(move |x| (x, y)))

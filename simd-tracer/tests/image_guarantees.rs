@@ -106,6 +106,7 @@ fn settings(side: u32, spp: u32) -> RenderSettings {
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     }
 }
 

@@ -48,6 +48,7 @@ fn settings(width: u32, height: u32, spp: u32, max_depth: u32) -> RenderSettings
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     }
 }
 

@@ -141,6 +141,7 @@ fn mirror_render(fresnel: AngularFunction) -> TestResult<Vec<f64>> {
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     };
     let transport =
         FourierTransport::<NETWORK_COEFFS>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?;

@@ -125,6 +125,7 @@ fn settings(size: u32, spp: u32, max_depth: u32) -> RenderSettings {
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     }
 }
 

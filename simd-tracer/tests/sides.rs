@@ -49,6 +49,7 @@ fn settings(size: u32) -> RenderSettings {
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     }
 }
 

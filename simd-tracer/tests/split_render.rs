@@ -4,11 +4,12 @@
 //! continued from its state equals the uninterrupted render bit for bit; the
 //! states of disjoint crop windows are the full render's states bit for
 //! bit; the merged or continued image does not depend on how the passes
-//! were split. Control variates refuse, and so does a state that does not
-//! fit (window, passes, pixel layout, corrupt values).
+//! were split. All of it with the filter importance-sampled and splatted
+//! (`FilmMode`). Control variates refuse, and so does a state that does not
+//! fit (window, passes, pixel layout, film mode, corrupt values).
 
-use simd_tracer::film::filter::Filter;
-use simd_tracer::film::{AlphaMode, Buffer};
+use simd_tracer::film::filter::{Filter, MAX_SPLAT_WEIGHT_PER_PASS};
+use simd_tracer::film::{AlphaMode, Buffer, FilmMode};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{
     FilmState, PassJob, PixelWindow, RenderError, RenderResult, RenderSettings, render,
@@ -31,7 +32,7 @@ const HEIGHT: u32 = 21;
 /// Passes of the whole render.
 const PASSES: u32 = 9;
 
-fn settings(spp: u32, window: Option<PixelWindow>) -> RenderSettings {
+fn settings(spp: u32, window: Option<PixelWindow>, film: FilmMode) -> RenderSettings {
     RenderSettings {
         width: WIDTH,
         height: HEIGHT,
@@ -46,6 +47,7 @@ fn settings(spp: u32, window: Option<PixelWindow>) -> RenderSettings {
         threads: Some(2),
         time_limit: None,
         window,
+        film,
     }
 }
 
@@ -60,16 +62,20 @@ fn part<T: Transport>(
     first: u32,
     spp: u32,
     window: Option<PixelWindow>,
+    film: FilmMode,
 ) -> TestResult<(RenderResult, FilmState)> {
     let job = PassJob {
         first_pass: first,
         resume: None,
         keep_state: true,
     };
-    let (result, state) =
-        render_passes(transport, scene, &settings(spp, window), &job, &mut |_| {
-            true
-        })?;
+    let (result, state) = render_passes(
+        transport,
+        scene,
+        &settings(spp, window, film),
+        &job,
+        &mut |_| true,
+    )?;
     Ok((result, state.ok_or("no state kept")?))
 }
 
@@ -81,11 +87,16 @@ const UNIT_ROUNDOFF: f64 = f64::EPSILON / 2.0;
 /// with the samples' largest value bounded by the sums' largest magnitude
 /// over one pass… conservatively by the largest merged magnitude times
 /// `n`), and the resolved XYZ within the same relative bound.
-fn pass_ranges_merge<T: Transport>(name: &str, transport: &T, scene: &Scene) -> TestResult {
-    let (whole, whole_state) = part(transport, scene, 0, PASSES, None)?;
+fn pass_ranges_merge<T: Transport>(
+    name: &str,
+    transport: &T,
+    scene: &Scene,
+    film: FilmMode,
+) -> TestResult {
+    let (whole, whole_state) = part(transport, scene, 0, PASSES, None, film)?;
     let mut merged: Option<FilmState> = None;
     for (first, end) in [(0, 2), (2, 3), (3, 7), (7, PASSES)] {
-        let (_, state) = part(transport, scene, first, end - first, None)?;
+        let (_, state) = part(transport, scene, first, end - first, None, film)?;
         match &mut merged {
             None => merged = Some(state),
             Some(sum) => sum.add(&state)?,
@@ -94,7 +105,14 @@ fn pass_ranges_merge<T: Transport>(name: &str, transport: &T, scene: &Scene) -> 
     let merged = merged.ok_or("no parts")?;
     assert_eq!(merged.passes, 0..PASSES, "{name}");
     assert_eq!(merged.rejected, whole_state.rejected, "{name}");
-    let n = f64::from(PASSES);
+    // Additions into a pixel: one per pass when sampling; when splatting
+    // one per pass and tile whose apron covers the pixel, at most 4 (2 × 2
+    // tiles) with a margin under a tile's side.
+    let additions_per_pass = match film {
+        FilmMode::Sample => 1.0,
+        FilmMode::Splat => 4.0,
+    };
+    let n = f64::from(PASSES) * additions_per_pass;
     let largest = whole_state
         .values
         .iter()
@@ -123,19 +141,27 @@ fn pass_ranges_merge<T: Transport>(name: &str, transport: &T, scene: &Scene) -> 
 
 /// Stopped after a few passes and continued: bit for bit the single
 /// render, for several stopping points.
-fn resume_is_exact<T: Transport>(name: &str, transport: &T, scene: &Scene) -> TestResult {
-    let (whole, whole_state) = part(transport, scene, 0, PASSES, None)?;
+fn resume_is_exact<T: Transport>(
+    name: &str,
+    transport: &T,
+    scene: &Scene,
+    film: FilmMode,
+) -> TestResult {
+    let (whole, whole_state) = part(transport, scene, 0, PASSES, None, film)?;
     for stop in [1, 4, PASSES - 1, PASSES] {
-        let (_, first) = part(transport, scene, 0, stop, None)?;
+        let (_, first) = part(transport, scene, 0, stop, None, film)?;
         let job = PassJob {
             first_pass: 0,
             resume: Some(&first),
             keep_state: true,
         };
-        let (result, state) =
-            render_passes(transport, scene, &settings(PASSES, None), &job, &mut |_| {
-                true
-            })?;
+        let (result, state) = render_passes(
+            transport,
+            scene,
+            &settings(PASSES, None, film),
+            &job,
+            &mut |_| true,
+        )?;
         let state = state.ok_or("no state kept")?;
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(
@@ -158,8 +184,13 @@ fn resume_is_exact<T: Transport>(name: &str, transport: &T, scene: &Scene) -> Te
 
 /// Four windows tiling the film (cutting tiles and packets): their states
 /// are the full render's pixel for pixel, bit for bit.
-fn crops_tile_the_state<T: Transport>(name: &str, transport: &T, scene: &Scene) -> TestResult {
-    let (_, whole) = part(transport, scene, 2, 3, None)?;
+fn crops_tile_the_state<T: Transport>(
+    name: &str,
+    transport: &T,
+    scene: &Scene,
+    film: FilmMode,
+) -> TestResult {
+    let (_, whole) = part(transport, scene, 2, 3, None, film)?;
     let (cut_x, cut_y) = (13, 9);
     let windows = [
         PixelWindow {
@@ -188,7 +219,7 @@ fn crops_tile_the_state<T: Transport>(name: &str, transport: &T, scene: &Scene) 
         },
     ];
     for window in windows {
-        let (_, crop) = part(transport, scene, 2, 3, Some(window))?;
+        let (_, crop) = part(transport, scene, 2, 3, Some(window), film)?;
         assert_eq!(crop.window, window);
         for y in 0..window.height {
             for x in 0..window.width {
@@ -209,27 +240,108 @@ fn crops_tile_the_state<T: Transport>(name: &str, transport: &T, scene: &Scene) 
 fn fourier_spectral_buffer_splits_and_merges() -> TestResult {
     let scene = scene("materials")?;
     let transport = FourierTransport::<12>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-    pass_ranges_merge("fourier 12", &transport, &scene)?;
-    resume_is_exact("fourier 12", &transport, &scene)?;
-    crops_tile_the_state("fourier 12", &transport, &scene)
+    [FilmMode::Sample, FilmMode::Splat]
+        .into_iter()
+        .try_for_each(|film| {
+            pass_ranges_merge(
+                &format!("{} {film:?}", "fourier 12"),
+                &transport,
+                &scene,
+                film,
+            )
+        })?;
+    [FilmMode::Sample, FilmMode::Splat]
+        .into_iter()
+        .try_for_each(|film| {
+            resume_is_exact(
+                &format!("{} {film:?}", "fourier 12"),
+                &transport,
+                &scene,
+                film,
+            )
+        })?;
+    [FilmMode::Sample, FilmMode::Splat]
+        .into_iter()
+        .try_for_each(|film| {
+            crops_tile_the_state(
+                &format!("{} {film:?}", "fourier 12"),
+                &transport,
+                &scene,
+                film,
+            )
+        })
 }
 
 #[test]
 fn fourier_xyz_buffer_splits_and_merges() -> TestResult {
     let scene = scene("cornell")?;
     let transport = FourierTransport::<8>::new(scene.range(), Buffer::Xyz, XyzRoute::Series)?;
-    pass_ranges_merge("fourier 8 xyz", &transport, &scene)?;
-    resume_is_exact("fourier 8 xyz", &transport, &scene)?;
-    crops_tile_the_state("fourier 8 xyz", &transport, &scene)
+    [FilmMode::Sample, FilmMode::Splat]
+        .into_iter()
+        .try_for_each(|film| {
+            pass_ranges_merge(
+                &format!("{} {film:?}", "fourier 8 xyz"),
+                &transport,
+                &scene,
+                film,
+            )
+        })?;
+    [FilmMode::Sample, FilmMode::Splat]
+        .into_iter()
+        .try_for_each(|film| {
+            resume_is_exact(
+                &format!("{} {film:?}", "fourier 8 xyz"),
+                &transport,
+                &scene,
+                film,
+            )
+        })?;
+    [FilmMode::Sample, FilmMode::Splat]
+        .into_iter()
+        .try_for_each(|film| {
+            crops_tile_the_state(
+                &format!("{} {film:?}", "fourier 8 xyz"),
+                &transport,
+                &scene,
+                film,
+            )
+        })
 }
 
 #[test]
 fn sampled_transport_splits_and_merges() -> TestResult {
     let scene = scene("lamps")?;
     let transport = SampledTransport::<4>::new(scene.range(), WavelengthStrategy::Hero);
-    pass_ranges_merge("sampled 4", &transport, &scene)?;
-    resume_is_exact("sampled 4", &transport, &scene)?;
-    crops_tile_the_state("sampled 4", &transport, &scene)
+    [FilmMode::Sample, FilmMode::Splat]
+        .into_iter()
+        .try_for_each(|film| {
+            pass_ranges_merge(
+                &format!("{} {film:?}", "sampled 4"),
+                &transport,
+                &scene,
+                film,
+            )
+        })?;
+    [FilmMode::Sample, FilmMode::Splat]
+        .into_iter()
+        .try_for_each(|film| {
+            resume_is_exact(
+                &format!("{} {film:?}", "sampled 4"),
+                &transport,
+                &scene,
+                film,
+            )
+        })?;
+    [FilmMode::Sample, FilmMode::Splat]
+        .into_iter()
+        .try_for_each(|film| {
+            crops_tile_the_state(
+                &format!("{} {film:?}", "sampled 4"),
+                &transport,
+                &scene,
+                film,
+            )
+        })
 }
 
 /// Negative control of the merge test: a part rendered with another seed
@@ -238,11 +350,11 @@ fn sampled_transport_splits_and_merges() -> TestResult {
 fn a_part_with_another_seed_does_not_merge_into_the_render() -> TestResult {
     let scene = scene("cornell")?;
     let transport = FourierTransport::<12>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-    let (_, whole) = part(&transport, &scene, 0, 4, None)?;
-    let (_, mut first) = part(&transport, &scene, 0, 2, None)?;
+    let (_, whole) = part(&transport, &scene, 0, 4, None, FilmMode::Sample)?;
+    let (_, mut first) = part(&transport, &scene, 0, 2, None, FilmMode::Sample)?;
     let other_seed = RenderSettings {
         seed: 24,
-        ..settings(2, None)
+        ..settings(2, None, FilmMode::Sample)
     };
     let job = PassJob {
         first_pass: 2,
@@ -285,11 +397,25 @@ fn control_variates_refuse_to_split() -> TestResult {
             keep_state: true,
         },
     ] {
-        let result = render_passes(&transport, &scene, &settings(2, None), &job, &mut |_| true);
+        let result = render_passes(
+            &transport,
+            &scene,
+            &settings(2, None, FilmMode::Sample),
+            &job,
+            &mut |_| true,
+        );
         assert!(matches!(result, Err(RenderError::NotSplittable)), "{job:?}");
     }
     // Without a range, a state or a resume it renders as always.
-    assert!(render(&transport, &scene, &settings(1, None), &mut |_| true).is_ok());
+    assert!(
+        render(
+            &transport,
+            &scene,
+            &settings(1, None, FilmMode::Sample),
+            &mut |_| true
+        )
+        .is_ok()
+    );
     Ok(())
 }
 
@@ -297,7 +423,7 @@ fn control_variates_refuse_to_split() -> TestResult {
 fn states_that_do_not_fit_are_refused() -> TestResult {
     let scene = scene("cornell")?;
     let transport = FourierTransport::<4>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-    let (_, good) = part(&transport, &scene, 0, 2, None)?;
+    let (_, good) = part(&transport, &scene, 0, 2, None, FilmMode::Sample)?;
     let resume = |state: &FilmState, first: u32, spp: u32, window: Option<PixelWindow>| {
         let job = PassJob {
             first_pass: first,
@@ -307,7 +433,7 @@ fn states_that_do_not_fit_are_refused() -> TestResult {
         render_passes(
             &transport,
             &scene,
-            &settings(spp, window),
+            &settings(spp, window, FilmMode::Sample),
             &job,
             &mut |_| true,
         )
@@ -328,7 +454,7 @@ fn states_that_do_not_fit_are_refused() -> TestResult {
     refused(resume(&good, 0, 1, None), "past the range");
     // Another film: 8 coefficients' state in a 4-coefficient render.
     let other = FourierTransport::<8>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-    let (_, eight) = part(&other, &scene, 0, 2, None)?;
+    let (_, eight) = part(&other, &scene, 0, 2, None, FilmMode::Sample)?;
     refused(resume(&eight, 0, 4, None), "layout");
     // Corrupt values: NaN, a fractional count, more samples than passes,
     // too few values.
@@ -349,5 +475,58 @@ fn states_that_do_not_fit_are_refused() -> TestResult {
     refused(resume(&short, 0, 4, None), "short");
     assert!(short.validate().is_err());
     assert!(good.validate().is_ok());
+
+    // A splatted state: its weight sums are fractional, which the state
+    // accepts in its own mode only; corrupt weights are refused.
+    let (_, splat) = part(&transport, &scene, 0, 2, None, FilmMode::Splat)?;
+    assert!(
+        splat
+            .values
+            .chunks_exact(n)
+            .any(|p| p[n - 1].fract() != 0.0)
+    );
+    assert!(resolve_state(&transport, &splat).is_ok());
+    refused(
+        resume(&splat, 0, 4, None),
+        "splatted state in a sampled render",
+    );
+    let mut as_sampled = splat.clone();
+    as_sampled.mode = FilmMode::Sample;
+    assert!(resolve_state(&transport, &as_sampled).is_err());
+    let mut sampled_as_splat = good.clone();
+    sampled_as_splat.mode = FilmMode::Splat;
+    assert!(sampled_as_splat.clone().add(&good).is_err());
+    for (what, value) in [
+        ("NaN weight", f64::NAN),
+        ("negative weight", -0.5),
+        ("infinite weight", f64::INFINITY),
+        (
+            "weight above the bound",
+            2.0 * MAX_SPLAT_WEIGHT_PER_PASS * 2.0 + 1.0,
+        ),
+    ] {
+        let mut bad = splat.clone();
+        bad.values[n - 1] = value;
+        assert!(resolve_state(&transport, &bad).is_err(), "{what}");
+    }
+    Ok(())
+}
+
+/// Splatting with control variates is refused with its own error.
+#[test]
+fn control_variates_refuse_to_splat() -> TestResult {
+    let scene = scene("cornell")?;
+    let transport = ControlVariateTransport::<4, 4>::new(
+        scene.range(),
+        WavelengthStrategy::Hero,
+        AlphaMode::PerPixel,
+    )?;
+    let result = render(
+        &transport,
+        &scene,
+        &settings(1, None, FilmMode::Splat),
+        &mut |_| true,
+    );
+    assert!(matches!(result, Err(RenderError::CannotSplat)));
     Ok(())
 }

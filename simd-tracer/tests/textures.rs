@@ -123,6 +123,7 @@ fn settings(spp: u32) -> RenderSettings {
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     }
 }
 

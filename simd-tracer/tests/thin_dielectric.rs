@@ -198,6 +198,7 @@ fn a_pane_in_front_of_a_lamp_passes_t_prime() -> TestResult {
         threads: Some(2),
         time_limit: None,
         window: None,
+        film: simd_tracer::film::FilmMode::Sample,
     };
     let range = SpectralRange::VISIBLE;
     let fourier = FourierTransport::<4>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?;

@@ -25,8 +25,8 @@
 //! delete the folder after changing the renderer.
 
 use crate::error::CliError;
-use simd_tracer::film::Buffer;
 use simd_tracer::film::filter::Filter;
+use simd_tracer::film::{Buffer, FilmMode};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderResult, RenderSettings, render};
 use simd_tracer::scene::Scene;
@@ -171,6 +171,7 @@ pub fn settings(size: u32, spp: u32, seed: u64, threads: Option<usize>) -> Rende
         threads,
         time_limit: None,
         window: None,
+        film: FilmMode::Sample,
     }
 }
 

@@ -229,6 +229,9 @@ pub struct RenderDefaults {
     pub seed: Option<u64>,
     /// Camera rays do not see emitters.
     pub hide_emitters: Option<bool>,
+    /// How samples reach pixels (TOML scenes only: Mitsuba's files keep
+    /// the default).
+    pub film: Option<simd_tracer::film::FilmMode>,
     /// Depth from which Russian roulette may end paths.
     pub rr_depth: Option<u32>,
     /// Pixel reconstruction filter.

@@ -35,6 +35,17 @@
 //! pixel's samples never touch other pixels, so tiles render independently
 //! and deterministically.
 //!
+//! **Splatting** ([`crate::film::FilmMode::Splat`], Mitsuba's way) needs
+//! the filters' values instead: [`Filter::weight`] evaluates Mitsuba's
+//! 1-D definitions above (the box is 1 on `[−0.5, 0.5)`, as Mitsuba's
+//! `x >= -.5 && x < .5`, so a box splat touches its own pixel only), and a
+//! sample at offset `(dx, dy)` from pixel `p`'s centre weighs
+//! `w = f(dx) f(dy)` there (separable, the product in `f32` as Mitsuba's).
+//! A sample lies at most half a pixel from its own pixel's centre, so the
+//! pixels it can reach are those within [`Filter::splat_margin_px`]
+//! `M = ⌈r + 1/2⌉ − 1` columns and rows of its own (the centres within `r`
+//! of an offset in `[−1/2, 1/2)`).
+//!
 //! Offsets for a whole packet come from [`Filter::sample_offset_x8`], which
 //! runs the scalar sampler's IEEE operations on `f32x8` (no fused
 //! multiply-add; the square root is correctly rounded in both), finding
@@ -58,6 +69,16 @@ pub const TENT_RADIUS_PX: f32 = 1.0;
 /// more than a hundred pixels, which no scene asks for, and keeps the
 /// offsets far inside `f32`'s exact range of pixel coordinates.
 pub const MAX_FILTER_RADIUS_PX: f32 = 64.0;
+/// The widest splat margin, px: [`Filter::splat_margin_px`] of a filter of
+/// radius [`MAX_FILTER_RADIUS_PX`], `⌈64 + 1/2⌉ − 1` (tested).
+pub const MAX_SPLAT_MARGIN_PX: u32 = 64;
+/// The largest weight one pass may splat into a pixel: every 1-D filter
+/// value is at most 1 (box 1, tent `1 − |x|/r`, Gaussian `1 − e^(−r²/2σ²)`),
+/// so `f(dx) f(dy) ≤ 1`, and a pass puts one sample in each of the at most
+/// `(2M + 1)²` pixels that reach it, `M` at most [`MAX_SPLAT_MARGIN_PX`].
+/// The bound the film states' weight sums are checked against.
+pub const MAX_SPLAT_WEIGHT_PER_PASS: f64 =
+    ((2 * MAX_SPLAT_MARGIN_PX + 1) * (2 * MAX_SPLAT_MARGIN_PX + 1)) as f64;
 /// Cells of the tabulated inverse CDF: the Gaussian's offsets at the CDF
 /// values `k / INVERSE_CELLS`, interpolated linearly in between.
 const INVERSE_CELLS: usize = 1024;
@@ -142,6 +163,30 @@ impl Filter {
         }
     }
 
+    /// Columns (and rows) on either side of its own pixel that a splatted
+    /// sample can reach: `M = ⌈r + 1/2⌉ − 1` (module docs).
+    pub fn splat_margin_px(&self) -> u32 {
+        // r ≤ MAX_FILTER_RADIUS_PX: the value is a small whole number.
+        ((self.radius_px() + 0.5).ceil() - 1.0).max(0.0) as u32
+    }
+
+    /// The filter's 1-D value at `x` px from a pixel centre, Mitsuba's
+    /// definitions (module docs): box `[−0.5 ≤ x < 0.5]`, tent
+    /// `max(0, 1 − |x|/r)`, Gaussian `max(0, e^(−x²/2σ²) − e^(−r²/2σ²))`.
+    pub fn weight(&self, x: f32) -> f32 {
+        match self {
+            Self::Box => {
+                if (-0.5..0.5).contains(&x) {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            Self::Tent { radius_px } => (1.0 - x.abs() / radius_px).max(0.0),
+            Self::Gaussian(g) => g.weight(x),
+        }
+    }
+
     /// An offset from the pixel centre, px, for uniform `(u, v)`.
     pub fn sample_offset(&self, u: f32, v: f32) -> (f32, f32) {
         match self {
@@ -212,6 +257,10 @@ pub struct GaussianSampler {
     cells: Box<[[f32; 2]; INVERSE_CELLS]>,
     /// The truncation radius, px.
     radius_px: f32,
+    /// `−1/(2σ²)`, px⁻², the exponent's factor in [`GaussianSampler::weight`].
+    exponent_per_px2: f32,
+    /// `e^(−r²/2σ²)`, the value subtracted so the filter reaches 0 at `r`.
+    bias: f32,
 }
 
 impl GaussianSampler {
@@ -269,7 +318,18 @@ impl GaussianSampler {
                 [knots[k], knots[k + 1] - knots[k]]
             })),
             radius_px,
+            exponent_per_px2: (-1.0 / two_variance) as f32,
+            bias: bias as f32,
         }
+    }
+
+    /// The filter's value at `x` px, `max(0, e^(−x²/2σ²) − e^(−r²/2σ²))`
+    /// in `f32` (Mitsuba's truncated Gaussian; 0 beyond `r`).
+    pub fn weight(&self, x: f32) -> f32 {
+        if x.abs() >= self.radius_px {
+            return 0.0;
+        }
+        ((x * x * self.exponent_per_px2).exp() - self.bias).max(0.0)
     }
 
     /// The cell of `u` (clamped to `[0, 1]`, NaN to 0) and the position in
@@ -555,6 +615,48 @@ mod tests {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// The splat weights are Mitsuba's filter values: the box 1 on
+    /// `[−0.5, 0.5)`, the tent and the truncated Gaussian against their
+    /// `f64` forms, 0 at and beyond the radius; the margins reach every
+    /// centre within the radius of an offset in `[−0.5, 0.5)` and no more.
+    #[test]
+    fn splat_weights_and_margins_follow_the_filters() -> Result<(), FilterError> {
+        assert_eq!(Filter::Box.weight(-0.5), 1.0);
+        assert_eq!(Filter::Box.weight(0.5), 0.0);
+        assert_eq!(Filter::Box.weight(0.499), 1.0);
+        assert_eq!(Filter::Box.splat_margin_px(), 0);
+        let sigma = f64::from(GAUSSIAN_SIGMA_PX);
+        for filter in [
+            Filter::gaussian(),
+            Filter::tent(TENT_RADIUS_PX)?,
+            Filter::tent(2.5)?,
+        ] {
+            let r = filter.radius_px();
+            let exact: Box<dyn Fn(f64) -> f64> = match filter {
+                Filter::Gaussian(_) => Box::new(gaussian(sigma)),
+                _ => Box::new(tent(f64::from(r))),
+            };
+            for i in -400..=400 {
+                let x = i as f32 * r / 300.0;
+                let error = (f64::from(filter.weight(x)) - exact(f64::from(x))).abs();
+                assert!(error < 1e-6, "{filter:?} at {x}: {error}");
+            }
+            assert_eq!(filter.weight(r), 0.0);
+            assert_eq!(filter.weight(-r), 0.0);
+            // Every pixel centre k with |o − k| < r for some o ∈ [−0.5, 0.5)
+            // lies within the margin, and the margin holds no other.
+            let margin = filter.splat_margin_px() as i32;
+            let reached = |k: i32| (k as f32).abs() - 0.5 < r;
+            assert!(reached(margin) && !reached(margin + 1), "{filter:?}");
+        }
+        assert_eq!(Filter::gaussian().splat_margin_px(), 2);
+        assert_eq!(
+            Filter::tent(MAX_FILTER_RADIUS_PX)?.splat_margin_px(),
+            MAX_SPLAT_MARGIN_PX
+        );
         Ok(())
     }
 

@@ -1,7 +1,7 @@
 //! [`FourierFilm<N>`]: per-pixel coefficient sums converted to XYZ once by
 //! the chosen route (spectral buffer), or XYZ converted per sample.
 
-use super::{Buffer, Film, all_finite, is_sample_count};
+use super::{Buffer, Film, FilmMode, all_finite};
 use spectral_core::color::Xyz;
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, SpectralError, SpectralRange};
@@ -54,7 +54,8 @@ pub struct FourierSample<const N: usize> {
     pub xyz: [f32; 3],
 }
 
-/// A Fourier pixel: coefficient sums, XYZ sums and the sample count.
+/// A Fourier pixel: coefficient sums, XYZ sums and the sample count (the
+/// weight sum when splatting).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FourierPixel<const N: usize> {
     pub(super) coeffs: [f64; N],
@@ -95,6 +96,29 @@ impl<const N: usize> Film for FourierFilm<N> {
         pixel.count += 1.0;
     }
 
+    fn accumulate_weighted(&self, pixel: &mut Self::Pixel, sample: &Self::Sample, weight: f32) {
+        let weight = f64::from(weight);
+        let sums: (&mut [f64], &[f32]) = match self.buffer {
+            Buffer::Spectral => (&mut pixel.coeffs, &sample.coeffs),
+            Buffer::Xyz => (&mut pixel.xyz, &sample.xyz),
+        };
+        for (acc, &c) in sums.0.iter_mut().zip(sums.1) {
+            *acc += weight * f64::from(c);
+        }
+        pixel.count += weight;
+    }
+
+    fn add_pixel(&self, into: &mut Self::Pixel, from: &Self::Pixel) {
+        let sums: (&mut [f64], &[f64]) = match self.buffer {
+            Buffer::Spectral => (&mut into.coeffs, &from.coeffs),
+            Buffer::Xyz => (&mut into.xyz, &from.xyz),
+        };
+        for (acc, &v) in sums.0.iter_mut().zip(sums.1) {
+            *acc += v;
+        }
+        into.count += from.count;
+    }
+
     fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
         if pixel.count == 0.0 {
             return Xyz::default();
@@ -119,7 +143,7 @@ impl<const N: usize> Film for FourierFilm<N> {
     }
 
     /// The sums the buffer fills (`N` coefficient sums, or 3 XYZ sums),
-    /// then the sample count.
+    /// then the sample count (the weight sum when splatting).
     fn state_len(&self) -> Option<usize> {
         Some(self.sums_len() + 1)
     }
@@ -135,9 +159,9 @@ impl<const N: usize> Film for FourierFilm<N> {
         }
     }
 
-    fn load_state(&self, values: &[f64]) -> Option<Self::Pixel> {
+    fn load_state(&self, values: &[f64], mode: FilmMode, passes: f64) -> Option<Self::Pixel> {
         let (&count, sums) = values.split_last()?;
-        if sums.len() != self.sums_len() || !is_sample_count(count) {
+        if sums.len() != self.sums_len() || !mode.is_weight_sum(count, passes) {
             return None;
         }
         if !sums.iter().all(|v| v.is_finite()) {

@@ -12,6 +12,15 @@
 //! * [`ControlVariateFilm`]: per pixel and XYZ channel a control variate,
 //!   `α` pooled over all pixels ([`AlphaMode::Shared`]) or per pixel.
 //!
+//! **Film modes** ([`FilmMode`]). With [`FilmMode::Sample`] (the default)
+//! the pixel filter is importance-sampled: each sample lands in its own
+//! pixel with weight 1 and a pixel is the mean of its samples. With
+//! [`FilmMode::Splat`] (Mitsuba's way) each sample, placed uniformly in its
+//! pixel, adds `w·L` and `w` to every pixel whose centre lies within the
+//! filter's support (`w` the filter's value there, [`filter`]), and a
+//! pixel is `Σ w·L / Σ w` ([`Film::accumulate_weighted`]). The sums are
+//! the same ones: the weight sum takes the sample count's place.
+//!
 //! Films know nothing of paths or transports: the transport depends on its
 //! film, never the other way.
 //!
@@ -36,6 +45,46 @@ pub use fourier::{FourierFilm, FourierPixel, FourierSample};
 pub use xyz::{XyzFilm, XyzPixel};
 
 use spectral_core::color::Xyz;
+
+/// How samples reach pixels (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FilmMode {
+    /// The filter importance-sampled: one pixel per sample, weight 1.
+    #[default]
+    Sample,
+    /// Each sample splatted into every pixel under the filter, weighted by
+    /// the filter's value.
+    Splat,
+}
+
+impl FilmMode {
+    /// Whether `weight` can be a pixel's weight sum after `passes` passes:
+    /// finite and `≥ 0`, at most one per pass and a whole number when
+    /// sampling (the sample count), at most
+    /// [`filter::MAX_SPLAT_WEIGHT_PER_PASS`] per pass when splatting.
+    pub fn is_weight_sum(self, weight: f64, passes: f64) -> bool {
+        let in_range = |most: f64| (0.0..=most).contains(&weight);
+        match self {
+            Self::Sample => in_range(passes) && weight.fract() == 0.0,
+            Self::Splat => in_range(passes * filter::MAX_SPLAT_WEIGHT_PER_PASS),
+        }
+    }
+
+    /// The mode's name on the command line and in partial films.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Sample => "sample",
+            Self::Splat => "splat",
+        }
+    }
+
+    /// The mode of a [`FilmMode::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Self::Sample, Self::Splat]
+            .into_iter()
+            .find(|mode| mode.name() == name)
+    }
+}
 
 /// Where Fourier samples are converted to colour.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,6 +111,14 @@ pub trait Film: Sync {
     fn sample_is_finite(sample: &Self::Sample) -> bool;
     /// Adds a sample to a pixel.
     fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample);
+    /// Adds `weight × sample` to a pixel's sums and `weight` to its weight
+    /// sum (splatting; [`FilmMode::Splat`]), both in `f64`. Films without
+    /// a state ([`Film::state_len`] `None`) are never splatted: the
+    /// renderer refuses them, and they add nothing.
+    fn accumulate_weighted(&self, _pixel: &mut Self::Pixel, _sample: &Self::Sample, _weight: f32) {}
+    /// Adds the sums and weight of `from` to `into` (a tile's splats into
+    /// the film; nothing for films without a state).
+    fn add_pixel(&self, _into: &mut Self::Pixel, _from: &Self::Pixel) {}
     /// The shared state for ending the current pass, from every pixel
     /// before any of them ends it (nothing unless passes interact).
     fn pass_shared<'a>(
@@ -98,16 +155,12 @@ pub trait Film: Sync {
     /// nothing for films without a state).
     fn save_state(&self, _pixel: &Self::Pixel, _out: &mut [f64]) {}
     /// The pixel a state describes, if `values` is one: the film's length,
-    /// every value finite and the sample count a whole number `≥ 0`.
-    fn load_state(&self, _values: &[f64]) -> Option<Self::Pixel> {
+    /// every sum finite and the last value a weight sum of `passes` passes
+    /// in `mode` ([`FilmMode::is_weight_sum`]: with importance sampling the
+    /// sample count).
+    fn load_state(&self, _values: &[f64], _mode: FilmMode, _passes: f64) -> Option<Self::Pixel> {
         None
     }
-}
-
-/// Whether `count` can be a pixel's sample count: a finite whole number
-/// `≥ 0` (the last value of the Fourier and sampled films' states).
-pub(crate) fn is_sample_count(count: f64) -> bool {
-    count >= 0.0 && count.is_finite() && count.fract() == 0.0
 }
 
 /// Whether every value is finite (without early exit: the check is a

@@ -1,6 +1,6 @@
 //! [`XyzFilm`]: the sampled transports' per-sample XYZ estimates, averaged.
 
-use super::{Film, all_finite, is_sample_count};
+use super::{Film, FilmMode, all_finite};
 use spectral_core::color::Xyz;
 
 /// The film of the sampled transports: each sample is already an XYZ
@@ -8,7 +8,8 @@ use spectral_core::color::Xyz;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct XyzFilm;
 
-/// A sampled pixel: XYZ sums and the sample count.
+/// A sampled pixel: XYZ sums and the sample count (the weight sum when
+/// splatting).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct XyzPixel {
     pub(super) xyz: [f64; 3],
@@ -35,6 +36,21 @@ impl Film for XyzFilm {
         pixel.count += 1.0;
     }
 
+    fn accumulate_weighted(&self, pixel: &mut Self::Pixel, sample: &Self::Sample, weight: f32) {
+        let weight = f64::from(weight);
+        for (acc, &v) in pixel.xyz.iter_mut().zip(sample) {
+            *acc += weight * f64::from(v);
+        }
+        pixel.count += weight;
+    }
+
+    fn add_pixel(&self, into: &mut Self::Pixel, from: &Self::Pixel) {
+        for (acc, &v) in into.xyz.iter_mut().zip(&from.xyz) {
+            *acc += v;
+        }
+        into.count += from.count;
+    }
+
     fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
         if pixel.count == 0.0 {
             return Xyz::default();
@@ -42,7 +58,8 @@ impl Film for XyzFilm {
         Xyz::from_array(pixel.xyz.map(|v| v / pixel.count))
     }
 
-    /// X, Y and Z sums, then the sample count.
+    /// X, Y and Z sums, then the sample count (the weight sum when
+    /// splatting).
     fn state_len(&self) -> Option<usize> {
         Some(XYZ_STATE_LEN)
     }
@@ -54,12 +71,12 @@ impl Film for XyzFilm {
         }
     }
 
-    fn load_state(&self, values: &[f64]) -> Option<Self::Pixel> {
+    fn load_state(&self, values: &[f64], mode: FilmMode, passes: f64) -> Option<Self::Pixel> {
         let [x, y, z, count] = *values else {
             return None;
         };
         let xyz = [x, y, z];
-        (xyz.iter().all(|v| v.is_finite()) && is_sample_count(count))
+        (xyz.iter().all(|v| v.is_finite()) && mode.is_weight_sum(count, passes))
             .then_some(XyzPixel { xyz, count })
     }
 }

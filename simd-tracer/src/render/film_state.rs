@@ -11,15 +11,23 @@
 //! ([`super::PassJob::resume`]) goes on adding in pass order and equals the
 //! render that never stopped bit for bit.
 //!
+//! Splatted films ([`crate::film::FilmMode::Splat`]) keep the same sums
+//! with the filter-weight sum in the sample count's place; the state
+//! records its mode, and a pixel's weight sum is checked by that mode's
+//! rule ([`crate::film::FilmMode::is_weight_sum`]).
+//!
 //! Merging pass ranges is exact up to the rounding of `f64` sums: a pixel's
 //! sum of `n` samples computed in one run and the sum of its parts added
 //! afterwards are two orders of the same additions, each within
 //! `(n − 1) u Σ|x|` of the exact sum (`u = 2⁻⁵³`, Higham, *Accuracy and
 //! Stability of Numerical Algorithms*, 2nd ed., §4.2), so they differ by at
-//! most `2 (n − 1) u Σ|x|`, far below the `f32` of every output.
+//! most `2 (n − 1) u Σ|x|`, far below the `f32` of every output. When
+//! splatting, `n` counts the additions into the pixel: one per pass and
+//! tile whose apron covers it (at most 4 while the margin is under a
+//! tile's side), each apron's own sum being the same in both.
 
 use super::{PixelWindow, RenderError};
-use crate::film::Film;
+use crate::film::{Film, FilmMode};
 use core::ops::Range;
 
 /// The film of a (cropped) render over a range of passes (module docs).
@@ -35,18 +43,28 @@ pub struct FilmState {
     pub values: Vec<f64>,
     /// Samples of these passes rejected for NaN or infinite values.
     pub rejected: u64,
+    /// How the samples reached the pixels: the last value of a pixel is
+    /// its sample count when sampling, its filter-weight sum when
+    /// splatting.
+    pub mode: FilmMode,
 }
 
 impl FilmState {
     /// An empty state (no pass yet) of `window` for a film whose pixel
-    /// states hold `values_per_pixel` values each.
-    pub fn empty(window: PixelWindow, first_pass: u32, values_per_pixel: usize) -> Self {
+    /// states hold `values_per_pixel` values each, filled in `mode`.
+    pub fn empty(
+        window: PixelWindow,
+        first_pass: u32,
+        values_per_pixel: usize,
+        mode: FilmMode,
+    ) -> Self {
         Self {
             window,
             passes: first_pass..first_pass,
             values_per_pixel,
             values: vec![0.0; window.pixel_count() as usize * values_per_pixel],
             rejected: 0,
+            mode,
         }
     }
 
@@ -89,6 +107,13 @@ impl FilmState {
         if later.window != self.window || later.values_per_pixel != self.values_per_pixel {
             return Err("the states hold different windows or pixels".into());
         }
+        if later.mode != self.mode {
+            return Err(format!(
+                "a {} film does not add to a {} film",
+                later.mode.name(),
+                self.mode.name()
+            ));
+        }
         if later.passes.start != self.passes.end {
             return Err(format!(
                 "passes {}..{} do not follow {}..{}",
@@ -120,14 +145,12 @@ impl FilmState {
             .chunks_exact(self.values_per_pixel)
             .enumerate()
             .map(|(index, values)| {
-                let count = values[values.len() - 1];
-                film.load_state(values)
-                    .filter(|_| count <= passes)
-                    .ok_or_else(|| {
-                        RenderError::State(format!(
-                            "pixel {index} of the window is not a sum of at most {passes} samples"
-                        ))
-                    })
+                film.load_state(values, self.mode, passes).ok_or_else(|| {
+                    RenderError::State(format!(
+                        "pixel {index} of the window is not a {} sum of {passes} passes",
+                        self.mode.name()
+                    ))
+                })
             })
             .collect()
     }

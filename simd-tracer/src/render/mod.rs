@@ -11,9 +11,45 @@
 //!
 //! Determinism: every sample draws its random numbers from streams keyed by
 //! (seed, pixel, pass) ([`crate::sampling::rng`]), the filter is importance-sampled so
-//! a sample only touches its own pixel, and each tile is owned by one task
-//! per pass: the image depends only on the seed, never on the thread count
+//! a sample only touches its own pixel (splatting: below), and each tile is
+//! owned by one task per pass: the image depends only on the seed, never on the thread count
 //! or scheduling (tested bit for bit).
+//!
+//! **Splatting** ([`RenderSettings::film`] = [`FilmMode::Splat`], Mitsuba's
+//! film): a sample, placed uniformly in its pixel, adds `w·L` and `w` to
+//! every pixel within the filter's margin `M`
+//! ([`Filter::splat_margin_px`]). Its camera ray is the box filter's (the
+//! same offsets, so a box splat equals a box-sampled render bit for bit,
+//! tested). A sample now touches pixels of neighbouring tiles, which other
+//! tasks own, and `f64` addition is not associative, so the order in which
+//! a pixel's contributions are added must not depend on scheduling:
+//!
+//! * each tile splats into an apron of its own (the tile grown by `M` on
+//!   every side), emptied before every pass, in the fixed order of its
+//!   packets and lanes;
+//! * after every pass the aprons are added into the film's pixels: each
+//!   tile (in parallel) adds, pixel by pixel, the aprons that cover it in
+//!   the fixed order of the tiles (row-major on the film's tile grid).
+//!
+//! A pixel's sum is thus `(…((S + a₁) + a₂) …)` over passes and tiles in
+//! one order whatever the thread count and whatever the batch sizes, which
+//! the measured speed sets and only the progress callback sees: the flush
+//! happens per pass inside a batch, never per batch. Per pass rather than
+//! per group of passes: a group would need its passes aligned to absolute
+//! pass indices so that `--passes` ranges and resumed renders stop at its
+//! edges, and the flush (one `f64` add per value of the apron, about
+//! `(1 + 2M/16)²` of the film per pass) is small beside tracing. The
+//! aprons cost that much memory beside the film.
+//!
+//! A cropped splat render traces the window grown by `M` (on the packet
+//! grid, clipped to the film) and flushes into the window only. A window
+//! pixel's contributions are the full render's, in the same order: the
+//! samples that reach it are all traced, the cut tiles keep their packets'
+//! row-major order, and a tile of the full render missing from the crop
+//! holds no sample that reaches the window (adding its zeros would change
+//! no bit: sums start at `+0`, never become `−0`). So crops are exact
+//! (tested). Samples are counted (and rejected) in the pixel that traced
+//! them, so parts over disjoint windows count each sample once.
 //!
 //! A crop window ([`RenderSettings::window`], Mitsuba's `hdrfilm`
 //! `crop_offset_x/y`, `crop_width/height`) renders part of the film: the
@@ -46,8 +82,8 @@ mod film_state;
 
 pub use film_state::FilmState;
 
-use crate::film::Film;
 use crate::film::filter::{Filter, FilterError};
+use crate::film::{Film, FilmMode};
 use crate::integrator::{
     GROUP, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
 };
@@ -90,6 +126,8 @@ pub struct RenderSettings {
     /// Render only this part of the `width × height` film (`None`: all of
     /// it); the result is the window's size (module docs).
     pub window: Option<PixelWindow>,
+    /// Importance-sample the filter or splat (module docs).
+    pub film: FilmMode,
 }
 
 /// A rectangle of the film, pixels: columns `x .. x + width`, rows
@@ -161,6 +199,22 @@ impl PixelWindow {
         Ok(self)
     }
 
+    /// The window grown by `margin` pixels on every side, clipped to a
+    /// `width × height` film.
+    fn grown(self, margin: u32, width: u32, height: u32) -> Self {
+        let (x_end, y_end) = self.end();
+        let (x, y) = (self.x.saturating_sub(margin), self.y.saturating_sub(margin));
+        // Clipped to the film, whose sides are `u32`.
+        let x_end = (x_end + u64::from(margin)).min(u64::from(width)) as u32;
+        let y_end = (y_end + u64::from(margin)).min(u64::from(height)) as u32;
+        Self {
+            x,
+            y,
+            width: x_end - x,
+            height: y_end - y,
+        }
+    }
+
     /// The window grown outwards to whole packets of the film's packet
     /// grid (4 × 2 pixels from the film's corner), clipped to the film:
     /// the pixels a cropped render traces.
@@ -196,6 +250,7 @@ impl Default for RenderSettings {
             threads: None,
             time_limit: None,
             window: None,
+            film: FilmMode::Sample,
         }
     }
 }
@@ -222,6 +277,10 @@ pub enum RenderError {
     NotSplittable,
     /// A film state to continue from does not fit the render (why).
     State(String),
+    /// The transport's film cannot splat (control variates weight each
+    /// pass by `α` from the earlier ones; their pixels are no weighted
+    /// sums).
+    CannotSplat,
     /// The crop window is empty or leaves the film.
     Window {
         /// The window asked for.
@@ -244,6 +303,10 @@ impl core::fmt::Display for RenderError {
                 "control variates weight each pass by every earlier pass: this transport cannot render a range of passes apart, continue a render or keep its film"
             ),
             Self::State(why) => write!(f, "the film state to continue from does not fit: {why}"),
+            Self::CannotSplat => write!(
+                f,
+                "control variates weight each pass by every earlier pass: their film cannot splat samples into neighbouring pixels (use the importance-sampled filter)"
+            ),
             Self::Window {
                 window,
                 width,
@@ -302,6 +365,10 @@ struct Tile<P> {
     width: u32,
     height: u32,
     pixels: Vec<P>,
+    /// Splatting: the current pass's splats over the tile grown by the
+    /// margin `M` on every side, row-major from `(x0 − M, y0 − M)`
+    /// (module docs); empty when sampling.
+    apron: Vec<P>,
     rejected: u64,
     rays: RayCounts,
 }
@@ -326,15 +393,17 @@ impl<P> Tile<P> {
 }
 
 /// The camera rays of a packet: lane `l` goes through pixel `lanes[l]` of
-/// `tile` (inactive where `None`) at an offset drawn from the filter with
-/// the lane's path stream (two numbers, x then y), all 8 lanes at once.
+/// `tile` (inactive where `None`) at an offset drawn from the filter
+/// (splatting: uniform in the pixel, the box's) with the lane's path
+/// stream (two numbers, x then y), all 8 lanes at once; with the offsets
+/// from the pixels' centres, px.
 fn camera_packet<P>(
     scene: &Scene,
     settings: &RenderSettings,
     tile: &Tile<P>,
     lanes: &[Option<(u32, u32)>; LANES],
     path_rngs: &mut RngPacket,
-) -> RayPacket {
+) -> (RayPacket, [f32x8; 2]) {
     // Drawn in every lane; lanes without a pixel are never read again.
     let (u, v) = (path_rngs.next_f32x8(), path_rngs.next_f32x8());
     let mut pixel_x = [0.0f32; LANES];
@@ -347,7 +416,10 @@ fn camera_packet<P>(
             active = active.with(lane);
         }
     }
-    let (dx, dy) = settings.filter.sample_offset_x8(u, v);
+    let (dx, dy) = match settings.film {
+        FilmMode::Sample => settings.filter.sample_offset_x8(u, v),
+        FilmMode::Splat => Filter::Box.sample_offset_x8(u, v),
+    };
     let direction = scene.camera().direction_x8(
         f32x8::new(pixel_x) + dx,
         f32x8::new(pixel_y) + dy,
@@ -355,12 +427,13 @@ fn camera_packet<P>(
         settings.height,
     );
     let live = active.to_simd();
-    RayPacket {
+    let packet = RayPacket {
         origin: Vec3x8::splat(scene.camera().position()).to_array(),
         direction: Vec3x8::select(live, direction, Vec3x8::splat(glam::Vec3::Z)).to_array(),
         t_max: live.select(f32x8::splat(f32::INFINITY), f32x8::ZERO),
         active,
-    }
+    };
+    (packet, [dx, dy])
 }
 
 /// Stack of each render thread. A group's path states, rays, hits and
@@ -404,12 +477,17 @@ fn render_tile<T: Transport>(
     // last group is padded with packets without pixels.
     let columns = tile.width.div_ceil(PACKET_WIDTH);
     let count = columns * tile.height.div_ceil(PACKET_HEIGHT);
-    let pixel_index = |(lx, ly): (u32, u32)| {
-        u64::from(tile.y0 + ly) * u64::from(settings.width) + u64::from(tile.x0 + lx)
-    };
+    let (x0, y0) = (tile.x0, tile.y0);
+    let pixel_index =
+        |(lx, ly): (u32, u32)| u64::from(y0 + ly) * u64::from(settings.width) + u64::from(x0 + lx);
     let window = settings.film_window();
     let path_key = SampleKey::new(settings.seed, u64::from(pass), Purpose::Path);
     let wavelength_key = SampleKey::new(settings.seed, u64::from(pass), Purpose::Wavelengths);
+    let splat = Splat::new(settings, tile);
+    if splat.is_some() {
+        let film = transport.film();
+        tile.apron.iter_mut().for_each(|p| *p = film.empty_pixel());
+    }
     for first in (0..count).step_by(GROUP) {
         let lanes: [[Option<(u32, u32)>; LANES]; GROUP] = core::array::from_fn(|g| {
             let mut lanes = [None; LANES];
@@ -437,9 +515,10 @@ fn render_tile<T: Transport>(
         };
         let mut path_rngs: [RngPacket; GROUP] =
             core::array::from_fn(|g| RngPacket::for_pixels(&pixels(&lanes[g]), path_key));
-        let camera_rays: [RayPacket; GROUP] = core::array::from_fn(|g| {
+        let cameras: [(RayPacket, [f32x8; 2]); GROUP] = core::array::from_fn(|g| {
             camera_packet(scene, settings, tile, &lanes[g], &mut path_rngs[g])
         });
+        let camera_rays: [RayPacket; GROUP] = core::array::from_fn(|g| cameras[g].0);
         let mut wavelengths: [T::Wavelengths; GROUP] = core::array::from_fn(|g| {
             let pixels = pixels(&lanes[g]);
             transport.sample_wavelengths(|lane| Rng::for_pixel(pixels[lane], wavelength_key))
@@ -460,6 +539,25 @@ fn render_tile<T: Transport>(
         for g in 0..GROUP {
             let samples = transport.samples(&radiance[g], &wavelengths[g]);
             let finite = transport.finite_lanes(&radiance[g], &samples);
+            if let Some(splat) = &splat {
+                let [dx, dy] = cameras[g].1.map(|o| o.to_array());
+                for (lane, slot) in lanes[g].iter().enumerate() {
+                    let Some((lx, ly)) = *slot else { continue };
+                    if finite.contains(lane) {
+                        splat.add(
+                            transport.film(),
+                            tile,
+                            (lx, ly),
+                            (dx[lane], dy[lane]),
+                            &samples[lane],
+                        );
+                    } else if window.contains(tile.x0 + lx, tile.y0 + ly) {
+                        // Counted by the window that holds its pixel.
+                        tile.rejected += 1;
+                    }
+                }
+                continue;
+            }
             for (lane, slot) in lanes[g].iter().enumerate() {
                 // Lanes outside a crop window were traced for their
                 // packet-mates' sake only (module docs).
@@ -477,6 +575,146 @@ fn render_tile<T: Transport>(
             }
         }
     }
+}
+
+/// A splatting tile's filter and margin (module docs).
+struct Splat<'a> {
+    filter: &'a Filter,
+    /// `M`, px.
+    margin: u32,
+    /// Apron width, `tile width + 2M`.
+    apron_width: u32,
+}
+
+impl<'a> Splat<'a> {
+    /// The splat of `tile` when `settings` splat.
+    fn new<P>(settings: &'a RenderSettings, tile: &Tile<P>) -> Option<Self> {
+        (settings.film == FilmMode::Splat).then(|| {
+            let margin = settings.filter.splat_margin_px();
+            Self {
+                filter: &settings.filter,
+                margin,
+                apron_width: tile.width + 2 * margin,
+            }
+        })
+    }
+
+    /// Adds `sample`, traced at `offset` px from the centre of the tile's
+    /// pixel `(lx, ly)`, to every apron pixel `(lx + i, ly + j)`,
+    /// `i, j ∈ −M ..= M`, with weight `f(dx − i) f(dy − j)` (the offset
+    /// from that pixel's centre), skipping zero weights.
+    fn add<F: Film>(
+        &self,
+        film: &F,
+        tile: &mut Tile<F::Pixel>,
+        (lx, ly): (u32, u32),
+        (dx, dy): (f32, f32),
+        sample: &F::Sample,
+    ) {
+        let reach = 2 * self.margin + 1;
+        let margin = self.margin as f32;
+        for j in 0..reach {
+            let wy = self.filter.weight(dy - (j as f32 - margin));
+            if wy == 0.0 {
+                continue;
+            }
+            let row = ((ly + j) * self.apron_width + lx) as usize;
+            for i in 0..reach {
+                let w = self.filter.weight(dx - (i as f32 - margin)) * wy;
+                if w != 0.0 {
+                    film.accumulate_weighted(&mut tile.apron[row + i as usize], sample, w);
+                }
+            }
+        }
+    }
+}
+
+/// Adds every tile's apron into the pixels of `window` it covers (module
+/// docs): `sources[t]` lists, in tile order, the tiles whose aprons cover
+/// some of tile `t`'s window pixels.
+fn flush_aprons<F: Film>(
+    film: &F,
+    tiles: &mut [Tile<F::Pixel>],
+    sources: &[Vec<usize>],
+    margin: u32,
+    window: &PixelWindow,
+) {
+    let aprons: Vec<(u32, u32, u32, Vec<F::Pixel>)> = tiles
+        .iter_mut()
+        .map(|t| {
+            (
+                t.x0,
+                t.y0,
+                t.width + 2 * margin,
+                std::mem::take(&mut t.apron),
+            )
+        })
+        .collect();
+    tiles
+        .par_iter_mut()
+        .zip(sources.par_iter())
+        .for_each(|(tile, sources)| {
+            for &source in sources {
+                let (sx0, sy0, apron_width, apron) = &aprons[source];
+                let apron_height = (apron.len() as u32) / apron_width;
+                for (index, pixel) in tile.pixels.iter_mut().enumerate() {
+                    let (x, y) = (
+                        tile.x0 + index as u32 % tile.width,
+                        tile.y0 + index as u32 / tile.width,
+                    );
+                    // Apron coordinates: the film's, shifted by M - x0.
+                    let (ax, ay) = (
+                        i64::from(x) + i64::from(margin) - i64::from(*sx0),
+                        i64::from(y) + i64::from(margin) - i64::from(*sy0),
+                    );
+                    let inside = (0..i64::from(*apron_width)).contains(&ax)
+                        && (0..i64::from(apron_height)).contains(&ay);
+                    if inside && window.contains(x, y) {
+                        film.add_pixel(pixel, &apron[(ay * i64::from(*apron_width) + ax) as usize]);
+                    }
+                }
+            }
+        });
+    for (tile, (.., apron)) in tiles.iter_mut().zip(aprons) {
+        tile.apron = apron;
+    }
+}
+
+/// For each tile, the tiles (in order) whose aprons, the tiles grown by
+/// `margin`, overlap its pixels in `window`.
+fn apron_sources<P>(tiles: &[Tile<P>], margin: u32, window: &PixelWindow) -> Vec<Vec<usize>> {
+    let rect = |t: &Tile<P>, grow: u32| {
+        (
+            i64::from(t.x0) - i64::from(grow),
+            i64::from(t.y0) - i64::from(grow),
+            i64::from(t.x0) + i64::from(t.width) + i64::from(grow),
+            i64::from(t.y0) + i64::from(t.height) + i64::from(grow),
+        )
+    };
+    let (wx0, wy0) = (i64::from(window.x), i64::from(window.y));
+    let (wx1, wy1) = (
+        wx0 + i64::from(window.width),
+        wy0 + i64::from(window.height),
+    );
+    tiles
+        .iter()
+        .map(|tile| {
+            let (x0, y0, x1, y1) = rect(tile, 0);
+            let (x0, y0, x1, y1) = (x0.max(wx0), y0.max(wy0), x1.min(wx1), y1.min(wy1));
+            if x0 >= x1 || y0 >= y1 {
+                return Vec::new();
+            }
+            tiles
+                .iter()
+                .enumerate()
+                .filter(|(_, source)| {
+                    let (sx0, sy0, sx1, sy1) = rect(source, margin);
+                    sx0 < x1 && x0 < sx1 && sy0 < y1 && y0 < sy1
+                })
+                .map(|(index, _)| index)
+                .collect()
+        })
+        .collect()
 }
 
 /// Which passes a render takes and what it starts from (module docs):
@@ -525,6 +763,10 @@ pub fn render_passes<T: Transport>(
         .validate(settings.width, settings.height)?;
     let film = transport.film();
     let state_len = film.state_len();
+    let splat = settings.film == FilmMode::Splat;
+    if splat && state_len.is_none() {
+        return Err(RenderError::CannotSplat);
+    }
     if (job.first_pass != 0 || job.resume.is_some() || job.keep_state) && state_len.is_none() {
         return Err(RenderError::NotSplittable);
     }
@@ -550,6 +792,13 @@ pub fn render_passes<T: Transport>(
                     window.y
                 )));
             }
+            if state.mode != settings.film {
+                return Err(RenderError::State(format!(
+                    "it holds a {} film, the render makes a {} film",
+                    state.mode.name(),
+                    settings.film.name()
+                )));
+            }
             if state.passes.start != job.first_pass || state.passes.end > last_pass {
                 return Err(RenderError::State(format!(
                     "it holds passes {}..{}, not a start of {}..{last_pass}",
@@ -567,9 +816,17 @@ pub fn render_passes<T: Transport>(
         .build()
         .map_err(|e| RenderError::Threads(e.to_string()))?;
     let start = Instant::now();
-    // The film's tiles cut to the traced pixels: each starts on the
-    // film's packet grid, so its packets are the full render's.
-    let traced = window.to_packet_grid(settings.width, settings.height);
+    // The film's tiles cut to the traced pixels (splatting: those within
+    // the margin of the window): each starts on the film's packet grid, so
+    // its packets are the full render's.
+    let margin = if splat {
+        settings.filter.splat_margin_px()
+    } else {
+        0
+    };
+    let traced = window
+        .grown(margin, settings.width, settings.height)
+        .to_packet_grid(settings.width, settings.height);
     let (traced_x_end, traced_y_end) = (traced.x + traced.width, traced.y + traced.height);
     let mut tiles = Vec::new();
     for tile_y in (0..settings.height).step_by(TILE_SIZE as usize) {
@@ -581,17 +838,28 @@ pub fn render_passes<T: Transport>(
                 continue;
             }
             let (width, height) = (x_end - x0, y_end - y0);
+            let apron_pixels = if splat {
+                ((width + 2 * margin) * (height + 2 * margin)) as usize
+            } else {
+                0
+            };
             tiles.push(Tile {
                 x0,
                 y0,
                 width,
                 height,
                 pixels: vec![film.empty_pixel(); (width * height) as usize],
+                apron: vec![film.empty_pixel(); apron_pixels],
                 rejected: 0,
                 rays: RayCounts::default(),
             });
         }
     }
+    let sources = if splat {
+        apron_sources(&tiles, margin, &window)
+    } else {
+        Vec::new()
+    };
     let pixel_count = window.pixel_count();
     let mut passes = 0;
     let mut resumed_rejected = 0;
@@ -614,14 +882,26 @@ pub fn render_passes<T: Transport>(
         let end = first.saturating_add(batch).min(last_pass);
         let batch_start = Instant::now();
         pool.install(|| {
-            tiles.par_iter_mut().for_each_init(
-                || GroupState::new(transport),
-                |state, tile| {
-                    for pass in first..end {
-                        render_tile(transport, scene, settings, pass, state, tile);
-                    }
-                },
-            );
+            if splat {
+                // One pass at a time, its aprons flushed before the next
+                // (module docs): the batch never reaches the sums.
+                for pass in first..end {
+                    tiles.par_iter_mut().for_each_init(
+                        || GroupState::new(transport),
+                        |state, tile| render_tile(transport, scene, settings, pass, state, tile),
+                    );
+                    flush_aprons(film, &mut tiles, &sources, margin, &window);
+                }
+            } else {
+                tiles.par_iter_mut().for_each_init(
+                    || GroupState::new(transport),
+                    |state, tile| {
+                        for pass in first..end {
+                            render_tile(transport, scene, settings, pass, state, tile);
+                        }
+                    },
+                );
+            }
         });
         if film.passes_interact() {
             debug_assert_eq!(end, first + 1);
@@ -668,7 +948,8 @@ pub fn render_passes<T: Transport>(
     let (xyz, coefficients) = resolve_pixels(film, &window, pixels);
     let state = match (job.keep_state, state_len) {
         (true, Some(values_per_pixel)) => {
-            let mut state = FilmState::empty(window, job.first_pass, values_per_pixel);
+            let mut state =
+                FilmState::empty(window, job.first_pass, values_per_pixel, settings.film);
             state.passes.end = job.first_pass + passes;
             state.rejected = rejected;
             for tile in &tiles {

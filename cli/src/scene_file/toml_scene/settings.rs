@@ -7,6 +7,7 @@ use crate::scene_file::construction::MapSettings;
 use crate::scene_file::toml_reader::Item;
 use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults};
 use glam::{Mat3, Vec3};
+use simd_tracer::film::FilmMode;
 use simd_tracer::scene::camera::{Camera, CameraError};
 use simd_tracer::spectra::environment::EnvironmentMap;
 
@@ -24,6 +25,7 @@ impl Loader<'_> {
                 "max_depth",
                 "seed",
                 "hide_emitters",
+                "film",
             ],
             "[render]",
         )?;
@@ -40,6 +42,14 @@ impl Loader<'_> {
             hide_emitters: table
                 .get("hide_emitters")
                 .map(|i| i.boolean(src))
+                .transpose()?,
+            film: table
+                .get("film")
+                .map(|i| {
+                    let name = i.string(src)?;
+                    FilmMode::from_name(name)
+                        .ok_or_else(|| i.err(src, format!("film `{name}`: use sample or splat")))
+                })
                 .transpose()?,
             ..RenderDefaults::default()
         })
