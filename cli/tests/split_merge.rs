@@ -491,3 +491,54 @@ fn corrupt_partial_films_are_refused() -> TestResult {
     );
     Ok(())
 }
+
+/// Splatted parts (`--film splat`): four crops merge bit for bit into the
+/// single splatted render (EXR and sums), a splatted part does not merge
+/// with a sampled one, and control variates refuse to splat.
+#[test]
+fn splatted_crops_merge_bit_for_bit() -> TestResult {
+    let dir = test_dir("splat")?;
+    let all = format!("0..{PASSES}");
+    let splat = |name: &str, extra: &[&str]| -> TestResult<String> {
+        let file = format!("{name}.fspart");
+        let exr = format!("{name}.exr");
+        let options = [
+            "--film", "splat", "--passes", &all, "--out", &file, "--out", &exr,
+        ];
+        render(&dir, &[&options[..], extra].concat())?;
+        Ok(file)
+    };
+    splat("single", &[])?;
+    let mut crops = Vec::new();
+    for (k, crop) in ["0,0,13,9", "13,0,24,9", "0,9,13,20", "13,9,24,20"]
+        .iter()
+        .enumerate()
+    {
+        crops.push(splat(&format!("c{k}"), &["--crop", crop])?);
+    }
+    merged_ok(&dir, &crops, &["crops.exr", "crops.fspart"])?;
+    assert_eq!(
+        fs::read(dir.join("crops.fspart"))?,
+        fs::read(dir.join("single.fspart"))?
+    );
+    assert_eq!(
+        fs::read(dir.join("crops.exr"))?,
+        fs::read(dir.join("single.exr"))?
+    );
+    // The sampled film of the same frame is another image, its part
+    // another film.
+    part(&dir, "sampled", &all, None)?;
+    assert_ne!(
+        fs::read(dir.join("sampled.fspart"))?,
+        fs::read(dir.join("single.fspart"))?
+    );
+    let half = splat("half", &["--crop", "0,0,37,10"])?;
+    let lower = part(&dir, "lower", &all, Some("0,10,37,19"))?;
+    refused(&merge(&dir, &[half, lower], &["mixed.exr"])?, "film (");
+    let cv = render_cmd(&dir)
+        .args(["--film", "splat", "--transport", "cv", "--spp", "1", "-q"])
+        .args(["--out", "cv.exr"])
+        .output()?;
+    refused(&cv, "--film splat");
+    Ok(())
+}

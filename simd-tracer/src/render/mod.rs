@@ -82,7 +82,7 @@ mod film_state;
 
 pub use film_state::FilmState;
 
-use crate::film::filter::{Filter, FilterError};
+use crate::film::filter::{Filter, FilterError, MAX_SPLAT_MARGIN_PX};
 use crate::film::{Film, FilmMode};
 use crate::integrator::{
     GROUP, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
@@ -611,18 +611,23 @@ impl<'a> Splat<'a> {
         (dx, dy): (f32, f32),
         sample: &F::Sample,
     ) {
-        let reach = 2 * self.margin + 1;
+        let reach = (2 * self.margin + 1) as usize;
         let margin = self.margin as f32;
+        // The column weights once per sample (M ≤ MAX_SPLAT_MARGIN_PX).
+        let mut column_weights = [0.0f32; 2 * MAX_SPLAT_MARGIN_PX as usize + 1];
+        for (i, w) in column_weights.iter_mut().take(reach).enumerate() {
+            *w = self.filter.weight(dx - (i as f32 - margin));
+        }
         for j in 0..reach {
             let wy = self.filter.weight(dy - (j as f32 - margin));
             if wy == 0.0 {
                 continue;
             }
-            let row = ((ly + j) * self.apron_width + lx) as usize;
-            for i in 0..reach {
-                let w = self.filter.weight(dx - (i as f32 - margin)) * wy;
+            let row = (ly as usize + j) * self.apron_width as usize + lx as usize;
+            for (i, &wx) in column_weights[..reach].iter().enumerate() {
+                let w = wx * wy;
                 if w != 0.0 {
-                    film.accumulate_weighted(&mut tile.apron[row + i as usize], sample, w);
+                    film.accumulate_weighted(&mut tile.apron[row + i], sample, w);
                 }
             }
         }
@@ -654,23 +659,28 @@ fn flush_aprons<F: Film>(
         .par_iter_mut()
         .zip(sources.par_iter())
         .for_each(|(tile, sources)| {
+            // The tile's pixels in the window, film coordinates (i64: the
+            // aprons reach past the film's corner).
+            let (x0, y0) = (i64::from(tile.x0), i64::from(tile.y0));
+            let (wx0, wy0) = (i64::from(window.x), i64::from(window.y));
+            let kept_x =
+                x0.max(wx0)..(x0 + i64::from(tile.width)).min(wx0 + i64::from(window.width));
+            let kept_y =
+                y0.max(wy0)..(y0 + i64::from(tile.height)).min(wy0 + i64::from(window.height));
+            let margin = i64::from(margin);
             for &source in sources {
                 let (sx0, sy0, apron_width, apron) = &aprons[source];
-                let apron_height = (apron.len() as u32) / apron_width;
-                for (index, pixel) in tile.pixels.iter_mut().enumerate() {
-                    let (x, y) = (
-                        tile.x0 + index as u32 % tile.width,
-                        tile.y0 + index as u32 / tile.width,
-                    );
-                    // Apron coordinates: the film's, shifted by M - x0.
-                    let (ax, ay) = (
-                        i64::from(x) + i64::from(margin) - i64::from(*sx0),
-                        i64::from(y) + i64::from(margin) - i64::from(*sy0),
-                    );
-                    let inside = (0..i64::from(*apron_width)).contains(&ax)
-                        && (0..i64::from(apron_height)).contains(&ay);
-                    if inside && window.contains(x, y) {
-                        film.add_pixel(pixel, &apron[(ay * i64::from(*apron_width) + ax) as usize]);
+                let apron_width = i64::from(*apron_width);
+                let apron_height = apron.len() as i64 / apron_width;
+                // The apron's corner in film coordinates, and its overlap
+                // with the kept pixels.
+                let (ax0, ay0) = (i64::from(*sx0) - margin, i64::from(*sy0) - margin);
+                let columns = kept_x.start.max(ax0)..kept_x.end.min(ax0 + apron_width);
+                for y in kept_y.start.max(ay0)..kept_y.end.min(ay0 + apron_height) {
+                    for x in columns.clone() {
+                        let at = ((y - y0) * i64::from(tile.width) + x - x0) as usize;
+                        let from = ((y - ay0) * apron_width + x - ax0) as usize;
+                        film.add_pixel(&mut tile.pixels[at], &apron[from]);
                     }
                 }
             }
