@@ -183,6 +183,15 @@ fn render_defaults_are_read() -> TestResult {
     let loaded = load_scene_file(&write(&dir, "s.toml", BASE)?)?;
     assert_eq!(loaded.render, RenderDefaults::default());
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    // The film mode, and a name that is none.
+    let splat = format!("{BASE}\n[render]\nfilm = \"splat\"\n");
+    let loaded = load_scene_file(&write(&dir, "splat.toml", &splat)?)?;
+    assert_eq!(loaded.render.film, Some(simd_tracer::film::FilmMode::Splat));
+    let (_, message) = scene_error("film-name", &format!("{BASE}\n[render]\nfilm = \"blur\"\n"))?;
+    assert!(
+        message.contains("film `blur`: use sample or splat"),
+        "{message}"
+    );
     Ok(())
 }
 
