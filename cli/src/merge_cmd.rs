@@ -18,7 +18,7 @@
 //! cell's first pass to its last.
 
 use crate::error::CliError;
-use crate::image_out::{Exposure, Tone};
+use crate::image_out::Exposure;
 use crate::partial_file::{self, FrameIdentity, PartialFilm};
 use crate::render_cmd::{
     OutputOptions, ResolveTask, ToneKind, identity_difference, with_transport,
@@ -196,10 +196,7 @@ pub fn run(args: &MergeArgs) -> Result<MergeSummary, CliError> {
         exposure: Exposure {
             stops: args.exposure,
         },
-        tone: match args.tone {
-            ToneKind::Clamp => Tone::Clamp,
-            ToneKind::Reinhard => Tone::Reinhard,
-        },
+        tone: args.tone.into(),
     };
     let mut parts = Vec::with_capacity(args.parts.len());
     for path in &args.parts {
@@ -221,14 +218,7 @@ pub fn run(args: &MergeArgs) -> Result<MergeSummary, CliError> {
             )));
         }
     }
-    let spectral = matches!(
-        identity.transport,
-        crate::render_cmd::TransportSpec::Fourier {
-            buffer: crate::render_cmd::BufferKind::Spectral,
-            ..
-        }
-    );
-    output.check(spectral)?;
+    output.check(identity.transport.keeps_coefficients())?;
     let frame = partial_file::array_window(identity.frame);
     let merged = merge_states(&parts, frame)?;
     let [min_nm, max_nm] = identity.range_nm;

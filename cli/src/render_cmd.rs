@@ -733,6 +733,19 @@ pub enum TransportSpec {
 }
 
 impl TransportSpec {
+    /// Whether its film keeps Fourier coefficients per pixel (a Fourier
+    /// transport with a spectral buffer): spectral and coefficient EXR
+    /// outputs need them.
+    pub fn keeps_coefficients(&self) -> bool {
+        matches!(
+            self,
+            Self::Fourier {
+                buffer: BufferKind::Spectral,
+                ..
+            }
+        )
+    }
+
     /// The transport `args` ask for (default wavelength counts filled in).
     pub fn of(args: &RenderArgs) -> Self {
         match args.transport {
@@ -1000,6 +1013,15 @@ fn check_writable(path: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
+impl From<ToneKind> for Tone {
+    fn from(kind: ToneKind) -> Self {
+        match kind {
+            ToneKind::Clamp => Tone::Clamp,
+            ToneKind::Reinhard => Tone::Reinhard,
+        }
+    }
+}
+
 /// The image outputs of a render or a merge and how they are made.
 #[derive(Debug, Clone)]
 pub struct OutputOptions {
@@ -1036,10 +1058,7 @@ impl OutputOptions {
             exposure: Exposure {
                 stops: args.exposure,
             },
-            tone: match args.tone {
-                ToneKind::Clamp => Tone::Clamp,
-                ToneKind::Reinhard => Tone::Reinhard,
-            },
+            tone: args.tone.into(),
         }
     }
 
@@ -1319,8 +1338,7 @@ fn plan_parts(
 /// Runs `fspec render`.
 pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
     let output = OutputOptions::of(args);
-    let spectral = args.transport == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
-    output.check(spectral)?;
+    output.check(TransportSpec::of(args).keeps_coefficients())?;
     if (args.passes.is_some() || args.resume.is_some() || output.keeps_state())
         && args.transport == TransportKind::Cv
     {
