@@ -6,6 +6,10 @@
 #   tools/image_checksums.sh FSPEC_BINARY > checksums.txt
 #   diff before.txt after.txt      # empty: bit-identical
 #
+# The film is the default of `fspec render` (splat; sample for --transport
+# cv) but in the line that pins `--film sample`; checksums taken before the
+# default became splat differ from later ones in every other non-cv line.
+#
 # The EXR outputs are hashed (the linear float image, no 8-bit rounding that
 # could hide a change in the last bits).
 set -euo pipefail
@@ -17,6 +21,7 @@ trap 'rm -rf "$work"' EXIT
 transports=(
   "--coeffs 4"
   "--coeffs 12"
+  "--coeffs 12 --film sample"
   "--coeffs 12 --to-color series"
   "--coeffs 12 --to-color lut"
   "--coeffs 12 --to-color mese"

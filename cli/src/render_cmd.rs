@@ -217,7 +217,7 @@ pub struct RenderArgs {
     /// How samples reach pixels: importance-sample the filter (one pixel
     /// per sample) or splat each sample into every pixel under the filter
     /// (as Mitsuba; not with --transport cv). Default: the scene's
-    /// `[render] film`, else sample.
+    /// `[render] film`, else splat (sample with --transport cv).
     #[arg(long, value_enum)]
     pub film: Option<FilmKind>,
     /// Seed of every random stream (same seed, same image).
@@ -434,8 +434,20 @@ fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSe
             .film
             .map(FilmMode::from)
             .or(defaults.film)
-            .unwrap_or(FilmMode::Sample),
+            .unwrap_or(default_film(args.transport)),
     })
+}
+
+/// The film when neither `--film` nor the scene names one: splatting, the
+/// less colour error at equal CPU time against Mitsuba on its Cornell box
+/// and the laser box (`fspec experiment equal-time`, docs/results.md);
+/// control variates cannot splat (their pixels are no weighted sums) and
+/// keep importance sampling of the filter.
+pub fn default_film(transport: TransportKind) -> FilmMode {
+    match transport {
+        TransportKind::Cv => FilmMode::Sample,
+        TransportKind::Fourier | TransportKind::Sampled => FilmMode::Splat,
+    }
 }
 
 /// Russian-roulette depth when neither the flag nor the scene gives one.

@@ -132,6 +132,31 @@ fn partial_film_corpus() -> TestResult {
     Ok(())
 }
 
+#[test]
+fn equal_time_manifest_corpus() -> TestResult {
+    let count = replay_corpus(
+        "equal_time_manifest",
+        fspec_cli::experiment::equal_time::fuzz_manifest,
+    )?;
+    assert!(count >= 5, "only {count} seeds");
+    // The seeds are what their names say.
+    for entry in std::fs::read_dir(corpus_dir("equal_time_manifest"))? {
+        let path = entry?.path();
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default();
+        let text = String::from_utf8_lossy(&std::fs::read(&path)?).into_owned();
+        let parsed = fspec_cli::experiment::equal_time::Manifest::parse(&text, name);
+        assert_eq!(
+            parsed.is_ok(),
+            name.starts_with("valid-"),
+            "{name}: {parsed:?}"
+        );
+    }
+    Ok(())
+}
+
 /// The partial-film seeds are what their names say: `valid-*` files parse,
 /// `broken-*` files are refused.
 #[test]

@@ -9,7 +9,8 @@
 //! | `truncation` | bias of Fourier N = 4 … 32 against the reference, and its cost | [`truncation`] |
 //! | `ringing` | negative reconstructions with and without Fejér damping, and the ΔE they cost | [`ringing`] |
 //! | `memory` | bytes per pixel and per texel of each representation, and its colour error | [`memory`] |
-//! | `all` | all of them, one report | |
+//! | `equal-time` | mean ΔE2000 at equal CPU time, fspec against Mitsuba 3, from `tools/mitsuba_equal_time.py`'s manifest (`--manifest`) | [`equal_time`] |
+//! | `all` | all of them but `equal-time`, one report | |
 //!
 //! Sizes: the full run uses the paper's 512 × 512 pixels and 64 spp; the
 //! reference has [`FULL_REFERENCE_SPP`] spp; the truncation renders a
@@ -21,6 +22,7 @@
 
 pub mod colorchecker;
 pub mod conversions;
+pub mod equal_time;
 pub mod image;
 pub mod memory;
 pub mod plot;
@@ -77,6 +79,8 @@ pub enum ExperimentName {
     Ringing,
     /// Memory per pixel and per texel of each representation.
     Memory,
+    /// Colour error at equal CPU time against Mitsuba 3 (needs --manifest).
+    EqualTime,
     /// Every experiment.
     All,
 }
@@ -119,6 +123,9 @@ pub struct ExperimentArgs {
     /// Worker threads of the renders (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// equal-time only: the manifest `tools/mitsuba_equal_time.py` wrote.
+    #[arg(long)]
+    pub manifest: Option<PathBuf>,
 }
 
 /// The resolved sizes of a run.
@@ -264,6 +271,19 @@ pub fn run(args: &ExperimentArgs, out: &mut dyn Write) -> Result<(), CliError> {
             "--illuminant is only for the colorchecker experiment (or `all`)",
         ));
     }
+    match (args.name, &args.manifest) {
+        (ExperimentName::EqualTime, None) => {
+            return Err(CliError::input(
+                "equal-time needs --manifest FILE (written by tools/mitsuba_equal_time.py)",
+            ));
+        }
+        (ExperimentName::EqualTime, Some(_)) | (_, None) => {}
+        (_, Some(_)) => {
+            return Err(CliError::input(
+                "--manifest is only for `fspec experiment equal-time`",
+            ));
+        }
+    }
     let illuminants = illuminants(args)
         .iter()
         .map(|name| colorchecker::Illuminant::resolve(name))
@@ -306,6 +326,10 @@ pub fn run(args: &ExperimentArgs, out: &mut dyn Write) -> Result<(), CliError> {
     if which(ExperimentName::Memory) {
         progress("memory");
         sections.push(memory::run(dir)?);
+    }
+    if let (ExperimentName::EqualTime, Some(manifest)) = (args.name, &args.manifest) {
+        progress("equal-time");
+        sections.push(equal_time::run(manifest, dir)?);
     }
     let claims: Vec<Claim> = sections.iter().flat_map(|s| s.claims.clone()).collect();
     let command: Vec<String> = std::env::args().collect();
