@@ -61,7 +61,8 @@ thread are the least disturbed by a loaded machine; Dr.Jit's
     target/release/fspec experiment equal-time \\
         --manifest target/equal-time/manifest.json --out results/equal-time
 
-About 25 minutes of CPU on one thread with the defaults.
+About 10-15 minutes of CPU on one thread with the defaults (the references
+half of it); wall time on a loaded machine several times that.
 """
 
 import argparse

@@ -525,15 +525,21 @@ fn splatted_crops_merge_bit_for_bit() -> TestResult {
         fs::read(dir.join("crops.exr"))?,
         fs::read(dir.join("single.exr"))?
     );
-    // The sampled film of the same frame is another image, its part
-    // another film.
-    part(&dir, "sampled", &all, None)?;
+    // The sampled film of the same frame (`--film sample`: the default
+    // is splat) is another image, its part another film.
+    let sampled = |name: &str, extra: &[&str]| -> TestResult<String> {
+        let file = format!("{name}.fspart");
+        let options = ["--film", "sample", "--passes", &all, "--out", &file];
+        render(&dir, &[&options[..], extra].concat())?;
+        Ok(file)
+    };
+    sampled("sampled", &[])?;
     assert_ne!(
         fs::read(dir.join("sampled.fspart"))?,
         fs::read(dir.join("single.fspart"))?
     );
     let half = splat("half", &["--crop", "0,0,37,10"])?;
-    let lower = part(&dir, "lower", &all, Some("0,10,37,19"))?;
+    let lower = sampled("lower", &["--crop", "0,10,37,19"])?;
     refused(&merge(&dir, &[half, lower], &["mixed.exr"])?, "film (");
     let cv = render_cmd(&dir)
         .args(["--film", "splat", "--transport", "cv", "--spp", "1", "-q"])
