@@ -1259,3 +1259,79 @@ fn neural_thickness_outside_the_training_range_warns() -> TestResult {
     );
     Ok(())
 }
+
+// ---------------------------------------------------------------------------
+// Fluorescent materials
+// ---------------------------------------------------------------------------
+
+/// `fluorescent` materials: a built-in fluorophore by name (any case) and
+/// an inline one load as fluorescent BSDFs with their own fluorophores; the
+/// `quantum_yield` key overrides the fluorophore's.
+#[test]
+fn fluorescent_materials_load() -> TestResult {
+    let text = format!(
+        "{BASE}\n[materials.a]\ntype = \"fluorescent\"\nalbedo = {{ constant = 0.8 }}\nfluorophore = \"Fluorescein\"\nquantum_yield = 0.5\n\n\
+         [materials.b]\ntype = \"fluorescent\"\nalbedo = {{ constant = 0.8 }}\nfluorophore = {{ absorption = [400, 20, 20], emission = [450, 20, 30], quantum_yield = 0.6 }}\nabsorptance = 0.5\n\n\
+         [[quads]]\nvertices = [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1]]\nmaterial = \"a\"\n\n\
+         [[quads]]\nvertices = [[-1, -1, -2], [1, -1, -2], [1, 1, -2], [-1, 1, -2]]\nmaterial = \"b\"\n"
+    );
+    let dir = test_dir("fluorescent_ok")?;
+    let path = write(&dir, "scene.toml", &text)?;
+    let loaded = load_scene_file(&path)?;
+    let scene = loaded.builder.build()?;
+    let fluorescent = scene
+        .materials()
+        .iter()
+        .filter(|m| matches!(m.bsdf, Bsdf::Fluorescent { .. }))
+        .count();
+    assert_eq!(fluorescent, 2);
+    let yields: Vec<f64> = scene
+        .fluorophores()
+        .iter()
+        .map(|f| f.layer.fluorophore().quantum_yield)
+        .collect();
+    assert_eq!(yields, [0.5, 0.6]);
+    Ok(())
+}
+
+/// Bad fluorescent materials: one line naming the file, line and key.
+#[test]
+fn fluorescent_material_errors() -> TestResult {
+    let material = |body: &str| format!("{BASE}\n[materials.f]\ntype = \"fluorescent\"\n{body}\n");
+    let cases = [
+        (
+            "albedo = { constant = 0.8 }\nfluorophore = \"quinine\"",
+            "fluorophore = \"quinine\"",
+            "unknown fluorophore",
+        ),
+        ("fluorophore = \"fluorescein\"", "[materials.f]", "albedo"),
+        (
+            "albedo = { constant = 0.8 }\nfluorophore = \"fluorescein\"\nabsorptance = 1.5",
+            "fluorophore = \"fluorescein\"",
+            "peak_absorptance",
+        ),
+        (
+            "albedo = { constant = 0.8 }\nfluorophore = { absorption = [500, 20, 20], emission = [450, 20, 20], quantum_yield = 0.5 }",
+            "fluorophore = {",
+            "emission peak",
+        ),
+        (
+            "albedo = { constant = 0.8 }\nfluorophore = { absorption = [400, 20], emission = [450, 20, 20], quantum_yield = 0.5 }",
+            "fluorophore = {",
+            "3 numbers",
+        ),
+        (
+            "albedo = { constant = 0.8 }\nfluorophore = \"brightener\"\nquantum_yield = 2",
+            "fluorophore = \"brightener\"",
+            "quantum_yield",
+        ),
+    ];
+    for (i, (body, needle, expected)) in cases.iter().enumerate() {
+        let text = material(body);
+        let (path, message) = scene_error(&format!("fluorescent_err_{i}"), &text)?;
+        assert!(message.contains(expected), "case {i}: {message}");
+        let prefix = format!("{}:{}:", path.display(), line_of(&text, needle)?);
+        assert!(message.starts_with(&prefix), "case {i}: {message}");
+    }
+    Ok(())
+}

@@ -75,6 +75,10 @@ id_type!(
     /// Index of a texture in [`crate::scene::Scene::textures`].
     TextureId
 );
+id_type!(
+    /// Index of a fluorophore in [`crate::scene::Scene::fluorophores`].
+    FluorophoreId
+);
 
 /// The raw word of every id's "none" ([`SpectrumId::NONE`] and its
 /// siblings), as packed records and 8-wide gathers hold it.

@@ -51,6 +51,7 @@ pub mod damping;
 pub mod data;
 pub mod delta_e;
 mod error;
+pub mod fluorescence;
 pub mod fourier;
 pub mod fuzzing;
 pub mod lane;

@@ -105,6 +105,7 @@
 //! | `coated` | `albedo` or `albedo_texture`; `ior` (a number); `roughness` | dielectric coat over a Lambertian base |
 //! | `thin-film` | `layers`, `substrate`, `base`; `thickness_texture` with `thickness_range_nm` | smooth thin-film stack |
 //! | `neural` | `network`; `roughness`; for two-input networks `thickness_nm`, or `thickness_texture` with `thickness_range_nm` | GGX reflector whose Fresnel reflectance is a trained sine network (paper §4) |
+//! | `fluorescent` | `albedo`; `fluorophore` (a built-in name or an inline table); `absorptance`, `quantum_yield` | fluorescent layer over a Lambertian base |
 //!
 //! * `roughness`: GGX `α`, a number `>= 0`, default 0 (smooth; below 10⁻³
 //!   the surface is a mirror).

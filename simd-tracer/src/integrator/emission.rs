@@ -140,6 +140,27 @@ impl<S: Copy> EmissionSums<S> {
         self.direct = transport.add(&self.direct, &transport.mul(&scaled, le));
     }
 
+    /// The radiance summed so far in the lanes of `lanes` (0 elsewhere),
+    /// which start again from zero (a fluorescent event closes what its
+    /// lanes gathered on the camera side of it).
+    pub(super) fn take<T: Transport<Spectra = S>>(
+        &mut self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+        lanes: LaneMask,
+    ) -> S {
+        let zero = transport.zero();
+        let taken = transport.select(lanes, &self.finish(transport, scene, wavelengths), &zero);
+        for (id, sum) in self.ids.iter().zip(&mut self.sums) {
+            if id.is_some() {
+                *sum = transport.select(lanes, &zero, sum);
+            }
+        }
+        self.direct = transport.select(lanes, &zero, &self.direct);
+        taken
+    }
+
     /// The total radiance.
     pub(super) fn finish<T: Transport<Spectra = S>>(
         &self,

@@ -146,8 +146,9 @@ pub fn trace_group<T: Transport, const G: usize>(
             if !shadows[p].active.is_empty() {
                 paths[p].add_light_sample(transport, scene, &wavelengths[p], &nee[p], blocked[p]);
             }
+            paths[p].settle_fluorescence(transport, scene, &mut wavelengths[p], &mut rngs[p]);
         }
         depth = depth.saturating_add(1);
     }
-    core::array::from_fn(|p| paths[p].emitted.finish(transport, scene, &wavelengths[p]))
+    core::array::from_fn(|p| paths[p].radiance(transport, scene, &wavelengths[p]))
 }

@@ -8,8 +8,8 @@ use crate::packet::PacketHit;
 use crate::sampling::rng::RngPacket;
 use crate::scene::Scene;
 use crate::shading::material::{
-    Bsdf, BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket, LaneSpectrum, PacketSurfaces,
-    SampleUniforms, ShadingPoint,
+    Bsdf, BsdfEvalPacket, BsdfSamplePacket, Fluorescence, LambertSamplePacket, LaneSpectrum,
+    PacketSurfaces, SampleUniforms, ShadingPoint,
 };
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
@@ -173,6 +173,7 @@ impl<'a> Shading<'a> {
                     weight,
                     valid,
                     terminate_secondary: LaneMask::NONE,
+                    fluorescence: Fluorescence::NONE,
                     spectrum: Factors::Lambert { albedo, lanes },
                 }
             }
@@ -184,6 +185,7 @@ impl<'a> Shading<'a> {
                     spectrum,
                     valid,
                     terminate_secondary,
+                    fluorescence,
                 } = Bsdf::sample_packet(
                     &scene.material_tables(),
                     &PacketSurfaces {
@@ -201,6 +203,7 @@ impl<'a> Shading<'a> {
                     weight,
                     valid,
                     terminate_secondary,
+                    fluorescence,
                     spectrum: Factors::Lanes(spectrum),
                 }
             }
@@ -262,6 +265,8 @@ pub(super) struct ShadingSample {
     pub(super) weight: f32x8,
     pub(super) valid: LaneMask,
     pub(super) terminate_secondary: LaneMask,
+    /// Lanes that took a fluorescent lobe.
+    pub(super) fluorescence: Fluorescence,
     pub(super) spectrum: Factors,
 }
 

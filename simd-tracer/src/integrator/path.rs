@@ -13,11 +13,11 @@ use crate::packet::RayPacket;
 use crate::sampling::rng::RngPacket;
 use crate::scene::Scene;
 use crate::shading::light_sampler::LightEmission;
-use crate::shading::material::{LaneSpectrum, SampleUniforms, SpectralRef};
+use crate::shading::material::{Fluorescence, LaneSpectrum, SampleUniforms, SpectralRef};
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
 use crate::spectra::environment::EnvironmentMap;
-use crate::transport::Transport;
+use crate::transport::{Transport, emitted_ids};
 use glam::Vec3;
 use wide::f32x8;
 
@@ -151,9 +151,32 @@ pub(super) struct BounceLanes<'a, S, W> {
     pub(super) wavelengths: &'a mut W,
 }
 
+/// A packet's fluorescent events (`shading::material`'s `fluorescent.rs`).
+/// The kernel is separable, `M(λo, λi) = u(λo) v(λi)`, so what the camera
+/// sees through an event is `T ⊛ u · ∫ v L dλ`: a camera-side spectrum
+/// times one number per lane. At an event the lane's radiance gathered so
+/// far is closed (`camera`), `pending` becomes `T ⊛ u` (times the
+/// integral of the earlier events' light side, `pending · ∫ T ⊛ u`, after
+/// a second one), and the path goes on with the excited side `v` as its
+/// throughput; what it gathers from then on reaches the camera as
+/// `pending · ∫ gathered dλ` ([`crate::transport::Transport::through_event`]).
+pub(super) struct FluorescenceState<S> {
+    /// What the camera sees of the radiance the shifted lanes gathered
+    /// before their last event.
+    camera: S,
+    /// The camera-side spectrum of the shifted lanes' events.
+    pending: S,
+    /// Lanes past at least one event.
+    shifted: LaneMask,
+    /// Lanes whose sample of this bounce took a fluorescent lobe: settled
+    /// once the light sample of the bounce (on the camera side) is added.
+    event: Fluorescence,
+}
+
 /// One packet's paths between bounces.
 pub(super) struct PathState<S> {
     pub(super) emitted: EmissionSums<S>,
+    pub(super) fluorescence: FluorescenceState<S>,
     pub(super) throughput: S,
     /// Lanes whose path goes on.
     pub(super) active: LaneMask,
@@ -183,6 +206,12 @@ impl<S: Copy> PathState<S> {
     pub(super) fn new<T: Transport<Spectra = S>>(transport: &T, active: LaneMask) -> Self {
         Self {
             emitted: EmissionSums::new(transport),
+            fluorescence: FluorescenceState {
+                camera: transport.zero(),
+                pending: transport.zero(),
+                shifted: LaneMask::NONE,
+                event: Fluorescence::NONE,
+            },
             throughput: transport.one(),
             active,
             previous_pdf: f32x8::ZERO,
@@ -193,6 +222,12 @@ impl<S: Copy> PathState<S> {
     /// without rebuilding the emission sums).
     pub(super) fn reset<T: Transport<Spectra = S>>(&mut self, transport: &T, active: LaneMask) {
         self.emitted.reset(transport);
+        // Only lanes past an event ever hold camera radiance.
+        if !self.fluorescence.shifted.is_empty() {
+            self.fluorescence.camera = transport.zero();
+            self.fluorescence.shifted = LaneMask::NONE;
+        }
+        self.fluorescence.event = Fluorescence::NONE;
         self.throughput = transport.one();
         self.active = active;
         self.previous_pdf = f32x8::ZERO;
@@ -448,6 +483,7 @@ impl<S: Copy> PathState<S> {
         for lane in sample.terminate_secondary.and(active).iter() {
             transport.terminate_secondary(wavelengths, lane);
         }
+        self.fluorescence.event = sample.fluorescence;
         let next_origin = departure(sample.wi, normal, origin, origin_below);
         self.previous_pdf = sample.pdf;
 
@@ -470,7 +506,7 @@ impl<S: Copy> PathState<S> {
 
         // Russian roulette, from the next segment on.
         if depth.saturating_add(1) > settings.rr_depth {
-            let mean = transport.mean(&self.throughput).to_array();
+            let mean = self.roulette_proxy(transport, wavelengths).to_array();
             let u_survive = rngs.next_f32x8().to_array();
             let mut survival = [1.0f32; LANES];
             for lane in active.iter() {
@@ -484,12 +520,86 @@ impl<S: Copy> PathState<S> {
             self.throughput = transport.scale(&self.throughput, f32x8::new(survival));
         }
         self.active = active;
+        self.fluorescence.event.lanes = self.fluorescence.event.lanes.and(active);
         *rays = RayPacket {
             origin: next_origin.to_array(),
             direction: sample.wi.to_array(),
             t_max: f32x8::splat(f32::INFINITY),
             active,
         };
+    }
+
+    /// The throughput's mean, and past a fluorescent event what the
+    /// camera would see of it (`pending · ∫ T dλ`): Russian roulette's
+    /// proxy (the excited side's throughput alone has another scale).
+    fn roulette_proxy<T: Transport<Spectra = S>>(
+        &self,
+        transport: &T,
+        wavelengths: &T::Wavelengths,
+    ) -> f32x8 {
+        let mean = transport.mean(&self.throughput);
+        let shifted = self.fluorescence.shifted;
+        if shifted.is_empty() {
+            return mean;
+        }
+        let seen =
+            transport.through_event(&self.fluorescence.pending, &self.throughput, wavelengths);
+        shifted.to_simd().select(transport.mean(&seen), mean)
+    }
+
+    /// Settles the fluorescent events of this bounce (after its light
+    /// sample, which belongs to the camera side): closes the lanes'
+    /// gathered radiance, forms their camera-side spectrum, and moves
+    /// them to the excited side ([`FluorescenceState`]).
+    pub(super) fn settle_fluorescence<T: Transport<Spectra = S>>(
+        &mut self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &mut T::Wavelengths,
+        rngs: &mut RngPacket,
+    ) {
+        let event = self.fluorescence.event;
+        if event.lanes.is_empty() {
+            return;
+        }
+        self.fluorescence.event = Fluorescence::NONE;
+        let shifted = self.fluorescence.shifted;
+        let zero = transport.zero();
+        let gathered = self
+            .emitted
+            .take(transport, scene, wavelengths, event.lanes);
+        let through =
+            |value: &S| transport.through_event(&self.fluorescence.pending, value, wavelengths);
+        let seen = transport.select(shifted, &through(&gathered), &gathered);
+        let seen = transport.select(event.lanes, &seen, &zero);
+        let emitted_side =
+            transport.gather_ids(scene, wavelengths, &emitted_ids(scene, &event), event.lanes);
+        let camera_side = transport.mul(&self.throughput, &emitted_side);
+        let pending = transport.select(shifted, &through(&camera_side), &camera_side);
+        self.fluorescence.camera = transport.add(&self.fluorescence.camera, &seen);
+        self.fluorescence.pending =
+            transport.select(event.lanes, &pending, &self.fluorescence.pending);
+        let u = uniforms(rngs, event.lanes);
+        let excited = transport.fluoresce(scene, wavelengths, &event, u);
+        self.throughput = transport.select(event.lanes, &excited, &self.throughput);
+        self.fluorescence.shifted = shifted.or(event.lanes);
+    }
+
+    /// The radiance each lane carries back to the camera.
+    pub(super) fn radiance<T: Transport<Spectra = S>>(
+        &self,
+        transport: &T,
+        scene: &Scene,
+        wavelengths: &T::Wavelengths,
+    ) -> S {
+        let gathered = self.emitted.finish(transport, scene, wavelengths);
+        let shifted = self.fluorescence.shifted;
+        if shifted.is_empty() {
+            return gathered;
+        }
+        let seen = transport.through_event(&self.fluorescence.pending, &gathered, wavelengths);
+        let seen = transport.select(shifted, &seen, &gathered);
+        transport.add(&self.fluorescence.camera, &seen)
     }
 
     /// Adds the light samples of `nee` whose shadow rays are not `blocked`.

@@ -7,6 +7,7 @@
 //! | `laser` | the paper's scene 2: the room lit by three laser lines (triangular, 2 nm FWHM at 450, 532 and 638 nm) |
 //! | `materials` | the paper's figure 4: diffuse, gold, copper, glass, coated plastic, a single-layer and a multi-layer thin film, on a textured floor |
 //! | `colorchecker` | the 24 ColorChecker patches lit directly by an illuminant (a constant environment, D65 by default, scaled to Y = 1) in front of a black backdrop |
+//! | `fluorescence` | fluorescent patches (fluorescein highlighter, brightened paper) beside plain patches of their daylight colours, under a UV-rich lamp and a white LED (`builtin/fluorescence.rs`) |
 
 use crate::ids::{MaterialId, SpectrumId};
 use crate::scene::camera::Camera;
@@ -22,6 +23,8 @@ use glam::Vec3;
 use spectral_core::SpectralRange;
 use spectral_core::registry::Builtin;
 use spectral_core::table::{FilmQuantity, FilmSide};
+
+pub mod fluorescence;
 
 /// The Cornell box OBJ (also at `scenes/cornell/cornell.obj`).
 pub const CORNELL_OBJ: &str = include_str!("../../../scenes/cornell/cornell.obj");
@@ -45,7 +48,7 @@ pub struct SceneInfo {
 pub const FILM_NETWORK: &[u8] = include_bytes!("../../../scenes/assets/film-400nm.nn");
 
 /// Every built-in scene.
-pub const SCENES: [SceneInfo; 5] = [
+pub const SCENES: [SceneInfo; 6] = [
     SceneInfo {
         name: "cornell",
         description: "Mitsuba 3's Cornell box (RGB materials upsampled, RGB illuminant light) — the default",
@@ -65,6 +68,10 @@ pub const SCENES: [SceneInfo; 5] = [
     SceneInfo {
         name: "colorchecker",
         description: "the 24 ColorChecker patches lit directly by an illuminant (default D65)",
+    },
+    SceneInfo {
+        name: "fluorescence",
+        description: "a fluorescein highlighter and a brightened paper beside plain patches of their daylight colours, under a UV-rich lamp and a white LED",
     },
 ];
 
@@ -126,6 +133,7 @@ pub fn builtin_scene(
         "laser" => laser(range),
         "materials" => materials(range),
         "colorchecker" => colorchecker(range, options),
+        "fluorescence" => fluorescence::fluorescence(range),
         other => Err(BuiltinError::Unknown(other.to_string())),
     }
 }

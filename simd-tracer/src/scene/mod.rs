@@ -18,13 +18,13 @@ pub mod shapes;
 pub mod transform;
 
 use crate::accel::{Bvh, TriangleSubset};
-use crate::ids::{AngularId, MaterialId, NO_ID, SpectrumId, TextureId};
+use crate::ids::{AngularId, FluorophoreId, MaterialId, NO_ID, SpectrumId, TextureId};
 use crate::scene::camera::Camera;
 use crate::scene::mesh::MeshData;
 use crate::scene::transform::Transform;
 use crate::shading::light::{Light, LightSet};
 use crate::shading::light_sampler::{DirectionalLight, LightSampler, PointLight, SceneLights};
-use crate::shading::material::{Material, MaterialTables};
+use crate::shading::material::{Bsdf, Material, MaterialTables, SceneFluorophore, tabulated_sides};
 use crate::shading::surface::{PackedSurfaces, Surface, triangle_area};
 use crate::spectra::angular::{AngularFunction, AngularSpectrum};
 use crate::spectra::environment::EnvironmentMap;
@@ -32,6 +32,7 @@ use crate::spectra::texture::Texture;
 use crate::spectra::{SceneSpectrum, SpectrumRegisters, SpectrumSource};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use spectral_core::fluorescence::FluorescentLayer;
 use spectral_core::{SpectralError, SpectralRange};
 
 /// Why a scene could not be built.
@@ -98,6 +99,8 @@ pub struct Scene {
     textures: Vec<Texture>,
     /// Materials.
     materials: Vec<Material>,
+    /// Fluorophores of fluorescent materials.
+    fluorophores: Vec<SceneFluorophore>,
     /// Triangle vertices (non-degenerate ones only).
     triangles: Vec<[Vec3; 3]>,
     /// Material of each triangle.
@@ -160,6 +163,11 @@ impl Scene {
     /// angular
     pub fn angular(&self) -> &[AngularSpectrum] {
         &self.angular
+    }
+
+    /// textures
+    pub fn fluorophores(&self) -> &[SceneFluorophore] {
+        &self.fluorophores
     }
 
     /// textures
@@ -431,6 +439,7 @@ pub struct SceneBuilder {
     angular: Vec<AngularSpectrum>,
     textures: Vec<Texture>,
     materials: Vec<Material>,
+    fluorophores: Vec<SceneFluorophore>,
     triangles: Vec<[Vec3; 3]>,
     triangle_material: Vec<MaterialId>,
     uvs: Vec<[Vec2; 3]>,
@@ -488,6 +497,7 @@ impl SceneBuilder {
             angular: Vec::new(),
             textures: Vec::new(),
             materials: Vec::new(),
+            fluorophores: Vec::new(),
             triangles: Vec::new(),
             triangle_material: Vec::new(),
             uvs: Vec::new(),
@@ -547,6 +557,113 @@ impl SceneBuilder {
     pub fn add_texture(&mut self, texture: Texture) -> TextureId {
         self.textures.push(texture);
         TextureId((self.textures.len() - 1) as u32)
+    }
+
+    /// Adds a fluorophore layer (prepared over the builder's range): its
+    /// two kernel sides become scene spectra
+    /// ([`crate::shading::material::SceneFluorophore`]).
+    pub fn add_fluorophore(
+        &mut self,
+        name: &str,
+        layer: FluorescentLayer,
+    ) -> Result<FluorophoreId, SceneError> {
+        if layer.range() != &self.range {
+            return Err(SceneError::Spectrum(
+                name.to_string(),
+                SpectralError::InvalidParameter("fluorophore range differs from the scene's"),
+            ));
+        }
+        let (lambda_nm, u, v) = tabulated_sides(&layer);
+        let emitted = self.add_spectrum(
+            &format!("{name} (emitted side)"),
+            SpectrumSource::Tabulated {
+                lambda_nm: lambda_nm.clone(),
+                values: u,
+            },
+        )?;
+        let excited = self.add_spectrum(
+            &format!("{name} (excited side)"),
+            SpectrumSource::Tabulated {
+                lambda_nm,
+                values: v,
+            },
+        )?;
+        let spectrum = self
+            .spectra
+            .get(excited.index())
+            .ok_or(SceneError::Reference(
+                name.to_string(),
+                "spectrum",
+                excited.0,
+            ))?;
+        let record = SceneFluorophore::new(name, layer, (emitted, excited), spectrum)
+            .map_err(SceneError::Light)?;
+        self.fluorophores.push(record);
+        Ok(FluorophoreId((self.fluorophores.len() - 1) as u32))
+    }
+
+    /// The BSDF of `fluorophore`'s layer over a Lambertian base of
+    /// reflectance `base`: its elastic reflectance `ρ (1 − a)` becomes a
+    /// scene spectrum (sampled on the dense grid).
+    pub fn fluorescent_bsdf(
+        &mut self,
+        name: &str,
+        base: SpectrumId,
+        fluorophore: FluorophoreId,
+    ) -> Result<Bsdf, SceneError> {
+        let missing = |kind, id| SceneError::Reference(name.to_string(), kind, id);
+        let layer = self
+            .fluorophores
+            .get(fluorophore.index())
+            .ok_or(missing("fluorophore", fluorophore.0))?
+            .layer;
+        let base_spectrum = self
+            .spectra
+            .get(base.index())
+            .ok_or(missing("spectrum", base.0))?;
+        let steps = (self.range.width_nm() / crate::spectra::DENSE_STEP_NM).round() as usize;
+        let lambda_nm: Vec<f64> = (0..=steps)
+            .map(|i| self.range.min_nm() + i as f64 * crate::spectra::DENSE_STEP_NM)
+            .collect();
+        let values = lambda_nm
+            .iter()
+            .map(|&l| f64::from(base_spectrum.value(l as f32)) * (1.0 - layer.absorptance(l)))
+            .collect();
+        let elastic = self.add_spectrum(
+            &format!("{name} (elastic)"),
+            SpectrumSource::Tabulated { lambda_nm, values },
+        )?;
+        Ok(Bsdf::Fluorescent {
+            elastic,
+            fluorophore,
+        })
+    }
+
+    /// Adds a non-emissive fluorescent material
+    /// ([`SceneBuilder::fluorescent_bsdf`]).
+    pub fn add_fluorescent_material(
+        &mut self,
+        name: &str,
+        base: SpectrumId,
+        fluorophore: FluorophoreId,
+    ) -> Result<MaterialId, SceneError> {
+        let bsdf = self.fluorescent_bsdf(name, base, fluorophore)?;
+        Ok(self.add_material(Material::new(name, bsdf)))
+    }
+
+    /// The elastic spectrum and the fluorophore of a fluorescent material
+    /// added so far (`None` for other materials).
+    pub fn fluorescent_parts(
+        &self,
+        material: MaterialId,
+    ) -> Option<(SpectrumId, &SceneFluorophore)> {
+        match self.materials.get(material.index())?.bsdf {
+            Bsdf::Fluorescent {
+                elastic,
+                fluorophore,
+            } => Some((elastic, self.fluorophores.get(fluorophore.index())?)),
+            _ => None,
+        }
     }
 
     /// Adds a material.
@@ -776,6 +893,17 @@ impl SceneBuilder {
                 }
             }
         }
+        for material in &self.materials {
+            if let Bsdf::Fluorescent { fluorophore, .. } = material.bsdf
+                && fluorophore.index() >= self.fluorophores.len()
+            {
+                return Err(SceneError::Reference(
+                    material.name.clone(),
+                    "fluorophore",
+                    fluorophore.0,
+                ));
+            }
+        }
         if let Some(env) = self
             .environment
             .filter(|&e| e.index() >= self.spectra.len())
@@ -843,6 +971,7 @@ impl SceneBuilder {
             angular: self.angular,
             textures: self.textures,
             materials: self.materials,
+            fluorophores: self.fluorophores,
             triangles: self.triangles,
             triangle_material: self.triangle_material,
             uvs: self.uvs,

@@ -3,12 +3,14 @@
 
 use super::Transport;
 use super::fourier::{FourierTransport, gather_fourier};
-use super::sampled::{PacketWavelengths, SampledTransport, gather_sampled, sampled_lane};
+use super::sampled::{
+    PacketWavelengths, SampledTransport, fluoresce_sampled, gather_sampled, sampled_lane,
+};
 use crate::film::{AlphaMode, Buffer, ControlVariateFilm, CvSample};
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
-use crate::shading::material::LaneSpectrum;
-use crate::simd::LANES;
+use crate::shading::material::{Fluorescence, LaneSpectrum};
+use crate::simd::{LANES, LaneMask};
 use spectral_core::sampling::{SampledSpectrum, WavelengthStrategy};
 use spectral_core::xyz::XyzRoute;
 use spectral_core::{FourierSpectrum, Lane, SpectralError, SpectralRange};
@@ -105,6 +107,42 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
         self.sampled.mean(&a.1)
     }
 
+    fn select(&self, lanes: LaneMask, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        (
+            self.fourier.select(lanes, &a.0, &b.0),
+            self.sampled.select(lanes, &a.1, &b.1),
+        )
+    }
+
+    fn through_event(
+        &self,
+        pending: &Self::Spectra,
+        excited: &Self::Spectra,
+        wavelengths: &Self::Wavelengths,
+    ) -> Self::Spectra {
+        (
+            self.fourier.through_event(&pending.0, &excited.0, &()),
+            self.sampled
+                .through_event(&pending.1, &excited.1, wavelengths),
+        )
+    }
+
+    /// Both parts move: the Fourier part to `v`, the sampled part to new
+    /// wavelengths; the control variate is still the Fourier radiance at
+    /// the camera's wavelengths.
+    fn fluoresce(
+        &self,
+        scene: &Scene,
+        wavelengths: &mut Self::Wavelengths,
+        fluorescence: &Fluorescence,
+        u: f32x8,
+    ) -> Self::Spectra {
+        (
+            self.fourier.fluoresce(scene, &mut (), fluorescence, u),
+            fluoresce_sampled(scene, wavelengths, fluorescence, u),
+        )
+    }
+
     fn samples(
         &self,
         radiance: &Self::Spectra,
@@ -112,7 +150,7 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
     ) -> [CvSample; LANES] {
         let mu = self.fourier.film.converter.zeroth(&radiance.0);
         core::array::from_fn(|lane| {
-            let w = wavelengths.lane(lane);
+            let w = wavelengths.camera_lane(lane);
             let y = sampled_lane(&radiance.1, lane).to_xyz(w);
             let series: FourierSpectrum<f32, N> =
                 FourierSpectrum::from_coeffs(core::array::from_fn(|j| {

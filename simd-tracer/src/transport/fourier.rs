@@ -1,12 +1,12 @@
 //! [`FourierTransport<N>`]: `N` Fourier coefficients per lane, one truncated
 //! product per bounce; the film keeps coefficient sums or XYZ per sample.
 
-use super::{Transport, id_spectra};
+use super::{Transport, excited_ids, id_spectra};
 use crate::film::{Buffer, FourierFilm, FourierSample, all_finite};
 use crate::ids::SpectrumId;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
-use crate::shading::material::{LaneSpectrum, SpectralRef};
+use crate::shading::material::{Fluorescence, LaneSpectrum, SpectralRef};
 use crate::simd::{LANES, LaneMask};
 use crate::spectra::MAX_COEFFS;
 use spectral_core::xyz::{XyzConverter, XyzRoute};
@@ -20,6 +20,8 @@ use wide::{f32x8, u32x8};
 #[derive(Debug, Clone)]
 pub struct FourierTransport<const N: usize> {
     pub(super) film: FourierFilm<N>,
+    /// `λ1 − λ0`: the integral of a series over the range is `W c_0`.
+    pub(super) width_nm: f32,
 }
 
 impl<const N: usize> FourierTransport<N> {
@@ -31,6 +33,7 @@ impl<const N: usize> FourierTransport<N> {
     ) -> Result<Self, SpectralError> {
         Ok(Self {
             film: FourierFilm::new(range, buffer, route)?,
+            width_nm: range.width_nm() as f32,
         })
     }
 
@@ -246,6 +249,33 @@ impl<const N: usize> Transport for FourierTransport<N> {
 
     fn mean(&self, a: &Self::Spectra) -> f32x8 {
         a.mean()
+    }
+
+    fn select(&self, lanes: LaneMask, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        let mask = lanes.to_simd();
+        FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
+            mask.select(a.coeffs[j], b.coeffs[j])
+        }))
+    }
+
+    fn through_event(
+        &self,
+        pending: &Self::Spectra,
+        excited: &Self::Spectra,
+        _wavelengths: &(),
+    ) -> Self::Spectra {
+        pending.scale(excited.coeffs[0] * f32x8::splat(self.width_nm))
+    }
+
+    fn fluoresce(
+        &self,
+        scene: &Scene,
+        wavelengths: &mut (),
+        fluorescence: &Fluorescence,
+        _u: f32x8,
+    ) -> Self::Spectra {
+        let ids = excited_ids(scene, fluorescence);
+        self.gather_ids(scene, wavelengths, &ids, fluorescence.lanes)
     }
 
     fn samples(&self, radiance: &Self::Spectra, _wavelengths: &()) -> [FourierSample<N>; LANES] {

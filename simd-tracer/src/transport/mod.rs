@@ -22,7 +22,7 @@ use crate::film::Film;
 use crate::ids::SpectrumId;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
-use crate::shading::material::LaneSpectrum;
+use crate::shading::material::{Fluorescence, LaneSpectrum};
 use crate::simd::{LANES, LaneMask};
 use wide::f32x8;
 
@@ -92,6 +92,32 @@ pub trait Transport: Sync {
         radiance: &Self::Spectra,
         wavelengths: &Self::Wavelengths,
     ) -> [FilmSample<Self>; LANES];
+    /// `a` in the lanes of `lanes`, `b` elsewhere.
+    fn select(&self, lanes: LaneMask, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra;
+    /// Fluorescence (`shading::material` `fluorescent.rs`): `pending · ∫
+    /// excited dλ` per lane, the camera-side spectrum `pending` of a
+    /// fluorescent event times the integral over wavelength of what arrived
+    /// on its excited side (for Fourier `W c_0`, the exact integral of the
+    /// series; sampled, the mean of the values, which carry their
+    /// wavelengths' `1/pdf`).
+    fn through_event(
+        &self,
+        pending: &Self::Spectra,
+        excited: &Self::Spectra,
+        wavelengths: &Self::Wavelengths,
+    ) -> Self::Spectra;
+    /// Moves the lanes of `lanes` to the excited side of their
+    /// `fluorophores` and returns the excited side's factor there (0 in
+    /// other lanes): Fourier the spectrum `v`; sampled, new wavelengths
+    /// drawn from `v` by the uniforms `u` (hero-style rotations) and
+    /// `v(λ)/p(λ)` at them, the film keeping the camera-side wavelengths.
+    fn fluoresce(
+        &self,
+        scene: &Scene,
+        wavelengths: &mut Self::Wavelengths,
+        fluorescence: &Fluorescence,
+        u: f32x8,
+    ) -> Self::Spectra;
     /// The lanes whose samples (made from `radiance`) are free of NaN and
     /// infinity: [`Film::sample_is_finite`] lane by lane.
     fn finite_lanes(
@@ -118,6 +144,34 @@ fn id_spectra(ids: &[SpectrumId; LANES], lanes: LaneMask) -> [LaneSpectrum; LANE
             LaneSpectrum::scene(ids[lane])
         } else {
             LaneSpectrum::ZERO
+        }
+    })
+}
+
+/// The excited-side spectra of the fluorophores of `fluorescence`'s lanes
+/// ([`SpectrumId::NONE`] elsewhere and for unknown fluorophores).
+pub(crate) fn excited_ids(scene: &Scene, fluorescence: &Fluorescence) -> [SpectrumId; LANES] {
+    fluorophore_spectra(scene, fluorescence, |f| f.excited)
+}
+
+/// The emitted-side spectra of the fluorophores of `fluorescence`'s lanes.
+pub(crate) fn emitted_ids(scene: &Scene, fluorescence: &Fluorescence) -> [SpectrumId; LANES] {
+    fluorophore_spectra(scene, fluorescence, |f| f.emitted)
+}
+
+fn fluorophore_spectra(
+    scene: &Scene,
+    fluorescence: &Fluorescence,
+    side: impl Fn(&crate::shading::material::SceneFluorophore) -> SpectrumId,
+) -> [SpectrumId; LANES] {
+    core::array::from_fn(|lane| {
+        if fluorescence.lanes.contains(lane) {
+            scene
+                .fluorophores()
+                .get(fluorescence.fluorophores[lane].index())
+                .map_or(SpectrumId::NONE, &side)
+        } else {
+            SpectrumId::NONE
         }
     })
 }

@@ -6,8 +6,8 @@ use super::fourier::reference_value;
 use crate::film::XyzFilm;
 use crate::sampling::rng::Rng;
 use crate::scene::Scene;
-use crate::shading::material::{LaneSpectrum, SpectralRef};
-use crate::simd::LANES;
+use crate::shading::material::{Fluorescence, LaneSpectrum, SpectralRef};
+use crate::simd::{LANES, LaneMask};
 use crate::spectra::DensePoint;
 use spectral_core::SpectralRange;
 use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy};
@@ -38,6 +38,11 @@ pub struct PacketWavelengths<const C: usize> {
     pub(super) points: [[DensePoint; C]; LANES],
     /// The range whose grid `points` lie on.
     pub(super) grid: SpectralRange,
+    /// The wavelengths the camera sees, for the film: `lanes` until a
+    /// fluorescent event moves a lane's path to its excited side.
+    pub(super) camera: [SampledWavelengths<C>; LANES],
+    /// Lanes moved by a fluorescent event.
+    pub(super) shifted: LaneMask,
 }
 
 impl<const C: usize> PacketWavelengths<C> {
@@ -47,7 +52,43 @@ impl<const C: usize> PacketWavelengths<C> {
             points: lanes.map(|w| w.lambda_nm().map(|l| DensePoint::new(range, l))),
             lanes,
             grid: *range,
+            camera: lanes,
+            shifted: LaneMask::NONE,
         }
+    }
+
+    /// The wavelengths the camera sees in ray lane `lane` (taken modulo
+    /// [`LANES`]): [`Self::lane`] unless a fluorescent event moved it.
+    pub fn camera_lane(&self, lane: usize) -> &SampledWavelengths<C> {
+        &self.camera[lane % LANES]
+    }
+
+    /// Moves lane `lane` to the wavelengths `moved` (a fluorescent event);
+    /// the camera's stay.
+    fn shift(&mut self, lane: usize, moved: SampledWavelengths<C>) {
+        let lane = lane % LANES;
+        self.lanes[lane] = moved;
+        self.points[lane] = moved.lambda_nm().map(|l| DensePoint::new(&self.grid, l));
+        self.shifted = self.shifted.with(lane);
+    }
+
+    /// Per lane, the integral over wavelength estimated from values that
+    /// carry their wavelengths' `1/pdf`: their mean, or the hero's value
+    /// alone once the secondaries are terminated.
+    fn integral(&self, values: &[f32x8; C]) -> f32x8 {
+        let mean =
+            values.iter().fold(f32x8::ZERO, |acc, &v| acc + v) * f32x8::splat(1.0 / C as f32);
+        let hero = values.first().copied().unwrap_or(f32x8::ZERO);
+        let terminated: [f32; LANES] = core::array::from_fn(|lane| {
+            if self.lanes[lane].secondary_terminated() {
+                1.0
+            } else {
+                0.0
+            }
+        });
+        f32x8::new(terminated)
+            .simd_gt(f32x8::ZERO)
+            .select(hero, mean)
     }
 
     /// The wavelengths of ray lane `lane` (taken modulo [`LANES`]).
@@ -98,6 +139,50 @@ pub(super) fn gather_sampled<const C: usize>(
     values.map(f32x8::new)
 }
 
+/// [`Transport::fluoresce`] for the sampled transports: per lane of
+/// `fluorescence`, `C` excited wavelengths drawn from its fluorophore's
+/// excitation distribution at the rotations `u + i/C` (stratified as hero
+/// wavelengths are; each is drawn with the pdf `p`, so the mean of the
+/// `v(λ_i)/p(λ_i)` estimates `∫ v L dλ`), and `v/p` at them.
+pub(super) fn fluoresce_sampled<const C: usize>(
+    scene: &Scene,
+    wavelengths: &mut PacketWavelengths<C>,
+    fluorescence: &Fluorescence,
+    u: f32x8,
+) -> [f32x8; C] {
+    let u = u.to_array();
+    let mut values = [[0.0f32; LANES]; C];
+    for lane in fluorescence.lanes.iter() {
+        let Some(fluorophore) = scene
+            .fluorophores()
+            .get(fluorescence.fluorophores[lane].index())
+        else {
+            continue;
+        };
+        let drawn: [(f32, f32); C] = core::array::from_fn(|i| {
+            let ui = u[lane] + i as f32 / C as f32;
+            fluorophore.sample_excitation(if ui >= 1.0 { ui - 1.0 } else { ui })
+        });
+        let moved = SampledWavelengths::from_parts(drawn.map(|(l, _)| l), drawn.map(|(_, p)| p));
+        wavelengths.shift(lane, moved);
+        let excited = scene.spectra().get(fluorophore.excited.index());
+        for (v, (&point, &(_, pdf))) in values
+            .iter_mut()
+            .zip(wavelengths.points[lane].iter().zip(&drawn))
+        {
+            let value = excited.map_or(0.0, |s| {
+                if s.range() == &wavelengths.grid {
+                    s.value_at(point)
+                } else {
+                    0.0
+                }
+            });
+            v[lane] = if pdf > 0.0 { value / pdf } else { 0.0 };
+        }
+    }
+    values.map(f32x8::new)
+}
+
 pub(super) fn sampled_lane<const C: usize>(values: &[f32x8; C], lane: usize) -> SampledSpectrum<C> {
     SampledSpectrum {
         values: core::array::from_fn(|i| values[i].to_array()[lane]),
@@ -132,6 +217,12 @@ impl<const C: usize> Transport for SampledTransport<C> {
 
     fn terminate_secondary(&self, wavelengths: &mut Self::Wavelengths, lane: usize) {
         if let Some(w) = wavelengths.lanes.get_mut(lane) {
+            w.terminate_secondary();
+        }
+        // Before a fluorescent event the camera's wavelengths are the path's.
+        if !wavelengths.shifted.contains(lane)
+            && let Some(w) = wavelengths.camera.get_mut(lane)
+        {
             w.terminate_secondary();
         }
     }
@@ -169,6 +260,31 @@ impl<const C: usize> Transport for SampledTransport<C> {
         a.iter().fold(f32x8::splat(0.0), |acc, &v| acc + v) * f32x8::splat(1.0 / C as f32)
     }
 
+    fn select(&self, lanes: LaneMask, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
+        let mask = lanes.to_simd();
+        core::array::from_fn(|i| mask.select(a[i], b[i]))
+    }
+
+    fn through_event(
+        &self,
+        pending: &Self::Spectra,
+        excited: &Self::Spectra,
+        wavelengths: &Self::Wavelengths,
+    ) -> Self::Spectra {
+        let integral = wavelengths.integral(excited);
+        pending.map(|p| p * integral)
+    }
+
+    fn fluoresce(
+        &self,
+        scene: &Scene,
+        wavelengths: &mut Self::Wavelengths,
+        fluorescence: &Fluorescence,
+        u: f32x8,
+    ) -> Self::Spectra {
+        fluoresce_sampled(scene, wavelengths, fluorescence, u)
+    }
+
     fn samples(
         &self,
         radiance: &Self::Spectra,
@@ -176,7 +292,7 @@ impl<const C: usize> Transport for SampledTransport<C> {
     ) -> [[f32; 3]; LANES] {
         core::array::from_fn(|lane| {
             sampled_lane(radiance, lane)
-                .to_xyz(wavelengths.lane(lane))
+                .to_xyz(wavelengths.camera_lane(lane))
                 .to_array()
                 .map(|v| v as f32)
         })

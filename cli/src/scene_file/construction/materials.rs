@@ -20,6 +20,7 @@ use simd_tracer::scene::SceneError;
 use simd_tracer::shading::material::{Albedo, Bsdf, CoatParams, Material, diffuse_fresnel};
 use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, REFERENCE_WAVELENGTH_NM};
+use spectral_core::fluorescence::{FluorescentLayer, Fluorophore};
 use spectral_core::table::{FilmQuantity, FilmSide};
 
 /// A material defined under a name.
@@ -203,6 +204,28 @@ impl Construction<'_> {
             ));
         }
         Ok(Bsdf::ThinDielectric { eta })
+    }
+
+    /// A fluorescent layer of `fluorophore` absorbing `peak_absorptance` at
+    /// its absorption peak over a Lambertian base `base`, for the material
+    /// `name` at `at`.
+    pub(crate) fn fluorescent(
+        &mut self,
+        at: &Spot,
+        name: &str,
+        base: SpectrumId,
+        (fluorophore, peak_absorptance): (Fluorophore, f64),
+    ) -> Result<Bsdf, CliError> {
+        let range = self.builder.range();
+        let layer = FluorescentLayer::new(fluorophore, peak_absorptance, range)
+            .map_err(|e| self.src.error_at(at, format!("fluorophore: {e}")))?;
+        let id = self
+            .builder
+            .add_fluorophore(name, layer)
+            .map_err(|e: SceneError| self.src.error_at(at, e.to_string()))?;
+        self.builder
+            .fluorescent_bsdf(name, base, id)
+            .map_err(|e| self.src.error_at(at, e.to_string()))
     }
 
     /// A smooth thin-film stack, for the material at `at`.

@@ -9,10 +9,12 @@ use crate::scene_file::construction::{ThinFilm, coated};
 use crate::scene_file::toml_reader::{Item, Table};
 use crate::texture_file::TextureUse;
 use simd_tracer::ids::MaterialId;
+use simd_tracer::scene::builtin::fluorescence::PEAK_ABSORPTANCE;
 use simd_tracer::shading::material::{Albedo, Bsdf, Material, Sides};
 use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
+use spectral_core::fluorescence::{BRIGHTENER, Band, FLUORESCEIN, Fluorophore};
 use spectral_core::table::MAX_LAYERS;
 use toml::de::DeValue;
 
@@ -81,6 +83,23 @@ const THIN_FILM_KEYS: &[&str] = &[
     "thickness_range_nm",
 ];
 
+const FLUORESCENT_KEYS: &[&str] = &[
+    "type",
+    "emission",
+    "emission_scale",
+    "two_sided",
+    "sides",
+    "albedo",
+    "fluorophore",
+    "absorptance",
+    "quantum_yield",
+];
+/// The keys of an inline fluorophore table.
+const FLUOROPHORE_KEYS: &[&str] = &["absorption", "emission", "quantum_yield"];
+/// The built-in fluorophores (`spectral_core::fluorescence`).
+const FLUOROPHORES: [(&str, Fluorophore); 2] =
+    [("brightener", BRIGHTENER), ("fluorescein", FLUORESCEIN)];
+
 const NEURAL_KEYS: &[&str] = &[
     "type",
     "emission",
@@ -130,7 +149,7 @@ impl Loader<'_> {
         let kind_item = table.require(
             &self.src,
             "type",
-            "lambert, conductor, dielectric, thin-dielectric, coated, thin-film or neural",
+            "lambert, conductor, dielectric, thin-dielectric, coated, thin-film, neural or fluorescent",
         )?;
         let kind = kind_item.string(&self.src)?;
         let keys = match kind {
@@ -141,11 +160,12 @@ impl Loader<'_> {
             "coated" => COATED_KEYS,
             "thin-film" => THIN_FILM_KEYS,
             "neural" => NEURAL_KEYS,
+            "fluorescent" => FLUORESCENT_KEYS,
             other => {
                 return Err(kind_item.err(
                     &self.src,
                     format!(
-                        "unknown material type \"{other}\" (lambert, conductor, dielectric, thin-dielectric, coated, thin-film or neural)"
+                        "unknown material type \"{other}\" (lambert, conductor, dielectric, thin-dielectric, coated, thin-film, neural or fluorescent)"
                     ),
                 ));
             }
@@ -160,6 +180,7 @@ impl Loader<'_> {
             "thin-dielectric" => self.thin_dielectric(&table)?,
             "coated" => self.coated(&table)?,
             "neural" => self.neural(&table)?,
+            "fluorescent" => self.fluorescent(name, &table)?,
             _ => self.thin_film(&table)?,
         };
         let mut material = Material::new(name, bsdf);
@@ -205,6 +226,72 @@ impl Loader<'_> {
         };
         let eta = item.number(&self.src)?;
         self.cx.thin_dielectric(&item.spot(), eta as f32)
+    }
+
+    /// A fluorescent layer over a Lambertian base: `albedo` (a spectrum),
+    /// `fluorophore` (a built-in name or an inline table), optional
+    /// `absorptance` (at the absorption peak, default 0.9) and
+    /// `quantum_yield` (overrides the fluorophore's).
+    fn fluorescent(&mut self, name: &str, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
+        let albedo = table.require(&self.src, "albedo", "the base's reflectance spectrum")?;
+        let base = self.spectrum_ref(&albedo, 1.0)?;
+        let item = table.require(
+            &self.src,
+            "fluorophore",
+            "brightener, fluorescein or a table with absorption, emission and quantum_yield",
+        )?;
+        let mut fluorophore = match item.value.get_ref() {
+            DeValue::String(_) => {
+                let wanted = item.string(&self.src)?;
+                FLUOROPHORES
+                    .iter()
+                    .find(|(n, _)| n.eq_ignore_ascii_case(wanted))
+                    .map(|&(_, f)| f)
+                    .ok_or_else(|| {
+                        item.err(
+                            &self.src,
+                            format!("unknown fluorophore \"{wanted}\" (brightener or fluorescein)"),
+                        )
+                    })?
+            }
+            _ => {
+                let inline = item.table(&self.src)?;
+                inline.allow(&self.src, FLUOROPHORE_KEYS, "a fluorophore")?;
+                let band = |key: &str| -> Result<Band, CliError> {
+                    let item =
+                        inline.require(&self.src, key, "[peak_nm, blue_hwhm_nm, red_hwhm_nm]")?;
+                    match item.numbers(&self.src, 3)?.as_slice() {
+                        &[peak_nm, blue_hwhm_nm, red_hwhm_nm] => Ok(Band {
+                            peak_nm,
+                            blue_hwhm_nm,
+                            red_hwhm_nm,
+                        }),
+                        _ => Err(item.wrong_type(&self.src, "three numbers")),
+                    }
+                };
+                let quantum_yield = inline
+                    .require(
+                        &self.src,
+                        "quantum_yield",
+                        "photons out per photon absorbed",
+                    )?
+                    .non_negative(&self.src)?;
+                Fluorophore {
+                    absorption: band("absorption")?,
+                    emission: band("emission")?,
+                    quantum_yield,
+                }
+            }
+        };
+        if let Some(q) = table.get("quantum_yield") {
+            fluorophore.quantum_yield = q.non_negative(&self.src)?;
+        }
+        let absorptance = match table.get("absorptance") {
+            Some(a) => a.non_negative(&self.src)?,
+            None => PEAK_ABSORPTANCE,
+        };
+        self.cx
+            .fluorescent(&item.spot(), name, base, (fluorophore, absorptance))
     }
 
     fn albedo(&mut self, table: &Table<'_, '_>, kind: &str) -> Result<Albedo, CliError> {

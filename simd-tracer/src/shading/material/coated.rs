@@ -284,6 +284,7 @@ impl<'a> CoatLobes<'a> {
                     weight: self.fresnel(wo.z) / p_specular * self.params.specular_scale,
                     spectrum: LaneSpectrum::ONE,
                     terminate_secondary: false,
+                    fluorophore: None,
                 });
             }
             let wi = sample_cosine(Vec3::Z, u, v);
@@ -294,6 +295,7 @@ impl<'a> CoatLobes<'a> {
                 weight: self.diffuse(wo, wi) / pdf,
                 spectrum: LaneSpectrum::of(self.base),
                 terminate_secondary: false,
+                fluorophore: None,
             });
         }
         let wi = if u_lobe < p_specular {
@@ -309,6 +311,7 @@ impl<'a> CoatLobes<'a> {
             weight: e.value / e.pdf,
             spectrum: e.spectrum,
             terminate_secondary: false,
+            fluorophore: None,
         })
     }
 }

@@ -93,6 +93,7 @@ pub(super) fn sample_smooth_interface(
                 weight: 1.0 / p,
                 spectrum: LaneSpectrum::of(reflectance),
                 terminate_secondary: false,
+                fluorophore: None,
             })
         }
         (Some(wi), transmittance) => {
@@ -107,6 +108,7 @@ pub(super) fn sample_smooth_interface(
                 weight: 1.0 / (p_transmit * eta * eta),
                 spectrum,
                 terminate_secondary: dispersed,
+                fluorophore: None,
             })
         }
     }

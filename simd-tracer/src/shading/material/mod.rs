@@ -30,7 +30,7 @@
 //! [`Material::two_sided`]. The integrator reads the setting from the
 //! triangles' shading records ([`crate::shading::surface`]).
 
-use crate::ids::{AngularId, SpectrumId, TextureId};
+use crate::ids::{AngularId, FluorophoreId, SpectrumId, TextureId};
 use crate::shading::microfacet::Microfacet;
 use crate::spectra::SceneSpectrum;
 use crate::spectra::angular::AngularSpectrum;
@@ -52,10 +52,13 @@ pub use plastic::{
 };
 mod interface;
 pub use interface::thin_dielectric_reflectance;
+mod fluorescent;
+pub use fluorescent::{FLUORESCENT_LOBE_PROBABILITY, SceneFluorophore, tabulated_sides};
 mod packet;
 mod scalar;
 pub use packet::{
-    BsdfEvalPacket, BsdfSamplePacket, LambertSamplePacket, PacketSurfaces, SampleUniforms,
+    BsdfEvalPacket, BsdfSamplePacket, Fluorescence, LambertSamplePacket, PacketSurfaces,
+    SampleUniforms,
 };
 /// What BSDFs read of a scene: the tables their ids index. Materials see
 /// only these, never the scene itself (its geometry, tree and lights are
@@ -135,6 +138,14 @@ pub enum Bsdf {
     ThinDielectric {
         /// `n_slab / n_outside` (constant; above 0).
         eta: f32,
+    },
+    /// A fluorescent layer over a Lambertian base (`fluorescent.rs`).
+    Fluorescent {
+        /// `ρ (1 − a)`: what the base reflects of the light the layer
+        /// does not absorb.
+        elastic: SpectrumId,
+        /// The layer's fluorophore.
+        fluorophore: FluorophoreId,
     },
     /// A smooth thin-film stack.
     ThinFilm {
@@ -226,6 +237,7 @@ impl Material {
             Bsdf::Lambert { albedo: a } | Bsdf::Coated { albedo: a, .. } => albedo(a, &mut r),
             Bsdf::Conductor { fresnel, .. } => r.angular.push(*fresnel),
             Bsdf::ThinDielectric { .. } => {}
+            Bsdf::Fluorescent { elastic, .. } => r.spectra.push(*elastic),
             Bsdf::Dielectric {
                 outside, inside, ..
             } => r.angular.extend([*outside, *inside]),
@@ -259,7 +271,10 @@ impl Bsdf {
                 front_transmittance,
                 ..
             } => front_transmittance.is_some(),
-            Self::Lambert { .. } | Self::Conductor { .. } | Self::Coated { .. } => false,
+            Self::Lambert { .. }
+            | Self::Conductor { .. }
+            | Self::Coated { .. }
+            | Self::Fluorescent { .. } => false,
         }
     }
 }
@@ -290,6 +305,9 @@ pub struct BsdfSample {
     pub spectrum: LaneSpectrum,
     /// The direction depends on the hero wavelength: drop the others.
     pub terminate_secondary: bool,
+    /// The fluorescent lobe of this fluorophore was sampled: the path
+    /// continues on the excited side (`fluorescent.rs`).
+    pub fluorophore: Option<FluorophoreId>,
 }
 
 /// A BSDF evaluated for a given pair of directions.

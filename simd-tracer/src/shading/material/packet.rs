@@ -5,6 +5,7 @@ use super::MaterialTables;
 use super::frame::sample_cosine_x8;
 use super::lane_spectrum::LaneSpectrum;
 use super::{Bsdf, ShadingPoint};
+use crate::ids::FluorophoreId;
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
 use glam::Vec3;
@@ -53,6 +54,26 @@ pub struct BsdfSamplePacket {
     pub valid: LaneMask,
     /// Lanes whose secondary wavelengths must be terminated.
     pub terminate_secondary: LaneMask,
+    /// Lanes that sampled a fluorescent lobe, and its fluorophore
+    /// ([`FluorophoreId::NONE`] elsewhere).
+    pub fluorescence: Fluorescence,
+}
+
+/// The lanes of a packet's sample that took a fluorescent lobe.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fluorescence {
+    /// The lanes.
+    pub lanes: LaneMask,
+    /// Their fluorophores.
+    pub fluorophores: [FluorophoreId; LANES],
+}
+
+impl Fluorescence {
+    /// No lane.
+    pub const NONE: Self = Self {
+        lanes: LaneMask::NONE,
+        fluorophores: [FluorophoreId::NONE; LANES],
+    };
 }
 
 /// The directional part of a Lambert packet's sample
@@ -121,6 +142,7 @@ impl Bsdf {
             spectrum: *albedo,
             valid,
             terminate_secondary: LaneMask::NONE,
+            fluorescence: Fluorescence::NONE,
         }
     }
 
@@ -192,6 +214,7 @@ impl Bsdf {
         let mut spectrum = [LaneSpectrum::ZERO; LANES];
         let mut valid = LaneMask::NONE;
         let mut terminate = LaneMask::NONE;
+        let mut fluorescence = Fluorescence::NONE;
         for lane in active.iter() {
             let sample = bsdfs[lane].and_then(|b| {
                 b.sample(
@@ -212,6 +235,10 @@ impl Bsdf {
                 if s.terminate_secondary {
                     terminate = terminate.with(lane);
                 }
+                if let Some(id) = s.fluorophore {
+                    fluorescence.lanes = fluorescence.lanes.with(lane);
+                    fluorescence.fluorophores[lane] = id;
+                }
             }
         }
         BsdfSamplePacket {
@@ -221,6 +248,7 @@ impl Bsdf {
             spectrum,
             valid,
             terminate_secondary: terminate,
+            fluorescence,
         }
     }
 

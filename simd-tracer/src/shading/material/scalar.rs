@@ -9,7 +9,10 @@ use super::interface::{
     thin_dielectric_reflectance,
 };
 use super::lane_spectrum::LaneSpectrum;
-use super::{Bsdf, BsdfEval, BsdfSample, ShadingPoint, angular_ref, direction_ior};
+use super::{
+    Bsdf, BsdfEval, BsdfSample, FLUORESCENT_LOBE_PROBABILITY, ShadingPoint, angular_ref,
+    direction_ior,
+};
 use crate::shading::microfacet;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -40,6 +43,39 @@ impl Bsdf {
                     weight: 1.0,
                     spectrum: LaneSpectrum::of(albedo.at(p.uv)),
                     terminate_secondary: false,
+                    fluorophore: None,
+                })
+            }
+            Self::Fluorescent {
+                elastic,
+                fluorophore,
+            } => {
+                // Both lobes are cosine-distributed (fluorescent.rs): the
+                // lobe scales the weight, the direction is the same.
+                let wi = sample_cosine(p.n, u, v);
+                let cos = wi.dot(p.n);
+                let fluoresce = u_lobe < FLUORESCENT_LOBE_PROBABILITY;
+                let elastic_probability = 1.0 - FLUORESCENT_LOBE_PROBABILITY;
+                (cos > 0.0).then(|| {
+                    if fluoresce {
+                        BsdfSample {
+                            wi,
+                            pdf: 0.0,
+                            weight: 1.0 / FLUORESCENT_LOBE_PROBABILITY,
+                            spectrum: LaneSpectrum::ONE,
+                            terminate_secondary: false,
+                            fluorophore: Some(*fluorophore),
+                        }
+                    } else {
+                        BsdfSample {
+                            wi,
+                            pdf: elastic_probability * cos * FRAC_1_PI,
+                            weight: 1.0 / elastic_probability,
+                            spectrum: LaneSpectrum::scene(*elastic),
+                            terminate_secondary: false,
+                            fluorophore: None,
+                        }
+                    }
                 })
             }
             Self::Conductor {
@@ -54,6 +90,7 @@ impl Bsdf {
                         weight: 1.0,
                         spectrum: LaneSpectrum::of(angular_ref(*fresnel, wo_local.z, 0.0)),
                         terminate_secondary: false,
+                        fluorophore: None,
                     });
                 }
                 let m = model.sample_visible_normal(wo_local, u, v);
@@ -68,6 +105,7 @@ impl Bsdf {
                     weight: model.g2(wo_local, wi_local) / model.g1(wo_local),
                     spectrum: LaneSpectrum::of(angular_ref(*fresnel, cos_om, 0.0)),
                     terminate_secondary: false,
+                    fluorophore: None,
                 })
             }
             Self::Dielectric {
@@ -113,6 +151,7 @@ impl Bsdf {
                         weight: model.g2(wo_local, wi_local) / model.g1(wo_local) / p_reflect,
                         spectrum: LaneSpectrum::of(fresnel),
                         terminate_secondary: false,
+                        fluorophore: None,
                     })
                 } else {
                     let wi_local = microfacet::refract(wo_local, m, eta)?;
@@ -129,6 +168,7 @@ impl Bsdf {
                             / (model.g1(wo_local) * eta * eta * p_transmit),
                         spectrum: LaneSpectrum::complement(fresnel),
                         terminate_secondary: dispersed,
+                        fluorophore: None,
                     })
                 }
             }
@@ -151,6 +191,7 @@ impl Bsdf {
                     weight: 1.0,
                     spectrum: LaneSpectrum::ONE,
                     terminate_secondary: false,
+                    fluorophore: None,
                 })
             }
             Self::ThinFilm {
@@ -185,6 +226,7 @@ impl Bsdf {
                         weight: 1.0,
                         spectrum: LaneSpectrum::of(angular_ref(r, wo_local.z, t)),
                         terminate_secondary: false,
+                        fluorophore: None,
                     }),
                 }
             }
@@ -213,6 +255,18 @@ impl Bsdf {
                     value: wi_local.z * FRAC_1_PI,
                     spectrum: LaneSpectrum::of(albedo.at(p.uv)),
                     pdf: wi_local.z * FRAC_1_PI,
+                }
+            }
+            // The elastic lobe only: the fluorescent one has no light
+            // sample (fluorescent.rs); its pdf is the elastic lobe's share.
+            Self::Fluorescent { elastic, .. } => {
+                if wi_local.z <= 0.0 {
+                    return BsdfEval::ZERO;
+                }
+                BsdfEval {
+                    value: wi_local.z * FRAC_1_PI,
+                    spectrum: LaneSpectrum::scene(*elastic),
+                    pdf: (1.0 - FLUORESCENT_LOBE_PROBABILITY) * wi_local.z * FRAC_1_PI,
                 }
             }
             Self::Conductor {
