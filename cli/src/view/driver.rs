@@ -6,7 +6,9 @@
 //! The server never waits on the render: a settings change bumps the
 //! generation under a mutex held for microseconds and wakes the driver;
 //! the render sees it after its current batch (batches aim at
-//! [`VIEW_BATCH_TARGET`]) and stops; frames go out through a `watch`
+//! [`VIEW_BATCH_TARGET`]) and stops; frames (at most one per
+//! [`VIEW_FRAME_INTERVAL`], and always the first and the last pass's) go
+//! out through a `watch`
 //! channel (the latest replaces the one before, nothing queues), encoded
 //! by whoever sends them. The driver also stops when the last page closes
 //! (no event stream left) and starts again from pass 0 when one opens.
@@ -24,13 +26,25 @@ use simd_tracer::transport::Transport;
 use spectral_core::SpectralRange;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 use tokio::sync::watch;
 
 /// Wall time a batch of the viewer's render aims at: a change stops the
 /// render within about this long (plus one pass), and frames come this
 /// often. A tenth of a second is where a restart still feels immediate.
 pub const VIEW_BATCH_TARGET: Duration = Duration::from_millis(100);
+
+/// Shortest time between two frames of one render (its first and last
+/// frames aside): a frame costs a resolve of the film on the driver thread
+/// (the render's pool waits) and a PNG encoding beside it, about 75 ms of
+/// CPU at 512² with 12 coefficients (docs/performance.md), so frames at
+/// every 0.1 s batch would take most of a 2-core machine.
+pub const VIEW_FRAME_INTERVAL: Duration = Duration::from_millis(250);
+
+/// A frame's resolve may take at most this share of the render's time:
+/// the interval between frames grows to this many times the last
+/// resolve's duration when that exceeds [`VIEW_FRAME_INTERVAL`].
+const RESOLVE_SHARE_INVERSE: u32 = 4;
 
 /// The camera a frame was rendered with, for the page to move it from.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -337,12 +351,22 @@ impl TransportTask for ViewTask<'_> {
         let shared = self.shared;
         let range = self.scene.range();
         let mut published_last = false;
+        let mut last_frame: Option<(Instant, Duration)> = None;
         let mut after_batch = |progress: &Progress, resolve: ResolvePartial| {
             if shared.should_stop(self.generation) {
                 return false;
             }
-            published_last = progress.passes_done == progress.passes_total;
+            let last_pass = progress.passes_done == progress.passes_total;
+            if let Some((at, resolve_took)) = last_frame {
+                let interval = VIEW_FRAME_INTERVAL.max(resolve_took * RESOLVE_SHARE_INVERSE);
+                if !last_pass && at.elapsed() < interval {
+                    return true;
+                }
+            }
+            published_last = last_pass;
+            let resolving = Instant::now();
             let image = resolve();
+            last_frame = Some((resolving, resolving.elapsed()));
             // Exposure and tone as of now (they change without a restart).
             let display = shared.job().settings.clone();
             let frame = Frame {

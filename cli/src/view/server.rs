@@ -279,12 +279,17 @@ fn frame_json(frame: &Frame, png: &str) -> serde_json::Value {
     })
 }
 
-/// The latest frame, or an error reply.
-fn latest_frame(app: &App) -> Result<Arc<Frame>, Response> {
+/// The latest frame, if any.
+fn latest_frame(app: &App) -> Option<Arc<Frame>> {
     match &*app.shared.updates.borrow() {
-        Update::Frame(frame) => Ok(Arc::clone(frame)),
-        _ => Err(error(StatusCode::CONFLICT, "no image rendered yet")),
+        Update::Frame(frame) => Some(Arc::clone(frame)),
+        _ => None,
     }
+}
+
+/// The reply when no frame exists yet.
+fn no_frame() -> Response {
+    error(StatusCode::CONFLICT, "no image rendered yet")
 }
 
 /// A pixel of the image.
@@ -306,9 +311,8 @@ async fn spectrum(
             "expected ?x=COLUMN&y=ROW (whole numbers)",
         );
     };
-    let frame = match latest_frame(&app) {
-        Ok(frame) => frame,
-        Err(reply) => return reply,
+    let Some(frame) = latest_frame(&app) else {
+        return no_frame();
     };
     let image = &frame.image;
     if x >= image.width || y >= image.height {
@@ -376,9 +380,8 @@ async fn save(
             );
         }
     };
-    let frame = match latest_frame(&app) {
-        Ok(frame) => frame,
-        Err(reply) => return reply,
+    let Some(frame) = latest_frame(&app) else {
+        return no_frame();
     };
     if format == "spectral" && frame.image.coefficients.is_none() {
         return error(

@@ -1237,7 +1237,7 @@ mod tests {
         // The frame is the image of that many passes, bit for bit …
         let same = RenderSettings {
             spp: *passes,
-            ..settings
+            ..settings.clone()
         };
         let full = render(&transport, &scene, &same, &mut |_| true)?;
         assert_eq!(last.xyz, full.xyz);
