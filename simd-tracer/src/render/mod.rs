@@ -803,7 +803,7 @@ pub type ResolvePartial<'a> = &'a dyn Fn() -> PartialImage;
 /// less than [`BATCH_TARGET`] to restart quickly after a change).
 pub struct Observer<'a> {
     /// Wall time a batch aims at (at least one pass, at most
-    /// [`MAX_BATCH`]).
+    /// 16 passes).
     pub batch_target: Duration,
     /// Called after every batch; `false` stops the render.
     pub after_batch: &'a mut dyn FnMut(&Progress, ResolvePartial) -> bool,
