@@ -154,27 +154,73 @@ pub fn write_png(
     tone: Tone,
 ) -> Result<(), CliError> {
     check_dimensions(path, image.width, image.height, image.xyz.len(), 1)?;
-    if !exposure.stops.is_finite() {
-        return Err(write_error(
-            path,
-            format!("exposure {} stops is not finite", exposure.stops),
+    let bytes = srgb8_bytes(image, exposure, tone).map_err(|e| write_error(path, e))?;
+    let (width, height) = (image.width, image.height);
+    write_atomically(path, |file| {
+        encode_png(
+            BufWriter::new(file),
+            width,
+            height,
+            &bytes,
+            png::Compression::Balanced,
+        )
+    })
+}
+
+/// `image` as the bytes of an 8-bit sRGB PNG, exactly as [`write_png`]
+/// writes its pixels, with the encoder's fastest compression (a viewer's
+/// frames: encoding time matters more than size).
+pub fn png_bytes(image: &XyzImage, exposure: Exposure, tone: Tone) -> Result<Vec<u8>, String> {
+    let expected = u64::from(image.width) * u64::from(image.height);
+    if image.width == 0 || image.height == 0 || expected != image.xyz.len() as u64 {
+        return Err(format!(
+            "{}×{} image with {} pixels",
+            image.width,
+            image.height,
+            image.xyz.len()
         ));
+    }
+    let bytes = srgb8_bytes(image, exposure, tone)?;
+    let mut out = Vec::new();
+    encode_png(
+        &mut out,
+        image.width,
+        image.height,
+        &bytes,
+        png::Compression::Fast,
+    )?;
+    Ok(out)
+}
+
+/// The 8-bit sRGB bytes of `image` after exposure and the tone map.
+fn srgb8_bytes(image: &XyzImage, exposure: Exposure, tone: Tone) -> Result<Vec<u8>, String> {
+    if !exposure.stops.is_finite() {
+        return Err(format!("exposure {} stops is not finite", exposure.stops));
     }
     let factor = exposure.factor();
     let mut bytes = Vec::with_capacity(image.xyz.len() * 3);
     for &xyz in image.xyz {
         bytes.extend_from_slice(&display_srgb8(xyz, factor, tone));
     }
-    let (width, height) = (image.width, image.height);
-    write_atomically(path, |file| {
-        let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-        writer.write_image_data(&bytes).map_err(|e| e.to_string())?;
-        writer.finish().map_err(|e| e.to_string())
-    })
+    Ok(bytes)
+}
+
+/// Encodes 8-bit RGB `bytes` as a PNG (sRGB chunk) into `sink`.
+fn encode_png(
+    sink: impl Write,
+    width: u32,
+    height: u32,
+    bytes: &[u8],
+    compression: png::Compression,
+) -> Result<(), String> {
+    let mut encoder = png::Encoder::new(sink, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    encoder.set_compression(compression);
+    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    writer.write_image_data(bytes).map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())
 }
 
 /// Writes `image` as a float32 OpenEXR with linear-sRGB channels `R`, `G`,

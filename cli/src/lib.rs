@@ -16,5 +16,6 @@ pub mod spectrum_cmd;
 pub mod spectrum_file;
 pub mod texture_file;
 pub mod train;
+pub mod view;
 
 pub use error::CliError;

@@ -7,6 +7,7 @@ use fspec_cli::merge_cmd::{self, MergeArgs};
 use fspec_cli::render_cmd::{self, RenderArgs};
 use fspec_cli::spectrum_cmd::{self, SpectrumArgs};
 use fspec_cli::train::{self, TrainArgs};
+use fspec_cli::view::{self, ViewArgs};
 use std::process::ExitCode;
 
 /// Fourier-series spectral rendering: spectra as N cosine coefficients.
@@ -35,6 +36,10 @@ enum Command {
     Spectrum(SpectrumArgs),
     /// Train the small sine network of a neural thin-film material.
     Train(TrainArgs),
+    /// Interactive preview in the browser: a local web server showing the
+    /// render pass after pass, with camera, transport, illuminant and
+    /// exposure controls.
+    View(Box<ViewArgs>),
 }
 
 /// Runs the command; `Ok` carries the exit code of a command that finished
@@ -55,6 +60,7 @@ fn run(cli: &Cli) -> Result<ExitCode, CliError> {
             Ok(())
         }
         Command::Spectrum(args) => spectrum_cmd::run(args, &mut out),
+        Command::View(args) => view::run(args),
         Command::Train(args) => {
             let trained = train::run(args, &mut out)?;
             let last = trained.curve.last().map_or(f64::NAN, |(_, l)| *l);

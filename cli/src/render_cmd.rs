@@ -150,7 +150,8 @@ impl From<FilmKind> for FilmMode {
 }
 
 /// 8-bit tone mapping.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum ToneKind {
     /// Clamp to [0, 1].
     Clamp,
@@ -357,7 +358,11 @@ pub struct RenderSummary {
     pub memory: MemoryPrediction,
 }
 
-fn settings_from(args: &RenderArgs, defaults: &SceneDefaults) -> Result<RenderSettings, CliError> {
+/// The render settings of `args` over a scene's `defaults` (flags win).
+pub fn settings_from(
+    args: &RenderArgs,
+    defaults: &SceneDefaults,
+) -> Result<RenderSettings, CliError> {
     let width = args.width.or(defaults.width).unwrap_or(512);
     let height = args.height.or(defaults.height).unwrap_or(512);
     let spp = args.spp.or(defaults.spp).unwrap_or(64);
@@ -1186,7 +1191,7 @@ impl OutputOptions {
 
 /// Spectral radiance at `wavelengths` from the coefficient planes (series,
 /// negative lobes clamped to 0).
-fn spectral_planes(
+pub fn spectral_planes(
     range: &SpectralRange,
     n: usize,
     coeffs: &[f32],
@@ -1212,7 +1217,7 @@ fn spectral_planes(
 }
 
 /// `name=value` of `-D`.
-fn parse_define(text: &str) -> Result<(String, String), CliError> {
+pub fn parse_define(text: &str) -> Result<(String, String), CliError> {
     match text.split_once('=') {
         Some((name, value))
             if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') =>

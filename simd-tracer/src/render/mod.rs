@@ -446,16 +446,24 @@ const RENDER_THREAD_STACK_BYTES: usize = 16 << 20;
 
 /// Wall time a batch of passes aims at: the progress callback (and so the
 /// CLI's progress display, Ctrl-C and the time limit) sees the render at
-/// least this often, give or take one pass.
-const BATCH_TARGET: Duration = Duration::from_millis(500);
+/// least this often, give or take one pass. An [`Observer`] may ask for
+/// shorter batches (a viewer's frame rate and restart latency).
+pub const BATCH_TARGET: Duration = Duration::from_millis(500);
 /// Most passes per batch.
 const MAX_BATCH: u32 = 16;
 
-/// Passes in the next batch: as many as fit in [`BATCH_TARGET`] at the
-/// last batch's speed (at most [`MAX_BATCH`], and not past a time limit).
-fn next_batch(batch: u32, took: Duration, settings: &RenderSettings, elapsed: Duration) -> u32 {
+/// Passes in the next batch: as many as fit in `target` (normally
+/// [`BATCH_TARGET`]) at the last batch's speed (at most [`MAX_BATCH`], and
+/// not past a time limit).
+fn next_batch(
+    batch: u32,
+    took: Duration,
+    settings: &RenderSettings,
+    elapsed: Duration,
+    target: Duration,
+) -> u32 {
     let per_pass = took.as_secs_f64() / f64::from(batch.max(1));
-    let mut budget = BATCH_TARGET.as_secs_f64();
+    let mut budget = target.as_secs_f64();
     if let Some(limit) = settings.time_limit {
         budget = budget.min(limit.saturating_sub(elapsed).as_secs_f64());
     }
@@ -764,6 +772,57 @@ pub fn render_passes<T: Transport>(
     job: &PassJob,
     progress: &mut dyn FnMut(&Progress) -> bool,
 ) -> Result<(RenderResult, Option<FilmState>), RenderError> {
+    let observer = Observer {
+        batch_target: BATCH_TARGET,
+        after_batch: &mut |p, _| progress(p),
+    };
+    render_observed(transport, scene, settings, job, observer)
+}
+
+/// The image of a render so far, as the final result would resolve it
+/// (a viewer's frame): XYZ per pixel of the window and the mean
+/// coefficients when the film keeps them ([`RenderResult`]'s fields).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PartialImage {
+    /// Width, pixels (the window's).
+    pub width: u32,
+    /// Height, pixels (the window's).
+    pub height: u32,
+    /// XYZ per pixel, row-major from the window's top-left.
+    pub xyz: Vec<Xyz>,
+    /// Mean Fourier coefficients per pixel (`N` per pixel), when kept.
+    pub coefficients: Option<(usize, Vec<f32>)>,
+}
+
+/// Resolves the image so far on request (only when a viewer wants it).
+pub type ResolvePartial<'a> = &'a dyn Fn() -> PartialImage;
+
+/// What watches a render: after every batch of passes `after_batch` sees
+/// the progress and may resolve the image so far, and returns whether to
+/// continue; batches aim at `batch_target` of wall time (a viewer asks for
+/// less than [`BATCH_TARGET`] to restart quickly after a change).
+pub struct Observer<'a> {
+    /// Wall time a batch aims at (at least one pass, at most
+    /// 16 passes).
+    pub batch_target: Duration,
+    /// Called after every batch; `false` stops the render.
+    pub after_batch: &'a mut dyn FnMut(&Progress, ResolvePartial) -> bool,
+}
+
+/// [`render_passes`] with an [`Observer`] that may see the image after
+/// every batch: the same passes in the same order, so the result does not
+/// depend on the observer (only where the render stops does).
+pub fn render_observed<T: Transport>(
+    transport: &T,
+    scene: &Scene,
+    settings: &RenderSettings,
+    job: &PassJob,
+    observer: Observer,
+) -> Result<(RenderResult, Option<FilmState>), RenderError> {
+    let Observer {
+        batch_target,
+        after_batch,
+    } = observer;
     if settings.width == 0 || settings.height == 0 || settings.spp == 0 {
         return Err(RenderError::EmptyImage);
     }
@@ -932,17 +991,37 @@ pub fn render_passes<T: Transport>(
         }
         passes = end - job.first_pass;
         let elapsed = start.elapsed();
-        let keep_going = progress(&Progress {
+        let resolve = || {
+            let pixels = tiles
+                .iter()
+                .flat_map(|tile| tile.window_pixels(&window))
+                .map(|((x, y), pixel)| (window_index(&window, x, y), pixel));
+            let (xyz, coefficients) = resolve_pixels(film, &window, pixels);
+            PartialImage {
+                width: window.width,
+                height: window.height,
+                xyz,
+                coefficients,
+            }
+        };
+        let progress = Progress {
             passes_done: passes,
             passes_total: settings.spp,
             samples: pixel_count * u64::from(passes),
             elapsed,
-        });
+        };
+        let keep_going = after_batch(&progress, &resolve);
         if !keep_going || settings.time_limit.is_some_and(|limit| elapsed >= limit) {
             break;
         }
         if !film.passes_interact() {
-            batch = next_batch(batch, batch_start.elapsed(), settings, elapsed);
+            batch = next_batch(
+                batch,
+                batch_start.elapsed(),
+                settings,
+                elapsed,
+                batch_target,
+            );
         }
     }
     let mut rejected = resumed_rejected;
@@ -1053,19 +1132,31 @@ mod tests {
         let settings = RenderSettings::default();
         let ms = Duration::from_millis;
         // 4 passes took 200 ms: 50 ms each, 10 fit in 500 ms.
-        assert_eq!(next_batch(4, ms(200), &settings, ms(1000)), 10);
+        assert_eq!(
+            next_batch(4, ms(200), &settings, ms(1000), BATCH_TARGET),
+            10
+        );
         // Slow passes: never fewer than one.
-        assert_eq!(next_batch(1, ms(2000), &settings, ms(2000)), 1);
+        assert_eq!(
+            next_batch(1, ms(2000), &settings, ms(2000), BATCH_TARGET),
+            1
+        );
         // Fast passes: at most MAX_BATCH.
-        assert_eq!(next_batch(2, ms(1), &settings, ms(10)), MAX_BATCH);
-        assert_eq!(next_batch(1, Duration::ZERO, &settings, ms(10)), MAX_BATCH);
+        assert_eq!(
+            next_batch(2, ms(1), &settings, ms(10), BATCH_TARGET),
+            MAX_BATCH
+        );
+        assert_eq!(
+            next_batch(1, Duration::ZERO, &settings, ms(10), BATCH_TARGET),
+            MAX_BATCH
+        );
         // Not past a time limit: 100 ms left at 30 ms per pass.
         let limited = RenderSettings {
             time_limit: Some(ms(1100)),
             ..RenderSettings::default()
         };
-        assert_eq!(next_batch(1, ms(30), &limited, ms(1000)), 3);
-        assert_eq!(next_batch(1, ms(30), &limited, ms(1200)), 1);
+        assert_eq!(next_batch(1, ms(30), &limited, ms(1000), BATCH_TARGET), 3);
+        assert_eq!(next_batch(1, ms(30), &limited, ms(1200), BATCH_TARGET), 1);
     }
 
     #[test]
@@ -1104,6 +1195,60 @@ mod tests {
         // Stopping after the first batch keeps exactly its passes.
         let first = render(&transport, &scene, &settings, &mut |_| false)?;
         assert_eq!(first.passes, 1);
+        Ok(())
+    }
+
+    #[test]
+    fn an_observer_sees_the_image_the_same_passes_render() -> Result<(), RenderError> {
+        use crate::film::Buffer;
+        use crate::transport::FourierTransport;
+        use spectral_core::xyz::XyzRoute;
+        let range = spectral_core::SpectralRange::VISIBLE;
+        let (Ok(scene), Ok(transport)) = (
+            crate::scene::builtin::cornell_box(range),
+            FourierTransport::<4>::new(range, Buffer::Spectral, XyzRoute::Zeroth),
+        ) else {
+            panic!("Cornell box and transport");
+        };
+        let settings = RenderSettings {
+            width: 24,
+            height: 16,
+            spp: 40,
+            ..RenderSettings::default()
+        };
+        // Stop after the second batch, keeping what the observer saw then.
+        let mut seen: Vec<(u32, PartialImage)> = Vec::new();
+        let mut after_batch = |p: &Progress, resolve: ResolvePartial| {
+            seen.push((p.passes_done, resolve()));
+            seen.len() < 2
+        };
+        let observer = Observer {
+            batch_target: Duration::from_millis(1),
+            after_batch: &mut after_batch,
+        };
+        let (observed, _) =
+            render_observed(&transport, &scene, &settings, &PassJob::default(), observer)?;
+        let Some((passes, last)) = seen.last() else {
+            panic!("no batch seen");
+        };
+        assert_eq!(*passes, observed.passes);
+        assert_eq!(last.xyz, observed.xyz);
+        assert_eq!(last.coefficients, observed.coefficients);
+        // The frame is the image of that many passes, bit for bit …
+        let same = RenderSettings {
+            spp: *passes,
+            ..settings.clone()
+        };
+        let full = render(&transport, &scene, &same, &mut |_| true)?;
+        assert_eq!(last.xyz, full.xyz);
+        assert_eq!((last.width, last.height), (24, 16));
+        // … and not that of one pass more (the negative control).
+        let more = RenderSettings {
+            spp: *passes + 1,
+            ..settings
+        };
+        let other = render(&transport, &scene, &more, &mut |_| true)?;
+        assert_ne!(last.xyz, other.xyz);
         Ok(())
     }
 }

@@ -183,7 +183,7 @@ fn patch(index: usize) -> Result<SpectrumSource, SceneError> {
 }
 
 /// Luminance `Y` of a prepared spectrum (1 nm trapezoid, `∫ȳ`-normalised).
-fn luminance(spectrum: &crate::spectra::SceneSpectrum, range: &SpectralRange) -> f64 {
+pub(crate) fn luminance(spectrum: &crate::spectra::SceneSpectrum, range: &SpectralRange) -> f64 {
     let steps = range.width_nm().round().max(1.0) as usize;
     let step_nm = range.width_nm() / steps as f64;
     let sum: f64 = (0..=steps)
@@ -231,7 +231,11 @@ fn emitter(
 }
 
 /// `source` times `scale`, as a tabulated spectrum on a 0.25 nm grid.
-fn scaled_source(source: SpectrumSource, scale: f64, range: &SpectralRange) -> SpectrumSource {
+pub(crate) fn scaled_source(
+    source: SpectrumSource,
+    scale: f64,
+    range: &SpectralRange,
+) -> SpectrumSource {
     match source {
         SpectrumSource::Tabulated { lambda_nm, values } => SpectrumSource::Tabulated {
             lambda_nm,

@@ -124,6 +124,17 @@ impl Camera {
         })
     }
 
+    /// The camera's position and unit axes ([`Camera::from_axes`] makes
+    /// the same camera from them).
+    pub fn axes(&self) -> CameraAxes {
+        CameraAxes {
+            position: self.position,
+            forward: self.forward,
+            right: self.right,
+            up: self.up,
+        }
+    }
+
     /// The camera position.
     pub fn position(&self) -> Vec3 {
         self.position

@@ -13,6 +13,7 @@ mod fingerprint;
 pub mod mesh;
 pub mod obj;
 pub mod ply;
+mod relight;
 pub mod serialized;
 pub mod shapes;
 pub mod transform;
@@ -224,6 +225,12 @@ impl Scene {
     /// camera
     pub fn camera(&self) -> &Camera {
         &self.camera
+    }
+
+    /// Replaces the camera (a viewer moving it): nothing else depends on
+    /// it, so the scene stays valid and the BVH is kept.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.camera = camera;
     }
 
     /// environment

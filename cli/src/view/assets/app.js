@@ -1,0 +1,214 @@
+// fspec view: the page. Settings go to the server as JSON POSTs; frames
+// come back as server-sent events (a PNG in base64 with its pass count).
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const view = $("view");
+let latest = null;        // the latest frame's metadata
+let settings = null;      // the server's settings as last known
+
+function showError(message) { $("error").textContent = message || ""; }
+
+// Sends one change; the reply is the new generation or an error line.
+async function post(patch) {
+  const reply = await fetch("/api/settings", {
+    method: "POST",
+    headers: { "Content-Type": "application/json" },
+    body: JSON.stringify(patch),
+  });
+  const body = await reply.json();
+  if (!reply.ok) { showError(body.error); throw new Error(body.error); }
+  showError("");
+  return body;
+}
+
+// Camera moves: at most one request in flight, the latest move wins.
+let cameraInFlight = false, cameraPending = null;
+function sendCamera(camera) {
+  cameraPending = camera;
+  if (cameraInFlight) return;
+  cameraInFlight = true;
+  const next = cameraPending; cameraPending = null;
+  post({ camera: next }).catch(() => {}).finally(() => {
+    cameraInFlight = false;
+    if (cameraPending) sendCamera(cameraPending);
+  });
+}
+
+function transportOfControls() {
+  const kind = $("transport").value;
+  const n = Number($("coeffs").value), c = Number($("wavelengths").value);
+  const sampling = $("sampling").value;
+  if (kind === "fourier") return { kind, coeffs: n, buffer: $("buffer").value, to_color: $("to_color").value };
+  if (kind === "sampled") return { kind, wavelengths: c, sampling };
+  return { kind, wavelengths: c, coeffs: n, sampling, alpha_per_pixel: false };
+}
+
+function setControls(s) {
+  settings = s;
+  $("scene").value = s.scene;
+  const t = s.transport;
+  $("transport").value = t.kind;
+  if (t.coeffs) $("coeffs").value = String(t.coeffs);
+  if (t.wavelengths) $("wavelengths").value = String(t.wavelengths);
+  if (t.sampling) $("sampling").value = t.sampling;
+  if (t.buffer) $("buffer").value = t.buffer;
+  if (t.to_color) $("to_color").value = t.to_color;
+  $("exposure").value = String(s.exposure_stops);
+  $("exposure-value").textContent = String(s.exposure_stops);
+  $("tone").value = s.tone;
+  $("illuminant").value = s.illuminant || "scene";
+  $("max-passes").value = String(s.max_passes);
+  if (![...$("size").options].some((o) => o.value === String(s.width) && s.width === s.height)) {
+    const o = document.createElement("option");
+    o.value = `${s.width}x${s.height}`; o.textContent = `${s.width} × ${s.height}`;
+    $("size").appendChild(o); $("size").value = o.value;
+  } else {
+    $("size").value = String(s.width);
+  }
+}
+
+function fill(select, names) {
+  for (const name of names) {
+    const o = document.createElement("option");
+    o.value = name; o.textContent = name; select.appendChild(o);
+  }
+}
+
+async function start() {
+  const state = await (await fetch("/api/state")).json();
+  fill($("scene"), state.scenes);
+  fill($("illuminant"), ["scene"].concat(state.illuminants));
+  setControls(state.settings);
+  const onChange = (id, patch) => $(id).addEventListener("change", () => post(patch()).catch(() => {}));
+  onChange("scene", () => ({ scene: $("scene").value }));
+  onChange("size", () => {
+    const [w, h] = $("size").value.split("x").map(Number);
+    return { width: w, height: h || w };
+  });
+  for (const id of ["transport", "coeffs", "wavelengths", "sampling", "buffer", "to_color"]) {
+    onChange(id, () => ({ transport: transportOfControls() }));
+  }
+  $("exposure").addEventListener("input", () => {
+    $("exposure-value").textContent = $("exposure").value;
+    post({ exposure_stops: Number($("exposure").value) }).catch(() => {});
+  });
+  onChange("tone", () => ({ tone: $("tone").value }));
+  onChange("illuminant", () => ({ illuminant: $("illuminant").value }));
+  onChange("max-passes", () => ({ max_passes: Number($("max-passes").value) }));
+  $("reset-camera").addEventListener("click", () => post({ reset_camera: true }).catch(() => {}));
+
+  const events = new EventSource("/api/events");
+  events.addEventListener("frame", (e) => {
+    const frame = JSON.parse(e.data);
+    view.src = "data:image/png;base64," + frame.png;
+    delete frame.png;
+    latest = frame;
+    view.dataset.generation = String(frame.generation);
+    view.dataset.passes = String(frame.passes);
+    const seconds = frame.elapsed_ms / 1000;
+    const rate = frame.passes / Math.max(seconds, 1e-9);
+    $("status").textContent =
+      `pass ${frame.passes}/${frame.passes_total} · ${seconds.toFixed(2)} s · ${rate.toFixed(1)} passes/s · ${frame.width}×${frame.height} · generation ${frame.generation}`;
+    $("command").textContent = frame.render_command ? "same image: " + frame.render_command : "";
+    if (!dragging) setControls(frame.settings);
+  });
+  events.addEventListener("error", (e) => {
+    if (e.data) showError(JSON.parse(e.data).error);
+  });
+}
+
+// --- camera: orbit about the scene's centre, pan, dolly ---
+const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+const mul = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+const norm = (a) => mul(a, 1 / Math.hypot(a[0], a[1], a[2]));
+// Rodrigues: v rotated by `angle` about unit `axis`.
+function rotate(v, axis, angle) {
+  const c = Math.cos(angle), s = Math.sin(angle);
+  return add(add(mul(v, c), mul(cross(axis, v), s)), mul(axis, dot(axis, v) * (1 - c)));
+}
+
+// Radians of orbit per pixel dragged.
+const ORBIT_PER_PX = 0.01;
+// Closest the orbit comes to the poles (cosine between view and up).
+const POLE_COS = 0.99;
+
+let dragging = null;
+function cameraOf(frame) {
+  const c = frame.camera;
+  const target = add(c.position, mul(c.forward, c.pivot_distance));
+  return { position: c.position, target, up: c.world_up, fov_deg: c.fov_deg, right: cross(c.forward, c.up), upv: c.up };
+}
+
+view.addEventListener("contextmenu", (e) => e.preventDefault());
+view.addEventListener("mousedown", (e) => {
+  if (!latest) return;
+  dragging = { x: e.clientX, y: e.clientY, camera: cameraOf(latest), pan: e.shiftKey || e.button === 2, moved: false };
+  e.preventDefault();
+});
+window.addEventListener("mousemove", (e) => {
+  if (!dragging) return;
+  const dx = e.clientX - dragging.x, dy = e.clientY - dragging.y;
+  if (Math.abs(dx) + Math.abs(dy) < 3 && !dragging.moved) return;
+  dragging.moved = true;
+  const c = dragging.camera;
+  if (dragging.pan) {
+    // One screen pixel at the pivot's depth, in scene units.
+    const shown = view.clientHeight || 1;
+    const unit = 2 * Math.tan((c.fov_deg * Math.PI) / 360) * Math.hypot(...sub(c.target, c.position)) / shown;
+    const shift = add(mul(c.right, -dx * unit), mul(c.upv, dy * unit));
+    sendCamera({ position: add(c.position, shift), target: add(c.target, shift), up: c.up, fov_deg: c.fov_deg });
+  } else {
+    const up = norm(c.up);
+    let offset = rotate(sub(c.position, c.target), up, -dx * ORBIT_PER_PX);
+    const right = norm(cross(up, offset));
+    const pitched = rotate(offset, right, -dy * ORBIT_PER_PX);
+    if (Math.abs(dot(norm(pitched), up)) < POLE_COS) offset = pitched;
+    sendCamera({ position: add(c.target, offset), target: c.target, up: c.up, fov_deg: c.fov_deg });
+  }
+});
+window.addEventListener("mouseup", (e) => {
+  const was = dragging;
+  dragging = null;
+  if (was && !was.moved && e.target === view) showSpectrum(e);
+});
+view.addEventListener("wheel", (e) => {
+  if (!latest) return;
+  e.preventDefault();
+  const c = cameraOf(latest);
+  // Dolly: the distance to the pivot scales by e^(wheel/500).
+  const offset = mul(sub(c.position, c.target), Math.exp(e.deltaY / 500));
+  sendCamera({ position: add(c.target, offset), target: c.target, up: c.up, fov_deg: c.fov_deg });
+}, { passive: false });
+
+// --- a pixel's spectrum ---
+async function showSpectrum(e) {
+  if (!latest) return;
+  const r = view.getBoundingClientRect();
+  const x = Math.floor(((e.clientX - r.left) / r.width) * latest.width);
+  const y = Math.floor(((e.clientY - r.top) / r.height) * latest.height);
+  const reply = await fetch(`/api/spectrum?x=${x}&y=${y}`);
+  const body = await reply.json();
+  if (!reply.ok) { $("spectrum-caption").textContent = body.error; $("spectrum").innerHTML = ""; return; }
+  plot(body);
+}
+
+function plot(s) {
+  const W = 320, H = 180, L = 30, B = 20, T = 8, R = 8;
+  const lo = s.lambda_nm[0], hi = s.lambda_nm[s.lambda_nm.length - 1];
+  const top = Math.max(...s.radiance, 1e-12);
+  const px = (l) => L + ((l - lo) / (hi - lo)) * (W - L - R);
+  const py = (v) => H - B - (v / top) * (H - B - T);
+  const d = s.lambda_nm.map((l, i) => `${i ? "L" : "M"}${px(l).toFixed(1)},${py(s.radiance[i]).toFixed(1)}`).join("");
+  let svg = `<line x1="${L}" y1="${H - B}" x2="${W - R}" y2="${H - B}"/><line x1="${L}" y1="${T}" x2="${L}" y2="${H - B}"/>`;
+  for (let l = 400; l <= hi; l += 100) svg += `<text x="${px(l) - 10}" y="${H - 6}">${l}</text>`;
+  svg += `<text x="2" y="${T + 8}">${top.toPrecision(2)}</text><path d="${d}"/>`;
+  $("spectrum").innerHTML = svg;
+  $("spectrum-caption").textContent =
+    `pixel (${s.x}, ${s.y}), ${s.passes} passes: radiance from ${s.coefficients.length} coefficients, ${lo}–${hi} nm`;
+}
+
+start().catch((e) => showError(String(e)));

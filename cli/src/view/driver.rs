@@ -1,0 +1,406 @@
+//! The render driver: one thread that waits for settings, renders them with
+//! `simd_tracer::render::render_observed` on the renderer's own thread pool
+//! (the passes, batches and film of `fspec render`), and publishes the
+//! image after every batch.
+//!
+//! The server never waits on the render: a settings change bumps the
+//! generation under a mutex held for microseconds and wakes the driver;
+//! the render sees it after its current batch (batches aim at
+//! [`VIEW_BATCH_TARGET`]) and stops; frames (at most one per
+//! [`VIEW_FRAME_INTERVAL`], and always the first and the last pass's) go
+//! out through a `watch`
+//! channel (the latest replaces the one before, nothing queues), encoded
+//! by whoever sends them. The driver also stops when the last page closes
+//! (no event stream left) and starts again from pass 0 when one opens.
+
+use crate::error::CliError;
+use crate::render_cmd::{self, TransportSpec, TransportTask};
+use crate::scene_file::MitsubaOptions;
+use crate::scene_source::{SceneDefaults, resolve_scene};
+use crate::view::settings::{ViewSettings, illuminant_source};
+use simd_tracer::render::{Observer, PartialImage, PassJob, Progress, ResolvePartial};
+use simd_tracer::scene::Scene;
+use simd_tracer::scene::builtin::SceneOptions;
+use simd_tracer::scene::camera::Camera;
+use simd_tracer::transport::Transport;
+use spectral_core::SpectralRange;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError};
+use std::time::{Duration, Instant};
+use tokio::sync::watch;
+
+/// Wall time a batch of the viewer's render aims at: a change stops the
+/// render within about this long (plus one pass), and frames come this
+/// often. A tenth of a second is where a restart still feels immediate.
+pub const VIEW_BATCH_TARGET: Duration = Duration::from_millis(100);
+
+/// Shortest time between two frames of one render (its first and last
+/// frames aside): a frame costs a resolve of the film on the driver thread
+/// (the render's pool waits) and a PNG encoding beside it, about 75 ms of
+/// CPU at 512² with 12 coefficients (docs/performance.md), so frames at
+/// every 0.1 s batch would take most of a 2-core machine.
+pub const VIEW_FRAME_INTERVAL: Duration = Duration::from_millis(250);
+
+/// A frame's resolve may take at most this share of the render's time:
+/// the interval between frames grows to this many times the last
+/// resolve's duration when that exceeds [`VIEW_FRAME_INTERVAL`].
+const RESOLVE_SHARE_INVERSE: u32 = 4;
+
+/// The camera a frame was rendered with, for the page to move it from.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct CameraView {
+    /// Centre of projection.
+    pub position: [f32; 3],
+    /// Unit viewing direction.
+    pub forward: [f32; 3],
+    /// Unit image up.
+    pub up: [f32; 3],
+    /// Field of view along the smaller axis, degrees.
+    pub fov_deg: f32,
+    /// The scene camera's up: the axis the page orbits about.
+    pub world_up: [f32; 3],
+    /// Distance to the centre of the scene's bounds (the orbit pivot).
+    pub pivot_distance: f32,
+}
+
+/// One published image.
+#[derive(Debug)]
+pub struct Frame {
+    /// The settings generation it belongs to.
+    pub generation: u64,
+    /// Passes in it.
+    pub passes: u32,
+    /// Passes the render will take.
+    pub passes_total: u32,
+    /// Render time so far.
+    pub elapsed: Duration,
+    /// The image so far.
+    pub image: Arc<PartialImage>,
+    /// The scene's spectral range (for spectra of pixels).
+    pub range: SpectralRange,
+    /// The settings it was rendered with (exposure and tone as of its
+    /// publication).
+    pub settings: ViewSettings,
+    /// The camera it was rendered with.
+    pub camera: CameraView,
+    /// The PNG, base64, made once by the first stream that sends it.
+    pub encoded: OnceLock<Result<String, String>>,
+}
+
+impl Frame {
+    /// The same image under other display settings (not yet encoded).
+    pub fn redisplayed(&self, settings: &ViewSettings) -> Self {
+        Self {
+            generation: self.generation,
+            passes: self.passes,
+            passes_total: self.passes_total,
+            elapsed: self.elapsed,
+            image: Arc::clone(&self.image),
+            range: self.range,
+            settings: ViewSettings {
+                exposure_stops: settings.exposure_stops,
+                tone: settings.tone,
+                ..self.settings.clone()
+            },
+            camera: self.camera,
+            encoded: OnceLock::new(),
+        }
+    }
+}
+
+/// What the page is told.
+#[derive(Debug, Clone, Default)]
+pub enum Update {
+    /// Nothing rendered yet.
+    #[default]
+    Nothing,
+    /// The latest image.
+    Frame(Arc<Frame>),
+    /// The render of a generation failed (one line).
+    Error {
+        /// Its generation.
+        generation: u64,
+        /// Why.
+        message: String,
+    },
+}
+
+/// The settings and where the driver stands.
+#[derive(Debug)]
+pub struct Job {
+    /// Current settings.
+    pub settings: ViewSettings,
+    /// Bumped by every change that restarts the render.
+    pub generation: u64,
+    /// The last generation rendered to its end (or failed): nothing to do
+    /// until the generation changes.
+    pub finished: Option<u64>,
+}
+
+/// State shared by the server and the driver.
+#[derive(Debug)]
+pub struct Shared {
+    /// Settings and generation.
+    pub job: Mutex<Job>,
+    /// Wakes the driver (a change, a page opening or closing, shutdown).
+    pub wake: Condvar,
+    /// Open event streams (pages).
+    pub viewers: AtomicUsize,
+    /// Set once to stop everything.
+    pub stopping: AtomicBool,
+    /// The latest frame or error.
+    pub updates: watch::Sender<Update>,
+    /// The render's options that the page does not change.
+    pub options: DriverOptions,
+}
+
+/// Options of the driver fixed at start.
+#[derive(Debug, Clone)]
+pub struct DriverOptions {
+    /// Render threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Mitsuba scene parameters and leniency.
+    pub mitsuba: MitsubaOptions,
+}
+
+impl Shared {
+    /// The job, even if a thread panicked while holding it (the settings
+    /// are replaced whole, never left half-written).
+    pub fn job(&self) -> MutexGuard<'_, Job> {
+        self.job.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Wakes the driver after a change of the job, the viewers or
+    /// `stopping`.
+    pub fn notify(&self) {
+        // Taking the lock orders the change before the driver's check.
+        drop(self.job());
+        self.wake.notify_all();
+    }
+
+    fn should_stop(&self, generation: u64) -> bool {
+        self.stopping.load(Ordering::SeqCst)
+            || self.viewers.load(Ordering::SeqCst) == 0
+            || self.job().generation != generation
+    }
+}
+
+/// The scene of some settings, built once per scene and illuminant.
+struct BuiltScene {
+    key: (String, Option<String>),
+    scene: Scene,
+    defaults: SceneDefaults,
+    camera: Camera,
+    centre: glam::Vec3,
+}
+
+/// Builds `name` (relit by `illuminant`) as `fspec render` would.
+fn build_scene(
+    name: &str,
+    illuminant: Option<&str>,
+    mitsuba: &MitsubaOptions,
+) -> Result<BuiltScene, CliError> {
+    let (mut builder, defaults, _warnings) =
+        resolve_scene(name, &SceneOptions::default(), mitsuba)?;
+    if let Some(illuminant) = illuminant {
+        let source = illuminant_source(illuminant)?;
+        builder
+            .relight(illuminant, &source)
+            .map_err(|e| CliError::input(format!("{name}: {e}")))?;
+    }
+    let scene = builder
+        .build()
+        .map_err(|e| CliError::input(format!("{name}: {e}")))?;
+    let (mut lo, mut hi) = (
+        glam::Vec3::splat(f32::INFINITY),
+        glam::Vec3::splat(f32::NEG_INFINITY),
+    );
+    for triangle in scene.triangles() {
+        for v in triangle {
+            lo = lo.min(*v);
+            hi = hi.max(*v);
+        }
+    }
+    let camera = *scene.camera();
+    let centre = if lo.cmple(hi).all() {
+        0.5 * (lo + hi)
+    } else {
+        camera.position() + camera.axes().forward
+    };
+    Ok(BuiltScene {
+        key: (name.to_string(), illuminant.map(String::from)),
+        scene,
+        defaults,
+        camera,
+        centre,
+    })
+}
+
+/// Runs the driver until `shared.stopping`.
+pub fn run(shared: &Shared) {
+    let mut built: Option<BuiltScene> = None;
+    loop {
+        let (settings, generation) = {
+            let mut job = shared.job();
+            loop {
+                if shared.stopping.load(Ordering::SeqCst) {
+                    return;
+                }
+                let idle = shared.viewers.load(Ordering::SeqCst) == 0
+                    || job.finished == Some(job.generation);
+                if !idle {
+                    break;
+                }
+                job = shared
+                    .wake
+                    .wait(job)
+                    .unwrap_or_else(PoisonError::into_inner);
+            }
+            (job.settings.clone(), job.generation)
+        };
+        match render_generation(shared, &mut built, &settings, generation) {
+            Ok(completed) => {
+                if completed {
+                    let mut job = shared.job();
+                    if job.generation == generation {
+                        job.finished = Some(generation);
+                    }
+                }
+            }
+            Err(error) => {
+                shared.updates.send_replace(Update::Error {
+                    generation,
+                    message: error.to_string(),
+                });
+                let mut job = shared.job();
+                if job.generation == generation {
+                    job.finished = Some(generation);
+                }
+            }
+        }
+    }
+}
+
+/// Renders one generation; `Ok(true)` when it took all its passes.
+fn render_generation(
+    shared: &Shared,
+    built: &mut Option<BuiltScene>,
+    settings: &ViewSettings,
+    generation: u64,
+) -> Result<bool, CliError> {
+    let key = (settings.scene.clone(), settings.illuminant.clone());
+    if built.as_ref().is_none_or(|b| b.key != key) {
+        *built = None;
+        *built = Some(build_scene(
+            &settings.scene,
+            settings.illuminant.as_deref(),
+            &shared.options.mitsuba,
+        )?);
+    }
+    let Some(built) = built.as_mut() else {
+        return Err(CliError::input("the scene could not be built"));
+    };
+    let camera = match &settings.camera {
+        Some(spec) => spec.camera()?,
+        None => built.camera,
+    };
+    built.scene.set_camera(camera);
+    let args = settings.parse_render_args()?;
+    let mut render_settings = render_cmd::settings_from(&args, &built.defaults)?;
+    // The whole film (a scene's crop window is for files), the driver's
+    // threads, no time limit: the page stops it.
+    render_settings.window = None;
+    render_settings.threads = shared.options.threads;
+    if matches!(settings.transport, TransportSpec::Cv { .. }) {
+        render_settings.film = simd_tracer::film::FilmMode::Sample;
+    }
+    let axes = camera.axes();
+    let view = CameraView {
+        position: axes.position.into(),
+        forward: axes.forward.into(),
+        up: axes.up.into(),
+        fov_deg: camera.fov_deg(),
+        world_up: built.camera.axes().up.into(),
+        pivot_distance: (built.centre - axes.position).length().max(f32::EPSILON),
+    };
+    let task = ViewTask {
+        shared,
+        scene: &built.scene,
+        settings: &render_settings,
+        view: settings,
+        camera: view,
+        generation,
+    };
+    render_cmd::with_transport(&settings.transport, built.scene.range(), task)
+}
+
+/// The render of one generation with the transport's concrete type.
+struct ViewTask<'a> {
+    shared: &'a Shared,
+    scene: &'a Scene,
+    settings: &'a simd_tracer::render::RenderSettings,
+    view: &'a ViewSettings,
+    camera: CameraView,
+    generation: u64,
+}
+
+impl TransportTask for ViewTask<'_> {
+    type Output = bool;
+
+    fn run<T: Transport>(self, transport: &T) -> Result<bool, CliError> {
+        let shared = self.shared;
+        let range = self.scene.range();
+        let mut published_last = false;
+        let mut last_frame: Option<(Instant, Duration)> = None;
+        let mut after_batch = |progress: &Progress, resolve: ResolvePartial| {
+            if shared.should_stop(self.generation) {
+                return false;
+            }
+            let last_pass = progress.passes_done == progress.passes_total;
+            if let Some((at, resolve_took)) = last_frame {
+                let interval = VIEW_FRAME_INTERVAL.max(resolve_took * RESOLVE_SHARE_INVERSE);
+                if !last_pass && at.elapsed() < interval {
+                    return true;
+                }
+            }
+            published_last = last_pass;
+            let resolving = Instant::now();
+            let image = resolve();
+            last_frame = Some((resolving, resolving.elapsed()));
+            // Exposure and tone as of now (they change without a restart).
+            let display = shared.job().settings.clone();
+            let frame = Frame {
+                generation: self.generation,
+                passes: progress.passes_done,
+                passes_total: progress.passes_total,
+                elapsed: progress.elapsed,
+                image: Arc::new(image),
+                range,
+                settings: ViewSettings {
+                    exposure_stops: display.exposure_stops,
+                    tone: display.tone,
+                    ..self.view.clone()
+                },
+                camera: self.camera,
+                encoded: OnceLock::new(),
+            };
+            shared.updates.send_replace(Update::Frame(Arc::new(frame)));
+            true
+        };
+        let observer = Observer {
+            batch_target: VIEW_BATCH_TARGET,
+            after_batch: &mut after_batch,
+        };
+        simd_tracer::render::render_observed(
+            transport,
+            self.scene,
+            self.settings,
+            &PassJob::default(),
+            observer,
+        )
+        .map_err(|e| CliError::input(e.to_string()))?;
+        // Finished only if the page saw the last pass (not stopped just
+        // before publishing it).
+        Ok(published_last)
+    }
+}
