@@ -33,7 +33,7 @@ use spectral_core::delta_e::delta_e2000;
 use spectral_core::registry::Builtin;
 use spectral_core::sampling::cmf_at;
 use spectral_core::table::FourierTable;
-use spectral_core::{FourierSpectrum, SpectralRange, Spectrum};
+use spectral_core::{FourierBasis, FourierSpectrum, SpectralRange, Spectrum};
 use std::io::BufWriter;
 use std::path::Path;
 
@@ -95,7 +95,7 @@ fn series_at(coeffs: &[f32; MAX_COEFFS], n: usize, range: &SpectralRange, l: f64
         FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
             if j < n { f64::from(coeffs[j]) } else { 0.0 }
         }));
-    s.eval(range, l)
+    s.eval(&FourierBasis::new(*range), l)
 }
 
 /// Colours of the rows of a table under D65 (Y = 100 for R = 1).

@@ -11,7 +11,7 @@ use spectral_core::damping::Damping;
 use spectral_core::delta_e::delta_e2000;
 use spectral_core::registry::Builtin;
 use spectral_core::xyz::{XyzConverter, XyzRoute, reference_xyz, xyz_of};
-use spectral_core::{FourierSpectrum, SpectralRange, Spectrum, cmf};
+use spectral_core::{FourierBasis, FourierSpectrum, SpectralRange, Spectrum, cmf};
 use std::io::Write;
 
 /// Arguments of `fspec spectrum`.
@@ -91,10 +91,11 @@ fn errors<const N: usize>(
     range: &SpectralRange,
 ) -> (f64, f64, f64) {
     let steps = (range.width_nm() / cmf::STEP_NM).floor() as usize;
+    let basis = FourierBasis::new(*range);
     let (mut max, mut sum_sq, mut min) = (0.0f64, 0.0, f64::INFINITY);
     for i in 0..=steps {
         let lambda_nm = range.min_nm() + i as f64 * cmf::STEP_NM;
-        let value = series.eval(range, lambda_nm);
+        let value = series.eval(&basis, lambda_nm);
         let error = value - spectrum.value(lambda_nm);
         max = max.max(error.abs());
         sum_sq += error * error;
@@ -108,7 +109,7 @@ fn analyse<const N: usize>(
     reference: Xyz,
     range: SpectralRange,
 ) -> Result<(SpectrumReport, Extras), CliError> {
-    let converter = XyzConverter::<N>::new(range)
+    let converter = XyzConverter::<N>::new(&FourierBasis::new(range))
         .map_err(|_| CliError::input("the range must lie inside 360–830 nm with min < max"))?;
     let coefficients = spectrum.project::<N>(&range);
     let route = |r| converter.convert(r, &coefficients).to_array();

@@ -6,13 +6,13 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use spectral_core::SpectralRange;
+use spectral_core::FourierBasis;
 use spectral_core::xyz::XyzConverter;
 use std::sync::OnceLock;
 
 static CONVERTER: OnceLock<Option<XyzConverter<12>>> = OnceLock::new();
 
 fuzz_target!(|data: &[u8]| {
-    let converter = CONVERTER.get_or_init(|| XyzConverter::new(SpectralRange::VISIBLE).ok());
+    let converter = CONVERTER.get_or_init(|| XyzConverter::new(&FourierBasis::VISIBLE).ok());
     spectral_core::fuzzing::product_and_xyz_with(converter.as_ref(), data);
 });

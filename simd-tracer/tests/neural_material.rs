@@ -21,7 +21,7 @@ use spectral_core::complex::Complex;
 use spectral_core::optics::{Layer, multilayer};
 use spectral_core::table::{FilmQuantity, FilmSide};
 use spectral_core::xyz::XyzRoute;
-use spectral_core::{FourierSpectrum, SpectralRange};
+use spectral_core::{FourierBasis, FourierSpectrum, SpectralRange};
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
@@ -59,7 +59,7 @@ fn series<const N: usize>(a: &AngularSpectrum, range: &SpectralRange, cos: f32, 
     let c = a.fourier(cos, 0.0);
     let s: FourierSpectrum<f64, N> =
         FourierSpectrum::from_coeffs(core::array::from_fn(|j| f64::from(c[j])));
-    s.eval(range, l)
+    s.eval(&FourierBasis::new(*range), l)
 }
 
 #[test]

@@ -275,7 +275,11 @@ fn check_fourier_furnace<const N: usize>(
     let rho = albedo.project::<N>(&range).to_lanes::<f32>();
     let le = emission.project::<N>(&range).to_lanes::<f32>();
     let deterministic = le + rho.product(&le) + rho.product(&rho).product(&le);
-    let expected = transport.converter().zeroth(&deterministic).map(f64::from);
+    let expected = transport
+        .converter()
+        .zeroth(&deterministic)
+        .map(f64::from)
+        .to_array();
     let result = run(&transport, scene, &settings(16, 16, 3))?;
     for (channel, &expected_value) in expected.iter().enumerate() {
         let (mean, error) = mean_and_error(&result.xyz, channel);

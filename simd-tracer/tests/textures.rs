@@ -28,6 +28,7 @@ use simd_tracer::shading::material::{Albedo, Bsdf, Material};
 use simd_tracer::spectra::texture::{Texture, TextureSampling, UvTransform};
 use simd_tracer::spectra::{SceneSpectrum, SpectrumSource};
 use simd_tracer::transport::{FourierTransport, SampledTransport, Transport};
+use spectral_core::FourierBasis;
 use spectral_core::SpectralRange;
 use spectral_core::registry::Builtin;
 use spectral_core::sampling::{WavelengthStrategy, cmf_at};
@@ -161,7 +162,7 @@ fn exact_xyz(s: &SceneSpectrum) -> [f64; 3] {
 fn series_xyz(s: &SceneSpectrum) -> [f64; 3] {
     let series = s.fourier_f64::<N>();
     let range = *s.range();
-    xyz_of(|l| series.eval(&range, l))
+    xyz_of(|l| series.eval(&FourierBasis::new(range), l))
 }
 
 /// Whether pixel `(column, row)` shows `color0` (module docs: its centre's

@@ -5,6 +5,7 @@
 //! paint; each product is converted to XYZ by the four routes, and eight
 //! dimmed copies of the LED are multiplied 8 lanes at once.
 
+use spectral_core::FourierBasis;
 use spectral_core::lane::Lane;
 use spectral_core::xyz::{XyzConverter, XyzKernel, XyzRoute};
 use spectral_core::{Blackbody, FourierSpectrum, SpectralRange, Spectrum, TabulatedSpectrum};
@@ -34,7 +35,7 @@ fn main() -> Result<(), spectral_core::SpectralError> {
     let led = TabulatedSpectrum::new(&LED_NM, &LED_VALUES)?.project::<N>(&range);
     let red = TabulatedSpectrum::new(&RED_NM, &RED_VALUES)?.project::<N>(&range);
     let tungsten = Blackbody::new(TUNGSTEN_K)?.project::<N>(&range);
-    let converter = XyzConverter::<N>::new(range)?;
+    let converter = XyzConverter::<N>::new(&FourierBasis::new(range))?;
     let led_red = led.product(&red);
     for (name, route) in [
         ("series", XyzRoute::Series),
@@ -59,8 +60,8 @@ fn main() -> Result<(), spectral_core::SpectralError> {
     let dimmed =
         FourierSpectrum::<f32x8, N>::from_lanes(|lane| led.scale((lane + 1) as f64 / LANES as f64));
     let paint = red.to_lanes::<f32x8>();
-    let kernel = XyzKernel::<N>::new(&range)?;
-    let [_, luminance, _] = kernel.apply(&dimmed.product(&paint));
+    let kernel = XyzKernel::<N>::new(&FourierBasis::new(range))?;
+    let luminance = kernel.apply(&dimmed.product(&paint)).y;
     let values: Vec<String> = (0..LANES)
         .map(|lane| format!("{:.9e}", luminance.lane(lane)))
         .collect();

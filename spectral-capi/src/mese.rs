@@ -10,7 +10,7 @@ use crate::{
     to_array,
 };
 use spectral_core::mese::{BoundedMese, Mese};
-use spectral_core::{FourierSpectrum, SpectralRange};
+use spectral_core::{FourierBasis, FourierSpectrum, SpectralRange};
 
 /// The unbounded MESE density of `n` coefficients over `range` at `count`
 /// wavelengths: `values_out[i]` at `lambda_nm[i]` (each inside the range).
@@ -116,10 +116,11 @@ unsafe fn eval_into<const N: usize>(
     } else {
         (Some(Mese::new(&spectrum)?), None)
     };
+    let basis = FourierBasis::new(*range);
     for (i, &lambda_nm) in wavelengths.iter().enumerate() {
         let value = match (&unbounded, &bounded) {
-            (Some(mese), _) => mese.eval(range, lambda_nm),
-            (None, Some(mese)) => mese.eval(range, lambda_nm),
+            (Some(mese), _) => mese.eval(&basis, lambda_nm),
+            (None, Some(mese)) => mese.eval(&basis, lambda_nm),
             (None, None) => 0.0,
         };
         // SAFETY: `i < wavelengths.len()`, and the caller guarantees that

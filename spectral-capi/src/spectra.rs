@@ -10,7 +10,9 @@ use crate::{
 use spectral_core::cmf;
 use spectral_core::lane::Lane;
 use spectral_core::upsample::{RgbIlluminant, RgbUnbounded, srgb_reflectance};
-use spectral_core::{Blackbody, FourierSpectrum, SpectralRange, Spectrum, TabulatedSpectrum};
+use spectral_core::{
+    Blackbody, FourierBasis, FourierSpectrum, SpectralRange, Spectrum, TabulatedSpectrum,
+};
 use wide::f32x8;
 
 /// Which spectrum an sRGB triple becomes (`fspec_upsample_srgb`), after
@@ -377,7 +379,8 @@ fn eval_at<const N: usize, L: Lane>(
     range: &SpectralRange,
     lambda_nm: f64,
 ) -> Result<L, FspecStatus> {
-    Ok(FourierSpectrum::<L, N>::from_coeffs(to_array(coeffs)?).eval(range, lambda_nm))
+    let basis = FourierBasis::new(*range);
+    Ok(FourierSpectrum::<L, N>::from_coeffs(to_array(coeffs)?).eval(&basis, lambda_nm))
 }
 
 /// `InvalidWavelength` for a non-finite wavelength, `OutOfRange` outside

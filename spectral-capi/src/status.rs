@@ -67,7 +67,11 @@ impl From<SpectralError> for FspecStatus {
             SpectralError::InvalidRange => Self::InvalidRange,
             SpectralError::InvalidTemperature
             | SpectralError::InvalidParameter(_)
-            | SpectralError::UnknownName => Self::InvalidParameter,
+            | SpectralError::UnknownName
+            | SpectralError::Csv(_) => Self::InvalidParameter,
+            // `SpectralError` is `#[non_exhaustive]`: a kind of bad input
+            // added later is at least a bad parameter.
+            _ => Self::InvalidParameter,
         }
     }
 }

@@ -12,6 +12,7 @@ use crate::{
     coeff_count, dispatch, fill, prefix, to_array,
 };
 use core::ffi::c_void;
+use spectral_core::FourierBasis;
 use spectral_core::FourierSpectrum;
 use spectral_core::xyz::{XyzConverter, XyzKernel, XyzRoute};
 use spectral_core::{SpectralRange, lane::Lane};
@@ -113,7 +114,7 @@ unsafe fn store_converter<const N: usize>(
     if bytes < boundary::tagged_size::<XyzConverter<N>>() {
         return Err(FspecStatus::BufferTooSmall);
     }
-    let converter = XyzConverter::<N>::new(range)?;
+    let converter = XyzConverter::<N>::new(&FourierBasis::new(range))?;
     // SAFETY: the caller guarantees `bytes` writable bytes.
     unsafe { boundary::store(buffer, bytes, Kind::XyzConverter, N, converter) }
 }
@@ -211,7 +212,7 @@ fn convert_once<const N: usize>(
     route: XyzRoute,
     coeffs: &[f64],
 ) -> Result<[f64; 3], FspecStatus> {
-    let converter = XyzConverter::<N>::new(range)?;
+    let converter = XyzConverter::<N>::new(&FourierBasis::new(range))?;
     let spectrum = FourierSpectrum::<f64, N>::from_coeffs(to_array(coeffs)?);
     Ok(converter.convert(route, &spectrum).to_array())
 }
@@ -266,7 +267,7 @@ fn kernel_rows<const N: usize>(
     range: &SpectralRange,
     rows: &mut [[f64; MAX_COEFFS]; 3],
 ) -> Result<(), FspecStatus> {
-    let kernel = XyzKernel::<N>::new(range)?;
+    let kernel = XyzKernel::<N>::new(&FourierBasis::new(*range))?;
     for (row, core_row) in rows.iter_mut().zip(&kernel.rows) {
         fill(prefix(row, N)?, core_row)?;
     }
@@ -352,7 +353,7 @@ fn apply_kernel<const N: usize, L: Lane>(
     coeffs: &[L],
 ) -> Result<[L; 3], FspecStatus> {
     let spectrum = FourierSpectrum::<L, N>::from_coeffs(to_array(coeffs)?);
-    Ok(core_kernel::<N>(kernel)?.apply(&spectrum))
+    Ok(core_kernel::<N>(kernel)?.apply(&spectrum).to_array())
 }
 
 /// XYZ of eight spectra at once (`XyzKernel::apply` on
@@ -401,7 +402,7 @@ fn apply_kernel_x8<const N: usize>(
 ) -> Result<[f32; XYZ_LANE_FLOATS], FspecStatus> {
     let xyz = core_kernel::<N>(kernel)?.apply(&load_x8::<N>(lanes)?);
     let mut out = [0.0f32; XYZ_LANE_FLOATS];
-    for (chunk, channel) in out.chunks_exact_mut(LANES).zip(xyz) {
+    for (chunk, channel) in out.chunks_exact_mut(LANES).zip(xyz.to_array()) {
         fill(chunk, &channel.to_array())?;
     }
     Ok(out)

@@ -13,6 +13,7 @@
 //!   against a lookup in the N = 10 Fourier table it replaces.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use spectral_core::FourierBasis;
 use spectral_core::data::tables::METALS;
 use spectral_core::mese::{BoundedMese, Mese};
 use spectral_core::neural::SineMlp;
@@ -82,7 +83,7 @@ fn products(c: &mut Criterion) {
 }
 
 fn xyz_routes(c: &mut Criterion) {
-    let Ok(converter) = XyzConverter::<12>::new(SpectralRange::VISIBLE) else {
+    let Ok(converter) = XyzConverter::<12>::new(&FourierBasis::VISIBLE) else {
         return;
     };
     let Some(d65) = Builtin::Illuminant(0).tabulated() else {

@@ -33,33 +33,47 @@ fn mat3(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
     core::array::from_fn(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2])
 }
 
-/// CIE 1931 XYZ tristimulus values.
+/// CIE 1931 XYZ tristimulus values, `f64` by default.
+///
+/// `T` is the number type: `Xyz` (`f64`) for one colour, and the
+/// [`Lane`](crate::Lane) type of the spectra for the lane-wise conversions
+/// ([`XyzKernel::apply`](crate::xyz::XyzKernel::apply) and the
+/// [`XyzConverter`](crate::xyz::XyzConverter) routes), e.g. `Xyz<f32x8>`
+/// for eight ray lanes. Colour science (chromaticity, CIELAB, sRGB) is
+/// defined on `Xyz<f64>`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Xyz {
+pub struct Xyz<T = f64> {
     /// X.
-    pub x: f64,
+    pub x: T,
     /// Y (luminance).
-    pub y: f64,
+    pub y: T,
     /// Z.
-    pub z: f64,
+    pub z: T,
 }
 
-impl Xyz {
+impl<T: Copy> Xyz<T> {
     /// From components.
-    pub const fn new(x: f64, y: f64, z: f64) -> Self {
+    pub const fn new(x: T, y: T, z: T) -> Self {
         Self { x, y, z }
     }
 
     /// From an array `[X, Y, Z]`.
-    pub const fn from_array(v: [f64; 3]) -> Self {
+    pub const fn from_array(v: [T; 3]) -> Self {
         Self::new(v[0], v[1], v[2])
     }
 
     /// As an array `[X, Y, Z]`.
-    pub const fn to_array(self) -> [f64; 3] {
+    pub const fn to_array(self) -> [T; 3] {
         [self.x, self.y, self.z]
     }
 
+    /// `f` applied to each component (e.g. one lane of an `Xyz<f32x8>`).
+    pub fn map<U: Copy>(self, f: impl Fn(T) -> U) -> Xyz<U> {
+        Xyz::new(f(self.x), f(self.y), f(self.z))
+    }
+}
+
+impl Xyz {
     /// From chromaticity `(x, y)` and luminance `Y`.
     pub fn from_chromaticity(x: f64, y: f64, luminance: f64) -> Self {
         Self::new(x * luminance / y, luminance, (1.0 - x - y) * luminance / y)

@@ -5,8 +5,23 @@
 //! header); every data row has exactly `COLS` cells, separated by commas
 //! (or, in a line without commas, by semicolons, tabs or spaces); every cell
 //! is a finite decimal number. A UTF-8 byte-order mark is ignored. Errors
-//! carry the 1-based line number.
+//! are [`SpectralError::Csv`], carrying the 1-based line number.
+//!
+//! ```
+//! use spectral_core::SpectralError;
+//! use spectral_core::csv::{CsvError, CsvErrorKind, rows};
+//!
+//! let text = "# lamp, measured 2024\nwavelength_nm,value\n400,0.5\n500,0.75\n";
+//! let parsed: Result<Vec<_>, _> = rows::<2>(text).collect();
+//! assert_eq!(parsed?, [(3, [400.0, 0.5]), (4, [500.0, 0.75])]);
+//!
+//! let bad = rows::<2>("400,0.5\n500,abc\n").nth(1);
+//! let expected = CsvError { line: 2, kind: CsvErrorKind::NotANumber { column: 2 } };
+//! assert_eq!(bad, Some(Err(SpectralError::Csv(expected))));
+//! # Ok::<(), SpectralError>(())
+//! ```
 
+use crate::SpectralError;
 use core::fmt;
 
 /// What was wrong with a line.
@@ -31,7 +46,7 @@ pub enum CsvErrorKind {
     },
 }
 
-/// A parse error at a line.
+/// A parse error at a line, reported as [`SpectralError::Csv`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CsvError {
     /// 1-based line number.
@@ -55,7 +70,8 @@ impl fmt::Display for CsvError {
 
 impl core::error::Error for CsvError {}
 
-/// Iterator over the data rows of CSV text, each `(line, [f64; COLS])`.
+/// Iterator over the data rows of CSV text, each `(line, [f64; COLS])` or
+/// the first bad line's [`SpectralError::Csv`].
 #[derive(Debug, Clone)]
 pub struct CsvRows<'a, const COLS: usize> {
     lines: core::str::Lines<'a>,
@@ -112,7 +128,7 @@ fn parse_row<const COLS: usize>(line: &str) -> Result<[f64; COLS], CsvErrorKind>
 }
 
 impl<const COLS: usize> Iterator for CsvRows<'_, COLS> {
-    type Item = Result<(usize, [f64; COLS]), CsvError>;
+    type Item = Result<(usize, [f64; COLS]), SpectralError>;
 
     fn next(&mut self) -> Option<Self::Item> {
         loop {
@@ -128,10 +144,10 @@ impl<const COLS: usize> Iterator for CsvRows<'_, COLS> {
                 Ok(values) => return Some(Ok((self.line, values))),
                 Err(CsvErrorKind::NotANumber { column: 1 }) if first_content => continue,
                 Err(kind) => {
-                    return Some(Err(CsvError {
+                    return Some(Err(SpectralError::Csv(CsvError {
                         line: self.line,
                         kind,
-                    }));
+                    })));
                 }
             }
         }
@@ -144,7 +160,14 @@ mod tests {
     use std::vec::Vec;
 
     fn parse(text: &str) -> Result<Vec<(usize, [f64; 2])>, CsvError> {
-        rows::<2>(text).collect()
+        rows::<2>(text)
+            .map(|row| {
+                row.map_err(|e| match e {
+                    SpectralError::Csv(csv) => csv,
+                    other => panic!("not a CSV error: {other}"),
+                })
+            })
+            .collect()
     }
 
     #[test]

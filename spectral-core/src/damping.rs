@@ -1,6 +1,6 @@
 //! σ-factor damping of a truncated cosine series against ringing.
 //!
-//! A truncated series of a non-negative spectrum can go negative (MATH.md §1:
+//! A truncated series of a non-negative spectrum can go negative ([math](crate::math) §1:
 //! a Cornell-box white dips to −0.12 at `m = 11`). Multiplying coefficient `j`
 //! by a σ-factor trades sharpness for smoothness:
 //!

@@ -1,9 +1,27 @@
 //! The error type of every input-driven entry point of the crate.
 
+use crate::csv::CsvError;
 use core::fmt;
 
 /// What was wrong with the input. Indices refer to the offending sample.
+///
+/// Every fallible function of the crate returns it, so one `?` serves them
+/// all. The enum is `#[non_exhaustive]`: a later version may report a new
+/// kind of bad input without a breaking change, so a `match` needs a `_`
+/// arm.
+///
+/// ```
+/// use spectral_core::{SpectralError, TabulatedSpectrum};
+///
+/// let unsorted = TabulatedSpectrum::new(&[500.0, 400.0], &[1.0, 1.0]);
+/// assert_eq!(unsorted, Err(SpectralError::NotIncreasing { index: 1 }));
+/// assert_eq!(
+///     unsorted.unwrap_err().to_string(),
+///     "wavelength of sample 2 is not larger than the previous one (unsorted or duplicate)"
+/// );
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum SpectralError {
     /// A tabulated spectrum has no samples.
     Empty,
@@ -42,6 +60,8 @@ pub enum SpectralError {
     InvalidParameter(&'static str),
     /// A name that the built-in registry does not know.
     UnknownName,
+    /// A line of CSV text that is not a row of numbers ([`crate::csv`]).
+    Csv(CsvError),
 }
 
 impl fmt::Display for SpectralError {
@@ -75,8 +95,15 @@ impl fmt::Display for SpectralError {
             }
             Self::InvalidParameter(name) => write!(f, "invalid parameter `{name}`"),
             Self::UnknownName => write!(f, "unknown built-in spectrum name"),
+            Self::Csv(error) => write!(f, "{error}"),
         }
     }
 }
 
 impl core::error::Error for SpectralError {}
+
+impl From<CsvError> for SpectralError {
+    fn from(error: CsvError) -> Self {
+        Self::Csv(error)
+    }
+}

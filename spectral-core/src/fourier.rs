@@ -1,6 +1,6 @@
 //! `FourierSpectrum<L, N>`: a spectrum as `N` cosine coefficients.
 //!
-//! Formulas (MATH.md §1; paper §2):
+//! Formulas ([math](crate::math) §1; paper §2):
 //!
 //! * coefficients `c_j = (1/π) ∫_{−π}^{0} g(φ) cos(jφ) dφ`, `j = 0..m`,
 //!   `m = N − 1`; `c_0` is the mean over the range;
@@ -21,9 +21,10 @@
 //! `c_j = −(1/π) Σ_seg (Δg/j) sin(j φ_mid) · sinc(j h)`, `h` the half-width of
 //! the segment in phase and `sinc(x) = sin x / x`. This form has no
 //! cancellation for short segments. `c_0` is the trapezoid sum, exact for
-//! linear segments. Data are held flat beyond their ends (MATH.md §1: zero
+//! linear segments. Data are held flat beyond their ends ([math](crate::math) §1: zero
 //! padding would add a step and ringing).
 
+use crate::basis::FourierBasis;
 use crate::damping::Damping;
 use crate::lane::Lane;
 use crate::range::SpectralRange;
@@ -103,13 +104,42 @@ impl<L: Lane, const N: usize> FourierSpectrum<L, N> {
         (tail + tail) + self.coeffs[0]
     }
 
-    /// The truncated series at one wavelength (the same in every lane).
+    /// The truncated series at one wavelength of `basis`'s range (the same
+    /// wavelength in every lane).
+    ///
+    /// ```
+    /// use spectral_core::{FourierBasis, FourierSpectrum};
+    ///
+    /// // c_0 + 2 c_1 cos φ: at 360 nm φ = −π, at 830 nm φ = 0.
+    /// let s = FourierSpectrum::<f64, 2>::from_coeffs([0.5, 0.25]);
+    /// let basis = FourierBasis::VISIBLE;
+    /// assert_eq!(s.eval(&basis, 360.0), 0.0);
+    /// assert_eq!(s.eval(&basis, 830.0), 1.0);
+    /// ```
     #[inline]
-    pub fn eval(&self, range: &SpectralRange, lambda_nm: f64) -> L {
-        self.eval_cos(L::splat(range.cos_phase(lambda_nm)))
+    pub fn eval(&self, basis: &FourierBasis<N>, lambda_nm: f64) -> L {
+        self.eval_cos(L::splat(basis.cos_phase(lambda_nm)))
     }
 
-    /// The truncated product `h = self ⊛ other` (module docs), lane-wise.
+    /// The truncated product `h = self ⊛ other` (module docs), lane-wise;
+    /// also `self * other`.
+    ///
+    /// ```
+    /// use spectral_core::{FourierBasis, TabulatedSpectrum};
+    ///
+    /// // A lamp and a reflectance, both linear ramps over the range.
+    /// let basis = FourierBasis::<8>::VISIBLE;
+    /// let lamp = basis.project(&TabulatedSpectrum::new(&[360.0, 830.0], &[1.0, 2.0])?);
+    /// let paint = basis.project(&TabulatedSpectrum::new(&[360.0, 830.0], &[0.8, 0.2])?);
+    /// let reflected = lamp.product(&paint);
+    /// assert_eq!(reflected, lamp * paint);
+    /// // Its mean is the mean of the product of the truncated series
+    /// // (Parseval, `product_mean`), close to the exact mean
+    /// // ∫ (1 + t)(0.8 − 0.6 t) dt over t ∈ [0, 1] = 0.7.
+    /// assert!((reflected.mean() - lamp.product_mean(&paint)).abs() < 1e-15);
+    /// assert!((reflected.mean() - 0.7).abs() < 1e-4);
+    /// # Ok::<(), spectral_core::SpectralError>(())
+    /// ```
     ///
     /// For `N` = 4, 8, 12, 16 the product runs as fully unrolled straight-line
     /// code (the private `unrolled` module), with the accumulators in registers; other `N` use
@@ -462,7 +492,7 @@ mod tests {
                     * (1..5)
                         .map(|j| c.coeffs[j] * libm::cos(j as f64 * phi))
                         .sum::<f64>();
-            assert!((c.eval(&r, lambda_nm) - direct).abs() < 1e-13);
+            assert!((c.eval(&FourierBasis::new(r), lambda_nm) - direct).abs() < 1e-13);
         }
     }
 

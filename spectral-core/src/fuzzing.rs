@@ -1,6 +1,7 @@
 //! Bodies of the cargo-fuzz targets that exercise this crate (`fuzz/`),
-//! public so that ordinary tests replay the committed corpora on stable
-//! Rust. Each takes arbitrary bytes and panics only if an invariant of the
+//! public (behind the feature `fuzzing`, which `fuzz/` and this crate's
+//! tests enable; not part of the stable API) so that ordinary tests replay
+//! the committed corpora on stable Rust. Each takes arbitrary bytes and panics only if an invariant of the
 //! crate is broken (that panic is the fuzzer's finding).
 //!
 //! * [`mese`]: MESE and bounded MESE from arbitrary finite coefficients —
@@ -11,10 +12,10 @@
 //! * [`sine_mlp`]: the network loader on arbitrary bytes — `Err`, or a
 //!   network that evaluates to finite coefficients.
 
+use crate::basis::FourierBasis;
 use crate::fourier::FourierSpectrum;
 use crate::mese::{BoundedMese, Mese};
 use crate::neural::SineMlp;
-use crate::range::SpectralRange;
 use crate::xyz::{XyzConverter, XyzRoute};
 
 /// Up to `N` finite `f64` from the bytes (8 bytes each; non-finite values
@@ -51,7 +52,7 @@ pub fn mese(bytes: &[u8]) {
 
 /// Products and XYZ routes on arbitrary finite coefficients of moderate size.
 pub fn product_and_xyz(bytes: &[u8]) {
-    let converter = XyzConverter::<12>::new(SpectralRange::VISIBLE).ok();
+    let converter = XyzConverter::new(&FourierBasis::<12>::VISIBLE).ok();
     product_and_xyz_with(converter.as_ref(), bytes);
 }
 

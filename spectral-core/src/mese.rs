@@ -1,4 +1,4 @@
-//! Maximum entropy spectral estimates from trigonometric moments (MATH.md §3).
+//! Maximum entropy spectral estimates from trigonometric moments ([math](crate::math) §3).
 //!
 //! Source: C. Peters, S. Merzbach, J. Hanika, C. Dachsbacher, "Using Moments
 //! to Represent Bounded Signals for Spectral Rendering", ACM TOG 38(4), 2019
@@ -40,9 +40,9 @@
 //!   negative "spectrum".
 
 use crate::SpectralError;
+use crate::basis::FourierBasis;
 use crate::complex::Complex;
 use crate::fourier::FourierSpectrum;
-use crate::range::SpectralRange;
 use core::f64::consts::PI;
 
 /// Shrink factor of the first infeasible reflection coefficient.
@@ -115,6 +115,30 @@ fn check_finite<const N: usize>(c: &FourierSpectrum<f64, N>) -> Result<(), Spect
 }
 
 /// Unbounded MESE of an emission spectrum, prepared for evaluation.
+///
+/// ```
+/// use spectral_core::mese::{BoundedMese, Mese};
+/// use spectral_core::{FourierBasis, FourierSpectrum, SpectralRange};
+///
+/// // Peters et al.'s demo reflectance (math page, §3), 400–700 nm, m = 6.
+/// let basis = FourierBasis::<7>::new(SpectralRange::new(400.0, 700.0)?);
+/// let c = FourierSpectrum::from_coeffs([
+///     0.3025583, 0.0692588, -0.0784922, 0.0112943, 0.0402224, -0.0099166, -0.0049585,
+/// ]);
+/// let unbounded = Mese::new(&c)?;
+/// let bounded = BoundedMese::new(&c)?;
+/// // Their published values at 550 nm.
+/// assert!((unbounded.eval(&basis, 550.0) - 0.540779).abs() < 2e-6);
+/// assert!((bounded.eval(&basis, 550.0) - 0.540955).abs() < 2e-6);
+/// // Unlike the truncated series, both stay non-negative, and the
+/// // bounded one stays in [0, 1], for any finite coefficients.
+/// let wild = FourierSpectrum::from_coeffs([0.1, 0.3, -0.3, 0.3, -0.3, 0.3, -0.3]);
+/// for lambda_nm in [400.0, 480.0, 555.0, 640.0, 700.0] {
+///     assert!(Mese::new(&wild)?.eval(&basis, lambda_nm) >= 0.0);
+///     assert!((0.0..=1.0).contains(&BoundedMese::new(&wild)?.eval(&basis, lambda_nm)));
+/// }
+/// # Ok::<(), spectral_core::SpectralError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mese<const N: usize> {
     /// `c_0`; 0 for the zero spectrum.
@@ -211,9 +235,9 @@ impl<const N: usize> Mese<N> {
         }
     }
 
-    /// The reconstruction at `lambda_nm`.
-    pub fn eval(&self, range: &SpectralRange, lambda_nm: f64) -> f64 {
-        self.eval_cos(range.cos_phase(lambda_nm))
+    /// The reconstruction at `lambda_nm` in `basis`'s range.
+    pub fn eval(&self, basis: &FourierBasis<N>, lambda_nm: f64) -> f64 {
+        self.eval_cos(basis.cos_phase(lambda_nm))
     }
 }
 
@@ -318,17 +342,18 @@ impl<const N: usize> BoundedMese<N> {
         }
     }
 
-    /// The reconstruction at `lambda_nm`.
-    pub fn eval(&self, range: &SpectralRange, lambda_nm: f64) -> f64 {
-        self.eval_cos(range.cos_phase(lambda_nm))
+    /// The reconstruction at `lambda_nm` in `basis`'s range.
+    pub fn eval(&self, basis: &FourierBasis<N>, lambda_nm: f64) -> f64 {
+        self.eval_cos(basis.cos_phase(lambda_nm))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::range::SpectralRange;
 
-    /// MATH.md §3: Peters' demo reflectance, 400–700 nm, m = 6.
+    /// [math](crate::math) §3: Peters' demo reflectance, 400–700 nm, m = 6.
     const C: [f64; 7] = [
         0.3025583, 0.0692588, -0.0784922, 0.0112943, 0.0402224, -0.0099166, -0.0049585,
     ];
@@ -344,7 +369,7 @@ mod tests {
 
     #[test]
     fn peters_test_vector() {
-        let range = SpectralRange::new(400.0, 700.0).unwrap();
+        let range = FourierBasis::new(SpectralRange::new(400.0, 700.0).unwrap());
         let c = FourierSpectrum::from_coeffs(C);
         let bounded = BoundedMese::new(&c).unwrap();
         let unbounded = Mese::new(&c).unwrap();

@@ -1,4 +1,4 @@
-//! Fresnel equations and thin-film interference (MATH.md §5).
+//! Fresnel equations and thin-film interference ([math](crate::math) §5).
 //!
 //! Conventions: complex refractive index `N = n + ik` (`k ≥ 0` absorbs);
 //! angles enter as `cos θ` of the incident ray in the incident medium; a
@@ -285,7 +285,7 @@ mod tests {
 
     #[test]
     fn gold_at_normal_incidence() {
-        // MATH.md §5: Au at 551 nm, n = 0.3455, k = 2.7306 → R = 0.8509.
+        // math page §5: Au at 551 nm, n = 0.3455, k = 2.7306 → R = 0.8509.
         let (n, k) = (0.3455, 2.7306);
         let r = fresnel_conductor(1.0, Complex::new(n, k));
         let closed_form = ((n - 1.0) * (n - 1.0) + k * k) / ((n + 1.0) * (n + 1.0) + k * k);

@@ -1,6 +1,6 @@
 //! The wavelength range a Fourier spectrum covers and its phase map.
 //!
-//! MATH.md §1: `φ(λ) = π (λ − λ0)/(λ1 − λ0) − π`, so `φ ∈ [−π, 0]`; the
+//! [math](crate::math) §1: `φ(λ) = π (λ − λ0)/(λ1 − λ0) − π`, so `φ ∈ [−π, 0]`; the
 //! spectrum is mirrored about `φ = 0` into an even signal on `[−π, π]`.
 //! The default range 360–830 nm is the range of the CIE 1931 table.
 

@@ -13,6 +13,18 @@
 //!
 //! Every name that [`Builtin::all`] lists parses back to itself through
 //! [`Builtin::lookup`] (tested).
+//!
+//! ```
+//! use spectral_core::registry::{Builtin, BuiltinData};
+//! use spectral_core::Spectrum;
+//!
+//! let d65 = Builtin::lookup("D65")?;
+//! assert_eq!(d65.to_string(), "d65");
+//! // CIE D65 is tabulated relative to 100 at 560 nm.
+//! assert_eq!(d65.value(560.0), 100.0);
+//! assert!(matches!(Builtin::lookup("blackbody-2700")?.resolve(), BuiltinData::Blackbody(_)));
+//! # Ok::<(), spectral_core::SpectralError>(())
+//! ```
 
 use crate::SpectralError;
 use crate::cmf;
@@ -100,9 +112,9 @@ impl Builtin {
             .chain(metals)
     }
 
-    /// The tabulated data, or the blackbody.
-    pub fn resolve(&self) -> Result<TabulatedSpectrum<'static>, Blackbody> {
-        Ok(match *self {
+    /// What the name stands for: embedded samples or a blackbody.
+    pub fn resolve(&self) -> BuiltinData {
+        BuiltinData::Tabulated(match *self {
             Self::EqualEnergy => TabulatedSpectrum::embedded(&EQUAL_ENERGY_NM, &EQUAL_ENERGY_VALUE),
             Self::Illuminant(i) => {
                 TabulatedSpectrum::embedded(ILLUMINANTS[i].lambda_nm, ILLUMINANTS[i].power)
@@ -113,13 +125,16 @@ impl Builtin {
             Self::Cmf(i) => cmf::cmfs()[i],
             Self::MetalN(i) => TabulatedSpectrum::embedded(METALS[i].lambda_nm, METALS[i].n),
             Self::MetalK(i) => TabulatedSpectrum::embedded(METALS[i].lambda_nm, METALS[i].k),
-            Self::Blackbody(b) => return Err(b),
+            Self::Blackbody(b) => return BuiltinData::Blackbody(b),
         })
     }
 
     /// The tabulated data, or `None` for a blackbody.
     pub fn tabulated(&self) -> Option<TabulatedSpectrum<'static>> {
-        self.resolve().ok()
+        match self.resolve() {
+            BuiltinData::Tabulated(tabulated) => Some(tabulated),
+            BuiltinData::Blackbody(_) => None,
+        }
     }
 
     /// A one-line description.
@@ -132,6 +147,31 @@ impl Builtin {
             Self::MetalN(_) => "metal refractive index, real part n",
             Self::MetalK(_) => "metal refractive index, imaginary part k",
             Self::Blackbody(_) => "blackbody (Planck), normalised to 1 at its peak",
+        }
+    }
+}
+
+/// The data behind a [`Builtin`] ([`Builtin::resolve`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BuiltinData {
+    /// Embedded samples (illuminants, patches, CMFs, metals, illuminant E).
+    Tabulated(TabulatedSpectrum<'static>),
+    /// A parametric blackbody.
+    Blackbody(Blackbody),
+}
+
+impl Spectrum for BuiltinData {
+    fn value(&self, lambda_nm: f64) -> f64 {
+        match self {
+            Self::Tabulated(tabulated) => tabulated.value(lambda_nm),
+            Self::Blackbody(blackbody) => blackbody.value(lambda_nm),
+        }
+    }
+
+    fn project<const N: usize>(&self, range: &SpectralRange) -> FourierSpectrum<f64, N> {
+        match self {
+            Self::Tabulated(tabulated) => tabulated.project(range),
+            Self::Blackbody(blackbody) => blackbody.project(range),
         }
     }
 }
@@ -161,17 +201,11 @@ impl fmt::Display for Builtin {
 
 impl Spectrum for Builtin {
     fn value(&self, lambda_nm: f64) -> f64 {
-        match self.resolve() {
-            Ok(tabulated) => tabulated.value(lambda_nm),
-            Err(blackbody) => blackbody.value(lambda_nm),
-        }
+        self.resolve().value(lambda_nm)
     }
 
     fn project<const N: usize>(&self, range: &SpectralRange) -> FourierSpectrum<f64, N> {
-        match self.resolve() {
-            Ok(tabulated) => tabulated.project(range),
-            Err(blackbody) => blackbody.project(range),
-        }
+        self.resolve().project(range)
     }
 }
 

@@ -1,5 +1,5 @@
 //! Sampled wavelengths and sampled spectra (the classical spectral path
-//! tracer's representation, MATH.md §4), kept as separate types like
+//! tracer's representation, [math](crate::math) §4), kept as separate types like
 //! pbrt-v4's `SampledWavelengths` / `SampledSpectrum`.
 //!
 //! Strategies for `C` wavelengths per path (each takes `C` uniform numbers
@@ -20,18 +20,20 @@
 //!   `p = 0.0039398042/cosh²(…)`.
 //! * [`WavelengthStrategy::VisibleHero`]: hero rotation in CDF space,
 //!   `u_i = u_0 + i/C mod 1`, each `λ_i = λ(u_i)` with its own `p(λ_i)`.
-//!   (λ-space and CDF-space rotations need different pdfs; MATH.md §4 warns
+//!   (λ-space and CDF-space rotations need different pdfs; [math](crate::math) §4 warns
 //!   that mixing them biased a toy test by 2.7 %.)
 //!
 //! Film estimate: `XYZ ≈ (1/C) Σ_i L(λ_i) x̄(λ_i)/p(λ_i) / ∫ȳ`, skipping
 //! wavelengths whose pdf is 0 (terminated secondaries). The CMFs are linear
 //! between the 1 nm table samples, as everywhere in the crate.
 
+use crate::basis::FourierBasis;
 use crate::cmf::{self, Y_BAR_INTEGRAL};
 use crate::color::Xyz;
 use crate::fourier::FourierSpectrum;
 use crate::range::SpectralRange;
 use crate::spectrum::Spectrum;
+use core::ops::{Add, AddAssign, Mul, MulAssign};
 
 /// Slope of the visible importance density, 1/nm.
 const VISIBLE_SLOPE_PER_NM: f64 = 0.0072;
@@ -113,6 +115,29 @@ pub struct SampledWavelengths<const C: usize> {
 impl<const C: usize> SampledWavelengths<C> {
     /// Draws wavelengths over `range` by `strategy` from uniform numbers `u`
     /// (values outside [0, 1) are wrapped into it).
+    ///
+    /// ```
+    /// use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy};
+    /// use spectral_core::{ConstantSpectrum, SpectralRange};
+    ///
+    /// // Hero wavelengths: one uniform, the others a quarter range apart.
+    /// let range = SpectralRange::VISIBLE;
+    /// let w = SampledWavelengths::<4>::sample(WavelengthStrategy::Hero, &range, [0.1, 0.0, 0.0, 0.0]);
+    /// assert_eq!(w.lambda_nm(), &[407.0, 524.5, 642.0, 759.5]);
+    /// assert_eq!(w.pdf_per_nm(), &[1.0 / 470.0; 4]);
+    /// // The film estimate of a constant 0.5 averages to Y = 0.5 over paths
+    /// // (here hero wavelengths at 1000 evenly spread u).
+    /// let half = ConstantSpectrum::new(0.5)?;
+    /// let paths = 1000;
+    /// let mut sum = 0.0;
+    /// for i in 0..paths {
+    ///     let u = [(i as f32 + 0.5) / paths as f32, 0.0, 0.0, 0.0];
+    ///     let w = SampledWavelengths::<4>::sample(WavelengthStrategy::Hero, &range, u);
+    ///     sum += SampledSpectrum::from_spectrum(&half, &w).to_xyz(&w).y;
+    /// }
+    /// assert!((sum / f64::from(paths) - 0.5).abs() < 1e-3);
+    /// # Ok::<(), spectral_core::SpectralError>(())
+    /// ```
     pub fn sample(strategy: WavelengthStrategy, range: &SpectralRange, u: [f32; C]) -> Self {
         let width = range.width_nm();
         let uniform_pdf = (1.0 / width) as f32;
@@ -222,30 +247,16 @@ impl<const C: usize> SampledSpectrum<C> {
         }
     }
 
-    /// A truncated Fourier series at the wavelengths.
+    /// A truncated Fourier series of `basis` at the wavelengths.
     pub fn from_fourier<const N: usize>(
         spectrum: &FourierSpectrum<f32, N>,
-        range: &SpectralRange,
+        basis: &FourierBasis<N>,
         wavelengths: &SampledWavelengths<C>,
     ) -> Self {
         Self {
             values: wavelengths
                 .lambda_nm
-                .map(|l| spectrum.eval_cos(range.cos_phase(f64::from(l)) as f32)),
-        }
-    }
-
-    /// Element-wise product.
-    pub fn mul(&self, other: &Self) -> Self {
-        Self {
-            values: core::array::from_fn(|i| self.values[i] * other.values[i]),
-        }
-    }
-
-    /// Element-wise sum.
-    pub fn add(&self, other: &Self) -> Self {
-        Self {
-            values: core::array::from_fn(|i| self.values[i] + other.values[i]),
+                .map(|l| spectrum.eval_cos(basis.cos_phase(f64::from(l)) as f32)),
         }
     }
 
@@ -274,6 +285,43 @@ impl<const C: usize> SampledSpectrum<C> {
             }
         }
         Xyz::from_array(xyz.map(|v| v / (C as f64 * Y_BAR_INTEGRAL)))
+    }
+}
+
+/// `a * b`: the element-wise product (the spectral product at the sampled
+/// wavelengths), as `FourierSpectrum`'s `*` is the truncated product.
+impl<const C: usize> Mul for SampledSpectrum<C> {
+    type Output = Self;
+    #[inline]
+    fn mul(self, rhs: Self) -> Self {
+        Self {
+            values: core::array::from_fn(|i| self.values[i] * rhs.values[i]),
+        }
+    }
+}
+
+impl<const C: usize> MulAssign for SampledSpectrum<C> {
+    #[inline]
+    fn mul_assign(&mut self, rhs: Self) {
+        *self = *self * rhs;
+    }
+}
+
+/// `a + b`: the element-wise sum.
+impl<const C: usize> Add for SampledSpectrum<C> {
+    type Output = Self;
+    #[inline]
+    fn add(self, rhs: Self) -> Self {
+        Self {
+            values: core::array::from_fn(|i| self.values[i] + rhs.values[i]),
+        }
+    }
+}
+
+impl<const C: usize> AddAssign for SampledSpectrum<C> {
+    #[inline]
+    fn add_assign(&mut self, rhs: Self) {
+        *self = *self + rhs;
     }
 }
 
@@ -343,7 +391,7 @@ mod tests {
 
     #[test]
     fn visible_sampling_spot_values() {
-        // MATH.md §4: (u → λ, 1/p).
+        // math page §4: (u → λ, 1/p).
         let density = VisibleDensity::new(&SpectralRange::VISIBLE);
         for (u, lambda_nm, inv_pdf) in [
             (0.1, 424.343, 465.291),

@@ -6,7 +6,7 @@
 //! sampled and Fourier representations derived from it).
 //!
 //! * [`TabulatedSpectrum`]: linear interpolation between samples, held flat
-//!   beyond the first and last sample (MATH.md §1). Projection is exact.
+//!   beyond the first and last sample ([math](crate::math) §1). Projection is exact.
 //! * [`Blackbody`]: Planck's law
 //!   `B(λ, T) = 2hc² / λ⁵ / (exp(hc/(λ k_B T)) − 1)`, normalised to 1 at its
 //!   peak `λ_max = b/T` (Wien's displacement law), like pbrt-v4's
@@ -18,13 +18,42 @@ use crate::SpectralError;
 use crate::fourier::{FourierSpectrum, PolylineProjector};
 use crate::range::SpectralRange;
 
-/// A continuous spectrum.
+/// A continuous spectrum: a function of wavelength that can be evaluated
+/// anywhere and projected onto the cosine basis of a range.
+///
+/// Only [`value`](Self::value) is required. [`project`](Self::project)
+/// defaults to Gauss–Legendre quadrature of `value` ([`project_function`]),
+/// right for smooth spectra; a spectrum with kinks or a closed form
+/// (tabulated data, a constant) overrides it with its exact projection.
+///
+/// ```
+/// use spectral_core::{FourierBasis, Spectrum, SpectralRange};
+///
+/// /// A smooth test spectrum: 1 + cos(φ(λ)), i.e. c_0 = 1, c_1 = ½.
+/// struct RaisedCosine(SpectralRange);
+///
+/// impl Spectrum for RaisedCosine {
+///     fn value(&self, lambda_nm: f64) -> f64 {
+///         1.0 + self.0.cos_phase(lambda_nm)
+///     }
+/// }
+///
+/// let basis = FourierBasis::<3>::VISIBLE;
+/// let c = basis.project(&RaisedCosine(*basis.range()));
+/// assert!((c.coeffs[0] - 1.0).abs() < 1e-12);
+/// assert!((c.coeffs[1] - 0.5).abs() < 1e-12);
+/// assert!(c.coeffs[2].abs() < 1e-12);
+/// ```
 pub trait Spectrum {
     /// The value at `lambda_nm`.
     fn value(&self, lambda_nm: f64) -> f64;
 
-    /// The `N` Fourier coefficients over `range`.
-    fn project<const N: usize>(&self, range: &SpectralRange) -> FourierSpectrum<f64, N>;
+    /// The `N` Fourier coefficients over `range`
+    /// (`c_j = (1/(λ1−λ0)) ∫ s(λ) cos(jφ(λ)) dλ`). The default integrates
+    /// [`value`](Self::value) by [`project_function`].
+    fn project<const N: usize>(&self, range: &SpectralRange) -> FourierSpectrum<f64, N> {
+        project_function(range, |lambda_nm| self.value(lambda_nm))
+    }
 }
 
 /// Panel width for spectra given only as functions, nm.
@@ -160,9 +189,6 @@ impl Blackbody {
 impl Spectrum for Blackbody {
     fn value(&self, lambda_nm: f64) -> f64 {
         planck_radiance(lambda_nm, self.temperature_k) / self.peak_radiance
-    }
-    fn project<const N: usize>(&self, range: &SpectralRange) -> FourierSpectrum<f64, N> {
-        project_function(range, |lambda_nm| self.value(lambda_nm))
     }
 }
 

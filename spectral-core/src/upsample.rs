@@ -1,4 +1,4 @@
-//! RGB → spectrum (Jakob & Hanika 2019, MATH.md §6) for the sRGB gamut.
+//! RGB → spectrum (Jakob & Hanika 2019, [math](crate::math) §6) for the sRGB gamut.
 //!
 //! A reflectance is `r(λ) = S(c0 t² + c1 t + c2)`, `t = (λ − 360)/470`,
 //! `S(x) = ½ + x/(2 sqrt(1 + x²))`. The coefficients come from a table
@@ -19,29 +19,61 @@
 //!
 //! Grey `v` maps exactly to `(0, 0, (v − ½)/sqrt(v(1 − v)))` (no table).
 //! Black is exactly zero. Non-finite input is an error.
+//!
+//! The table and everything that reads it ([`srgb_reflectance`],
+//! [`RgbUnbounded`], [`RgbIlluminant`], [`validate_table`]) need the
+//! default feature `upsampling`; without it the crate is 1.2 MB smaller and
+//! [`SigmoidPolynomial`] (coefficients from elsewhere) remains.
+//!
+//! ```
+//! use spectral_core::upsample::srgb_reflectance;
+//! use spectral_core::xyz::{XyzConverter, XyzRoute};
+//! use spectral_core::{FourierBasis, LinearSrgb, Spectrum};
+//!
+//! // A saturated red paint, upsampled and projected onto 16 cosines.
+//! let red = srgb_reflectance([0.8, 0.1, 0.1])?;
+//! assert!(red.value(650.0) > 0.9 && red.value(450.0) < 0.15);
+//! let basis = FourierBasis::<16>::VISIBLE;
+//! let coefficients = basis.project(&red);
+//! // Under the equal-energy white the reflectance's XYZ comes back to
+//! // nearly the same linear sRGB as the reflectance's own (the table is
+//! // fitted under D65, hence the tolerance).
+//! let xyz = XyzConverter::new(&basis)?.convert(XyzRoute::Zeroth, &coefficients);
+//! let LinearSrgb { r, g, b } = xyz.to_linear_srgb();
+//! assert!(r > 3.0 * g && r > 3.0 * b, "{r} {g} {b}");
+//! # Ok::<(), spectral_core::SpectralError>(())
+//! ```
 
+#[cfg(feature = "upsampling")]
 use crate::SpectralError;
 use crate::cmf;
 use crate::fourier::FourierSpectrum;
 use crate::range::SpectralRange;
+#[cfg(feature = "upsampling")]
 use crate::registry::Builtin;
-use crate::spectrum::{Spectrum, project_function, project_function_panels};
+use crate::spectrum::{Spectrum, project_function_panels};
+#[cfg(feature = "upsampling")]
 use crate::xyz::xyz_of;
 
 /// Panel width of the projection of sigmoid polynomials, nm.
 pub const SIGMOID_PROJECTION_PANEL_NM: f64 = 5.0;
 
+#[cfg(feature = "upsampling")]
 /// Grid points per axis of the embedded table.
 pub const SRGB_TABLE_RESOLUTION: usize = 32;
+#[cfg(feature = "upsampling")]
 const TABLE_FLOATS: usize =
     3 * SRGB_TABLE_RESOLUTION * SRGB_TABLE_RESOLUTION * SRGB_TABLE_RESOLUTION * 3;
 
+#[cfg(feature = "upsampling")]
 static SRGB_TABLE: &[u8] = include_bytes!("data/srgb_sigmoid.bin");
 
+#[cfg(feature = "upsampling")]
 const fn smoothstep(x: f64) -> f64 {
     x * x * (3.0 - 2.0 * x)
 }
 
+#[cfg(feature = "upsampling")]
 /// `z` of each table layer: `smoothstep(smoothstep(k/(R−1)))`.
 const Z_GRID: [f64; SRGB_TABLE_RESOLUTION] = {
     let mut z = [0.0; SRGB_TABLE_RESOLUTION];
@@ -53,6 +85,7 @@ const Z_GRID: [f64; SRGB_TABLE_RESOLUTION] = {
     z
 };
 
+#[cfg(feature = "upsampling")]
 /// Checks the embedded table: size and finite coefficients.
 pub fn validate_table() -> Result<(), SpectralError> {
     if SRGB_TABLE.len() != 4 * TABLE_FLOATS {
@@ -66,6 +99,7 @@ pub fn validate_table() -> Result<(), SpectralError> {
     Ok(())
 }
 
+#[cfg(feature = "upsampling")]
 fn table_value(index: usize) -> f64 {
     match SRGB_TABLE.get(4 * index..4 * index + 4) {
         Some(&[a, b, c, d]) => f64::from(f32::from_le_bytes([a, b, c, d])),
@@ -128,6 +162,7 @@ impl Spectrum for SigmoidPolynomial {
     }
 }
 
+#[cfg(feature = "upsampling")]
 fn check_rgb(rgb: [f64; 3]) -> Result<(), SpectralError> {
     match rgb.iter().position(|v| !v.is_finite()) {
         Some(index) => Err(SpectralError::NonFiniteValue { index }),
@@ -135,6 +170,7 @@ fn check_rgb(rgb: [f64; 3]) -> Result<(), SpectralError> {
     }
 }
 
+#[cfg(feature = "upsampling")]
 /// The sigmoid polynomial of an sRGB reflectance (`rgb` clamped to [0, 1]).
 pub fn srgb_reflectance(rgb: [f64; 3]) -> Result<SigmoidPolynomial, SpectralError> {
     check_rgb(rgb)?;
@@ -145,6 +181,7 @@ pub fn srgb_reflectance(rgb: [f64; 3]) -> Result<SigmoidPolynomial, SpectralErro
     Ok(SigmoidPolynomial { coeffs: fetch(rgb) })
 }
 
+#[cfg(feature = "upsampling")]
 /// Trilinear lookup of the table.
 fn fetch(rgb: [f64; 3]) -> [f64; 3] {
     let res = SRGB_TABLE_RESOLUTION;
@@ -180,6 +217,7 @@ fn fetch(rgb: [f64; 3]) -> [f64; 3] {
     })
 }
 
+#[cfg(feature = "upsampling")]
 /// An unbounded (emission) RGB spectrum: `scale · S(poly(λ))`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RgbUnbounded {
@@ -187,6 +225,7 @@ pub struct RgbUnbounded {
     shape: SigmoidPolynomial,
 }
 
+#[cfg(feature = "upsampling")]
 impl RgbUnbounded {
     /// `rgb` ≥ 0 (negative channels are clamped to 0).
     pub fn new(rgb: [f64; 3]) -> Result<Self, SpectralError> {
@@ -207,6 +246,7 @@ impl RgbUnbounded {
     }
 }
 
+#[cfg(feature = "upsampling")]
 impl Spectrum for RgbUnbounded {
     fn value(&self, lambda_nm: f64) -> f64 {
         self.scale * self.shape.value(lambda_nm)
@@ -217,6 +257,7 @@ impl Spectrum for RgbUnbounded {
     }
 }
 
+#[cfg(feature = "upsampling")]
 /// An RGB illuminant: the unbounded spectrum times D65 with `Y = 1`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RgbIlluminant {
@@ -224,6 +265,7 @@ pub struct RgbIlluminant {
     d65_per_luminance: f64,
 }
 
+#[cfg(feature = "upsampling")]
 impl RgbIlluminant {
     /// `rgb` ≥ 0, linear sRGB radiance.
     pub fn new(rgb: [f64; 3]) -> Result<Self, SpectralError> {
@@ -237,21 +279,19 @@ impl RgbIlluminant {
     }
 }
 
+#[cfg(feature = "upsampling")]
 impl Spectrum for RgbIlluminant {
     fn value(&self, lambda_nm: f64) -> f64 {
         self.unbounded.value(lambda_nm)
             * Builtin::Illuminant(0).value(lambda_nm)
             * self.d65_per_luminance
     }
-
-    fn project<const N: usize>(&self, range: &SpectralRange) -> FourierSpectrum<f64, N> {
-        project_function(range, |l| self.value(l))
-    }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "upsampling"))]
 mod tests {
     use super::*;
+    use crate::spectrum::project_function;
 
     #[test]
     fn embedded_table_is_valid() {

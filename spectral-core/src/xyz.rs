@@ -1,4 +1,4 @@
-//! From spectra to CIE XYZ: the conversions of MATH.md §2 and the 3×N kernel.
+//! From spectra to CIE XYZ: the conversions of [math](crate::math) §2 and the 3×N kernel.
 //!
 //! `X = ∫ s(λ) x̄(λ) dλ / ∫ȳ dλ` (likewise `Y`, `Z`) over the spectral range,
 //! so the constant spectrum 1 has `Y = 1`. `∫ȳ` is
@@ -34,6 +34,7 @@
 //! outside it.
 
 use crate::SpectralError;
+use crate::basis::FourierBasis;
 use crate::cmf::{self, Y_BAR_INTEGRAL};
 use crate::color::Xyz;
 use crate::fourier::FourierSpectrum;
@@ -69,9 +70,21 @@ pub struct XyzKernel<const N: usize> {
 }
 
 impl<const N: usize> XyzKernel<N> {
-    /// The kernel over `range`; `Err(InvalidRange)` unless the range lies
+    /// The kernel of `basis`; `Err(InvalidRange)` unless its range lies
     /// inside the CMF table (360–830 nm).
-    pub fn new(range: &SpectralRange) -> Result<Self, SpectralError> {
+    ///
+    /// ```
+    /// use spectral_core::xyz::XyzKernel;
+    /// use spectral_core::{FourierBasis, FourierSpectrum};
+    ///
+    /// // XYZ = K c, lane-wise; the constant spectrum 1 has Y = 1.
+    /// let kernel = XyzKernel::new(&FourierBasis::<12>::VISIBLE)?;
+    /// let white = kernel.apply(&FourierSpectrum::<f64, 12>::constant(1.0));
+    /// assert!((white.y - 1.0).abs() < 1e-12);
+    /// # Ok::<(), spectral_core::SpectralError>(())
+    /// ```
+    pub fn new(basis: &FourierBasis<N>) -> Result<Self, SpectralError> {
+        let range = basis.range();
         check_inside_table(range)?;
         let scale = range.width_nm() / Y_BAR_INTEGRAL;
         let cmfs = cmf::cmfs();
@@ -87,14 +100,14 @@ impl<const N: usize> XyzKernel<N> {
 
     /// `K c`, lane-wise.
     #[inline]
-    pub fn apply<L: Lane>(&self, spectrum: &FourierSpectrum<L, N>) -> [L; 3] {
-        core::array::from_fn(|r| {
+    pub fn apply<L: Lane>(&self, spectrum: &FourierSpectrum<L, N>) -> Xyz<L> {
+        Xyz::from_array(core::array::from_fn(|r| {
             let mut acc = L::splat(0.0);
             for j in 0..N {
                 acc = spectrum.coeffs[j].mul_add(L::splat(self.rows[r][j]), acc);
             }
             acc
-        })
+        }))
     }
 }
 
@@ -130,10 +143,35 @@ fn table_samples(range: &SpectralRange) -> impl Iterator<Item = (usize, f64, f64
     })
 }
 
-/// XYZ by all three linear routes, with the cosine table precomputed.
+/// XYZ by all four routes, with the cosine table of the LUT route and the
+/// kernels precomputed. Build it once per basis (it holds a table of
+/// `471 × N` cosines) and share it.
+///
+/// ```
+/// use spectral_core::registry::Builtin;
+/// use spectral_core::xyz::{XyzConverter, XyzRoute, reference_xyz};
+/// use spectral_core::FourierBasis;
+///
+/// // ColorChecker patch 13 (blue) under illuminant E, by each route,
+/// // against the exact XYZ of the tabulated reflectance.
+/// let basis = FourierBasis::<16>::VISIBLE;
+/// let converter = XyzConverter::new(&basis)?;
+/// let blue = Builtin::lookup("colorchecker-13")?;
+/// let coefficients = basis.project(&blue);
+/// let exact = reference_xyz(&blue.tabulated().unwrap(), basis.range());
+/// for route in [XyzRoute::Series, XyzRoute::Lut, XyzRoute::Zeroth, XyzRoute::Mese] {
+///     let xyz = converter.convert(route, &coefficients);
+///     assert!((xyz.y - exact.y).abs() < 2e-3, "{route:?}: {xyz:?} vs {exact:?}");
+/// }
+/// // The linear routes are one 3×N map up to quadrature error.
+/// let zeroth = converter.zeroth(&coefficients);
+/// let series = converter.series(&coefficients);
+/// assert!((zeroth.y - series.y).abs() < 1e-5);
+/// # Ok::<(), spectral_core::SpectralError>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct XyzConverter<const N: usize> {
-    range: SpectralRange,
+    basis: FourierBasis<N>,
     kernel: XyzKernel<N>,
     /// `cos(jφ_i)` for each table sample `i` (row `i − first_sample`).
     cosines: [[f32; N]; cmf::SAMPLES],
@@ -146,10 +184,11 @@ pub struct XyzConverter<const N: usize> {
 }
 
 impl<const N: usize> XyzConverter<N> {
-    /// A converter for `range`; `Err(InvalidRange)` unless the range lies in
-    /// the CMF table (360–830 nm).
-    pub fn new(range: SpectralRange) -> Result<Self, SpectralError> {
-        let kernel = XyzKernel::new(&range)?;
+    /// A converter for `basis`; `Err(InvalidRange)` unless its range lies
+    /// in the CMF table (360–830 nm).
+    pub fn new(basis: &FourierBasis<N>) -> Result<Self, SpectralError> {
+        let range = *basis.range();
+        let kernel = XyzKernel::new(basis)?;
         let mut cosines = [[0.0f32; N]; cmf::SAMPLES];
         let mut weighted_cmf = [[0.0f32; 3]; cmf::SAMPLES];
         let mut first_sample = None;
@@ -164,19 +203,19 @@ impl<const N: usize> XyzConverter<N> {
             sample_count = row + 1;
         }
         Ok(Self {
-            range,
+            basis: *basis,
             kernel,
             cosines,
             weighted_cmf,
-            mese_kernel: XyzKernel::new(&range)?,
+            mese_kernel: XyzKernel::new(&FourierBasis::new(range))?,
             first_sample: first_sample.unwrap_or(0),
             sample_count,
         })
     }
 
-    /// The range.
-    pub fn range(&self) -> &SpectralRange {
-        &self.range
+    /// The basis the converter reads coefficients in.
+    pub fn basis(&self) -> &FourierBasis<N> {
+        &self.basis
     }
 
     /// The 3×N kernel of route 3.
@@ -185,20 +224,20 @@ impl<const N: usize> XyzConverter<N> {
     }
 
     /// Route 1: series reconstruction (one `cos` per table wavelength).
-    pub fn series<L: Lane>(&self, spectrum: &FourierSpectrum<L, N>) -> [L; 3] {
+    pub fn series<L: Lane>(&self, spectrum: &FourierSpectrum<L, N>) -> Xyz<L> {
         let mut xyz = [L::splat(0.0); 3];
         for (row, weights) in self.weighted_cmf[..self.sample_count].iter().enumerate() {
             let lambda_nm = cmf::FIRST_NM + (self.first_sample + row) as f64 * cmf::STEP_NM;
-            let value = spectrum.eval(&self.range, lambda_nm);
+            let value = spectrum.eval(&self.basis, lambda_nm);
             for (acc, &w) in xyz.iter_mut().zip(weights) {
                 *acc = value.mul_add(L::splat(f64::from(w)), *acc);
             }
         }
-        xyz
+        Xyz::from_array(xyz)
     }
 
     /// Route 2: reconstruction with the precomputed cosine table.
-    pub fn lut<L: Lane>(&self, spectrum: &FourierSpectrum<L, N>) -> [L; 3] {
+    pub fn lut<L: Lane>(&self, spectrum: &FourierSpectrum<L, N>) -> Xyz<L> {
         let mut xyz = [L::splat(0.0); 3];
         let rows = self.cosines[..self.sample_count]
             .iter()
@@ -213,11 +252,11 @@ impl<const N: usize> XyzConverter<N> {
                 *acc = value.mul_add(L::splat(f64::from(w)), *acc);
             }
         }
-        xyz
+        Xyz::from_array(xyz)
     }
 
     /// Route 3: the zeroth coefficient of the product with the CMFs (kernel).
-    pub fn zeroth<L: Lane>(&self, spectrum: &FourierSpectrum<L, N>) -> [L; 3] {
+    pub fn zeroth<L: Lane>(&self, spectrum: &FourierSpectrum<L, N>) -> Xyz<L> {
         self.kernel.apply(spectrum)
     }
 
@@ -225,9 +264,9 @@ impl<const N: usize> XyzConverter<N> {
     /// through its extended coefficients (module docs). Non-finite
     /// coefficients give black (the film counts such samples before they
     /// get here).
-    pub fn mese(&self, spectrum: &FourierSpectrum<f64, N>) -> [f64; 3] {
+    pub fn mese(&self, spectrum: &FourierSpectrum<f64, N>) -> Xyz {
         let Ok(mese) = Mese::new(spectrum) else {
-            return [0.0; 3];
+            return Xyz::default();
         };
         self.mese_kernel
             .apply(&mese.extended_coefficients::<MESE_EXTENDED_COEFFS>())
@@ -235,12 +274,12 @@ impl<const N: usize> XyzConverter<N> {
 
     /// XYZ of one spectrum by `route`.
     pub fn convert(&self, route: XyzRoute, spectrum: &FourierSpectrum<f64, N>) -> Xyz {
-        Xyz::from_array(match route {
+        match route {
             XyzRoute::Series => self.series(spectrum),
             XyzRoute::Lut => self.lut(spectrum),
             XyzRoute::Zeroth => self.zeroth(spectrum),
             XyzRoute::Mese => self.mese(spectrum),
-        })
+        }
     }
 }
 

@@ -26,7 +26,7 @@
 use proptest::prelude::*;
 use spectral_core::damping::Damping;
 use spectral_core::xyz::XyzConverter;
-use spectral_core::{FourierSpectrum, Lane, SpectralRange};
+use spectral_core::{FourierBasis, FourierSpectrum, Lane};
 use wide::f32x8;
 
 const N: usize = 12;
@@ -405,7 +405,7 @@ fn agree_rules() {
 }
 #[test]
 fn xyz_routes_per_lane() {
-    let converter = XyzConverter::<N>::new(SpectralRange::VISIBLE).unwrap();
+    let converter = XyzConverter::<N>::new(&FourierBasis::VISIBLE).unwrap();
     let per_lane: [[f32; N]; 8] = core::array::from_fn(|lane| {
         core::array::from_fn(|j| ((lane * 7 + j * 3) % 11) as f32 * 0.1 - 0.4)
     });
@@ -423,8 +423,8 @@ fn xyz_routes_per_lane() {
                 1 => converter.lut(&s),
                 _ => converter.zeroth(&s),
             };
-            for r in 0..3 {
-                let (got, want) = (xyz[r].lane(lane), f64::from(expected[r]));
+            for (got, want) in xyz.to_array().iter().zip(expected.to_array()) {
+                let (got, want) = (got.lane(lane), f64::from(want));
                 assert!(
                     (got - want).abs() < 1e-5,
                     "route {route} lane {lane}: {got} vs {want}"

@@ -3,6 +3,7 @@
 //! control variates reduce variance for uniform and stratified sampling, and
 //! a same-batch α is biased where the running α is not.
 
+use spectral_core::FourierBasis;
 use spectral_core::control_variate::ControlVariate;
 use spectral_core::registry::Builtin;
 use spectral_core::sampling::{
@@ -188,7 +189,7 @@ fn pixel_estimates<const C: usize>(
                 values: w.lambda_nm().map(|l| radiance_of(f64::from(l)) as f32),
             };
             let y = values.to_xyz(&w).y;
-            let c = SampledSpectrum::from_fourier(&fourier32, &range, &w)
+            let c = SampledSpectrum::from_fourier(&fourier32, &FourierBasis::new(range), &w)
                 .to_xyz(&w)
                 .y;
             cv.add(y, c, mu);
@@ -241,8 +242,8 @@ fn control_variates_reduce_variance_for_uniform_and_stratified() {
     let radiance_of = |l: f64| radiance(l, &patch, &illuminant);
     let fourier: FourierSpectrum<f64, 4> =
         spectral_core::spectrum::project_function(&range, radiance_of);
-    let kernel = XyzKernel::<4>::new(&range).unwrap();
-    let mu = kernel.apply(&fourier)[1];
+    let kernel = XyzKernel::<4>::new(&FourierBasis::new(range)).unwrap();
+    let mu = kernel.apply(&fourier).y;
     let exact = exact_xyz(&patch, &illuminant)[1];
     for strategy in [WavelengthStrategy::Uniform, WavelengthStrategy::Stratified] {
         let mut rng = Rng(777);
@@ -280,8 +281,8 @@ fn same_batch_alpha_is_biased_and_running_alpha_is_not() {
     let radiance_of = |l: f64| radiance(l, &patch, &illuminant);
     let fourier: FourierSpectrum<f64, 4> =
         spectral_core::spectrum::project_function(&range, radiance_of);
-    let kernel = XyzKernel::<4>::new(&range).unwrap();
-    let mu = kernel.apply(&fourier)[1];
+    let kernel = XyzKernel::<4>::new(&FourierBasis::new(range)).unwrap();
+    let mu = kernel.apply(&fourier).y;
     let exact = exact_xyz(&patch, &illuminant)[1];
     let mut rng = Rng(4242);
     let (mut running, mut same_batch) = (Vec::new(), Vec::new());

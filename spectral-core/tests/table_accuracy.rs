@@ -9,6 +9,7 @@
 //! deterministic up to the last bits of f32 rounding, and a table that
 //! interpolates or projects worse than it does now fails.
 
+use spectral_core::FourierBasis;
 use spectral_core::complex::Complex;
 use spectral_core::data::tables::METALS;
 use spectral_core::optics::{Layer, fresnel_conductor};
@@ -36,7 +37,8 @@ fn interpolation_error(
         let looked_up = table.lookup(cos_i);
         for i in 0..=470 {
             let lambda_nm = 360.0 + i as f64;
-            let e = f64::from(looked_up.eval(&range, lambda_nm)) - exact.eval(&range, lambda_nm);
+            let e = f64::from(looked_up.eval(&FourierBasis::new(range), lambda_nm))
+                - exact.eval(&FourierBasis::new(range), lambda_nm);
             max = max.max(e.abs());
             sum_sq += e * e;
             count += 1;

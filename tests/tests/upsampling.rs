@@ -16,12 +16,6 @@ fn xyz_under_d65(reflectance: &impl Spectrum) -> Xyz {
         fn value(&self, l: f64) -> f64 {
             self.0.value(l) * self.1.value(l)
         }
-        fn project<const N: usize>(
-            &self,
-            _: &SpectralRange,
-        ) -> spectral_core::FourierSpectrum<f64, N> {
-            unreachable!("not projected")
-        }
     }
     let range = SpectralRange::VISIBLE;
     let white_y = xyz_of(&d65, &range).y;

@@ -39,6 +39,7 @@ use crate::error::CliError;
 use crate::spectrum_file::{SpectrumSource, resolve};
 use serde_json::{Value, json};
 use simd_tracer::sampling::rng::{Purpose, Rng};
+use spectral_core::FourierBasis;
 use spectral_core::cmf::{self, Y_BAR_INTEGRAL};
 use spectral_core::color::{Lab, Xyz};
 use spectral_core::control_variate::{AlphaStatistics, ControlVariate};
@@ -286,9 +287,9 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
     let raw_white = exact_xyz(&[e]);
     let k = WHITE_Y / raw_white.y;
     let white = raw_white.scale(k);
-    let kernel = XyzKernel::<COEFFS>::new(&range)
+    let kernel = XyzKernel::<COEFFS>::new(&FourierBasis::new(range))
         .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
-    let cv_kernel = XyzKernel::<CV_COEFFS>::new(&range)
+    let cv_kernel = XyzKernel::<CV_COEFFS>::new(&FourierBasis::new(range))
         .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
     let e12 = e.project::<COEFFS>(&range).scale(k);
     let e4 = e.project::<CV_COEFFS>(&range).scale(k);
@@ -304,9 +305,9 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
             reflectance,
             xyz,
             lab: xyz.to_lab(white),
-            fourier_xyz: Xyz::from_array(kernel.apply(&product12)),
+            fourier_xyz: kernel.apply(&product12),
             cv_spectrum: product4.to_lanes(),
-            cv_mu: cv_kernel.apply(&product4),
+            cv_mu: cv_kernel.apply(&product4).to_array(),
         });
     }
     let radiance = |patch: &Patch, lambda_nm: f32| {
@@ -386,9 +387,13 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
                                 values: w.lambda_nm().map(|l| radiance(patch, l)),
                             };
                             let y = values.to_xyz(&w).to_array();
-                            let c = SampledSpectrum::from_fourier(&patch.cv_spectrum, &range, &w)
-                                .to_xyz(&w)
-                                .to_array();
+                            let c = SampledSpectrum::from_fourier(
+                                &patch.cv_spectrum,
+                                &FourierBasis::new(range),
+                                &w,
+                            )
+                            .to_xyz(&w)
+                            .to_array();
                             for r in 0..3 {
                                 cv[r].add(y[r], c[r], patch.cv_mu[r]);
                                 cv[r].end_batch_with_alpha(alpha[r]);

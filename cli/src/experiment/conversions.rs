@@ -29,6 +29,7 @@ use crate::error::CliError;
 use crate::image_out::{Exposure, Tone, XyzImage, write_png};
 use simd_tracer::film::Buffer;
 use simd_tracer::render::RenderResult;
+use spectral_core::FourierBasis;
 use spectral_core::FourierSpectrum;
 use spectral_core::color::Xyz;
 use spectral_core::sampling::WavelengthStrategy;
@@ -134,7 +135,7 @@ fn conversion_ms(result: &RenderResult, route: XyzRoute) -> Result<Option<f64>, 
         return Ok(None);
     }
     let converter = Box::new(
-        XyzConverter::<COEFFS>::new(spectral_core::SpectralRange::VISIBLE)
+        XyzConverter::<COEFFS>::new(&FourierBasis::VISIBLE)
             .map_err(|e| CliError::input(format!("spectral range: {e}")))?,
     );
     let start = Instant::now();

@@ -23,7 +23,7 @@ use super::report::{Section, Table, fixed, write_text};
 use crate::error::CliError;
 use simd_tracer::film::{FourierPixel, XyzPixel};
 use simd_tracer::spectra::texture::Texture;
-use spectral_core::color::Xyz;
+use spectral_core::FourierBasis;
 use spectral_core::delta_e::delta_e2000;
 use spectral_core::registry::Builtin;
 use spectral_core::xyz::XyzKernel;
@@ -56,15 +56,16 @@ fn fourier_error<const N: usize>() -> Result<f64, CliError> {
     let range = SpectralRange::VISIBLE;
     let e = d65()?;
     let white = exact_xyz(&[e]);
-    let kernel = XyzKernel::<N>::new(&range)
+    let kernel = XyzKernel::<N>::new(&FourierBasis::new(range))
         .map_err(|err| CliError::input(format!("spectral range: {err}")))?;
     let en = e.project::<N>(&range);
     let patches = patches();
     let sum: f64 = patches
         .iter()
         .map(|p| {
-            let lab =
-                Xyz::from_array(kernel.apply(&en.product(&p.project::<N>(&range)))).to_lab(white);
+            let lab = kernel
+                .apply(&en.product(&p.project::<N>(&range)))
+                .to_lab(white);
             delta_e2000(lab, exact_xyz(&[e, *p]).to_lab(white))
         })
         .sum();

@@ -25,7 +25,7 @@ use super::report::{Section, Table, fixed, write_text};
 use super::truncation::{COEFFS, SceneRenders, compare_both};
 use super::{Config, progress};
 use crate::error::CliError;
-use spectral_core::color::Xyz;
+use spectral_core::FourierBasis;
 use spectral_core::damping::Damping;
 use spectral_core::delta_e::delta_e2000;
 use spectral_core::registry::Builtin;
@@ -93,8 +93,8 @@ fn spectra_rows<const N: usize>(
     let plain = weights::<N>(SPECTRA_STEP_NM, Damping::None);
     let fejer = weights::<N>(SPECTRA_STEP_NM, Damping::Fejer);
     let sigma = Damping::Fejer.factors::<N>();
-    let kernel =
-        XyzKernel::<N>::new(&range).map_err(|e| CliError::input(format!("spectral range: {e}")))?;
+    let kernel = XyzKernel::<N>::new(&FourierBasis::new(range))
+        .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
     let row = |set: &'static str, spectra: &[[f64; N]], delta_e: Option<(f64, f64)>| {
         let mut negative = 0;
         let mut negative_fejer = 0;
@@ -136,7 +136,7 @@ fn spectra_rows<const N: usize>(
             let damped = FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
                 product.coeffs[j] * sigma[j]
             }));
-            let lab = |c: &FourierSpectrum<f64, N>| Xyz::from_array(kernel.apply(c)).to_lab(white);
+            let lab = |c: &FourierSpectrum<f64, N>| kernel.apply(c).to_lab(white);
             de_plain += delta_e2000(lab(&product), exact);
             de_fejer += delta_e2000(lab(&damped), exact);
             products.push(product.coeffs);
@@ -188,16 +188,14 @@ fn pixel_row<const N: usize>(
     let w_plain = weights::<N>(PIXEL_STEP_NM, Damping::None);
     let w_fejer = weights::<N>(PIXEL_STEP_NM, Damping::Fejer);
     let sigma = Damping::Fejer.factors::<N>();
-    let kernel =
-        XyzKernel::<N>::new(&range).map_err(|e| CliError::input(format!("spectral range: {e}")))?;
+    let kernel = XyzKernel::<N>::new(&FourierBasis::new(range))
+        .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
     let (mut pixels, mut negative, mut negative_fejer) = (0, 0, 0);
     let mut damped_xyz = Vec::with_capacity(coefficients.len() / N);
     for pixel in coefficients.chunks_exact(N) {
         let c: [f64; N] = core::array::from_fn(|j| f64::from(pixel[j]));
         let damped: [f64; N] = core::array::from_fn(|j| c[j] * sigma[j]);
-        damped_xyz.push(Xyz::from_array(
-            kernel.apply(&FourierSpectrum::from_coeffs(damped)),
-        ));
+        damped_xyz.push(kernel.apply(&FourierSpectrum::from_coeffs(damped)));
         if c[0] <= 0.0 {
             continue;
         }

@@ -2,6 +2,7 @@
 //! the chosen route (spectral buffer), or XYZ converted per sample.
 
 use super::{Buffer, Film, FilmMode, all_finite};
+use spectral_core::FourierBasis;
 use spectral_core::color::Xyz;
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, SpectralError, SpectralRange};
@@ -23,7 +24,7 @@ impl<const N: usize> FourierFilm<N> {
         route: XyzRoute,
     ) -> Result<Self, SpectralError> {
         Ok(Self {
-            converter: Box::new(XyzConverter::new(range)?),
+            converter: Box::new(XyzConverter::new(&FourierBasis::new(range))?),
             buffer,
             route,
         })

@@ -15,6 +15,7 @@
 //! stack at the texel's exact thickness.
 
 use crate::spectra::{MAX_COEFFS, SceneSpectrum};
+use spectral_core::FourierBasis;
 use spectral_core::complex::Complex;
 use spectral_core::neural::SineMlp;
 use spectral_core::optics::{Layer, fresnel_conductor, fresnel_dielectric, multilayer};
@@ -322,7 +323,7 @@ impl AngularFunction {
                 let c = network.eval(cos_theta as f32, t as f32);
                 let series: spectral_core::FourierSpectrum<f64, MAX_COEFFS> =
                     spectral_core::FourierSpectrum::from_coeffs(c.map(f64::from));
-                series.eval(&range, lambda_nm).max(0.0)
+                series.eval(&FourierBasis::new(range), lambda_nm).max(0.0)
             }
         }
     }
@@ -525,7 +526,7 @@ mod tests {
         let coeffs = gold.fourier(1.0, 0.0);
         let series: spectral_core::FourierSpectrum<f32, 16> =
             spectral_core::FourierSpectrum::from_coeffs(core::array::from_fn(|j| coeffs[j]));
-        let at = series.eval(&range, 551.0);
+        let at = series.eval(&FourierBasis::new(range), 551.0);
         assert!((at - exact).abs() < 0.02, "{at} vs {exact}");
         assert!(gold.table_bytes() == 32 * 180 * 4);
     }

@@ -22,6 +22,7 @@ pub mod texture;
 
 use crate::simd::LANES;
 use crate::simd::lookup_f32x8;
+use spectral_core::FourierBasis;
 use spectral_core::registry::Builtin;
 use spectral_core::spectrum::{Blackbody, ConstantSpectrum, Spectrum, TabulatedSpectrum};
 use spectral_core::upsample::{RgbIlluminant, RgbUnbounded, SigmoidPolynomial};
@@ -169,7 +170,10 @@ fn project_any<'a>(
                 c.get(j).copied().unwrap_or(0.0)
             }));
             let r = *range;
-            (f, Box::new(move |l| f.eval(&r, l).max(0.0)))
+            (
+                f,
+                Box::new(move |l| f.eval(&FourierBasis::new(r), l).max(0.0)),
+            )
         }
     })
 }

@@ -11,6 +11,7 @@ use crate::sampling::rng::Rng;
 use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum};
 use crate::simd::{LANES, LaneMask};
+use spectral_core::FourierBasis;
 use spectral_core::sampling::{SampledSpectrum, WavelengthStrategy};
 use spectral_core::xyz::XyzRoute;
 use spectral_core::{FourierSpectrum, Lane, SpectralError, SpectralRange};
@@ -156,11 +157,12 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
                 FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
                     radiance.0.coeffs[j].to_array()[lane]
                 }));
-            let c = SampledSpectrum::from_fourier(&series, &self.range, w).to_xyz(w);
+            let c =
+                SampledSpectrum::from_fourier(&series, &FourierBasis::new(self.range), w).to_xyz(w);
             CvSample {
                 y: y.to_array().map(|v| v as f32),
                 c: c.to_array().map(|v| v as f32),
-                mu: core::array::from_fn(|r| mu[r].lane(lane) as f32),
+                mu: mu.map(|v| v.lane(lane) as f32).to_array(),
             }
         })
     }

@@ -296,7 +296,7 @@ impl<const N: usize> Transport for FourierTransport<N> {
             (Buffer::Spectral, _) => [[0.0; 3]; LANES],
             (Buffer::Xyz, XyzRoute::Mese) => core::array::from_fn(|lane| {
                 let c = radiance.lane(lane);
-                self.film.converter.mese(&c).map(|v| v as f32)
+                self.film.converter.mese(&c).to_array().map(|v| v as f32)
             }),
             (Buffer::Xyz, route) => {
                 let xyz = match route {
@@ -304,7 +304,7 @@ impl<const N: usize> Transport for FourierTransport<N> {
                     XyzRoute::Lut => self.film.converter.lut(radiance),
                     _ => self.film.converter.zeroth(radiance),
                 };
-                core::array::from_fn(|lane| core::array::from_fn(|r| xyz[r].lane(lane) as f32))
+                core::array::from_fn(|lane| xyz.map(|v| v.lane(lane) as f32).to_array())
             }
         };
         core::array::from_fn(|lane| FourierSample {

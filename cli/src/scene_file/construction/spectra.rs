@@ -13,7 +13,7 @@ use crate::scene_file::source::Spot;
 use simd_tracer::ids::SpectrumId;
 use simd_tracer::scene::SceneError;
 use simd_tracer::spectra::{SceneSpectrum, SpectrumSource};
-use spectral_core::registry::Builtin;
+use spectral_core::registry::{Builtin, BuiltinData};
 use spectral_core::upsample::srgb_reflectance;
 use spectral_core::{SpectralError, SpectralRange, Spectrum};
 
@@ -34,11 +34,11 @@ fn scale_source(
     let times = |values: &[f64]| values.iter().map(|v| v * s).collect::<Vec<f64>>();
     Ok(match source {
         SpectrumSource::Builtin(b) => match b.resolve() {
-            Ok(t) => SpectrumSource::Tabulated {
+            BuiltinData::Tabulated(t) => SpectrumSource::Tabulated {
                 lambda_nm: t.wavelengths_nm().to_vec(),
                 values: times(t.values()),
             },
-            Err(blackbody) => SpectrumSource::Blackbody {
+            BuiltinData::Blackbody(blackbody) => SpectrumSource::Blackbody {
                 temperature_k: blackbody.temperature_k(),
                 scale: s,
             },
