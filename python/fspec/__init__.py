@@ -26,7 +26,7 @@ from __future__ import annotations
 import logging
 import os
 import warnings
-from typing import Iterable, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -61,9 +61,9 @@ __all__ = [
 #: The largest coefficient count (every count from 1 up to it is supported).
 MAX_COEFFS: int = _fspec.MAX_COEFFS
 #: The default spectral range, nm: the CIE 1931 table's, as the renderer's.
-VISIBLE_RANGE_NM: Tuple[float, float] = tuple(_fspec.VISIBLE_RANGE_NM)
+VISIBLE_RANGE_NM: Tuple[float, float] = _fspec.VISIBLE_RANGE_NM
 #: The CIE 1931 2-degree table's range, nm; colour needs ranges inside it.
-CIE_RANGE_NM: Tuple[float, float] = tuple(_fspec.CIE_RANGE_NM)
+CIE_RANGE_NM: Tuple[float, float] = _fspec.CIE_RANGE_NM
 
 ArrayLike = Union[np.ndarray, Sequence[float], Sequence[Sequence[float]], float]
 Range = Tuple[float, float]
@@ -364,7 +364,7 @@ class Rendered(NamedTuple):
     passes: int
 
 
-def _flag(arguments: list, name: str, value) -> None:
+def _flag(arguments: List[str], name: str, value: object) -> None:
     if value is None or value is False:
         return
     if value is True:
@@ -442,8 +442,8 @@ def render(
         FileNotFoundError: the scene file does not exist.
         KeyboardInterrupt: Ctrl-C, checked between batches of passes.
     """
-    arguments: list = []
-    for name, value in [
+    arguments: List[str] = []
+    options: List[Tuple[str, object]] = [
         ("spp", spp),
         ("width", width),
         ("height", height),
@@ -464,7 +464,8 @@ def render(
         ("lenient", bool(lenient)),
         ("illuminant", illuminant),
         ("cv-alpha-per-pixel", bool(cv_alpha_per_pixel)),
-    ]:
+    ]
+    for name, value in options:
         _flag(arguments, name, value)
     if crop is not None:
         try:
@@ -475,12 +476,17 @@ def render(
     for name, value in (defines or {}).items():
         arguments.append(f"-D{name}={value}")
     arguments += ["--quiet", "--", os.fspath(scene)]
-    image, planes, range_nm, passes, _rejected, notices = _fspec.render(arguments, color, bool(coefficients))
+    image, planes, range_nm, passes, rejected, notices = _fspec.render(arguments, color, bool(coefficients))
     for is_warning, text in notices:
         if is_warning:
             warnings.warn(text, RuntimeWarning, stacklevel=2)
         else:
             _log.info(text)
+    if rejected:
+        # As the command line's summary: the film dropped these samples.
+        warnings.warn(f"{rejected} samples rejected (NaN/Inf)", RuntimeWarning, stacklevel=2)
     if coefficients:
-        return Rendered(image, planes, tuple(range_nm), passes)
+        if planes is None:
+            raise RuntimeError("internal error in fspec (please report): no coefficient planes")
+        return Rendered(image, planes, range_nm, passes)
     return image

@@ -2,6 +2,10 @@
 error messages."""
 
 import math
+import signal
+import subprocess
+import sys
+import time
 
 import numpy as np
 import OpenEXR
@@ -170,3 +174,25 @@ def test_builtin_scenes_are_listed_and_render():
         image = fspec.render(name, spp=1, width=8, height=8)
         assert image.shape == (8, 8, 3) and np.isfinite(image).all(), name
         assert not math.isclose(float(image.max()), 0.0), name
+
+
+def test_ctrl_c_stops_a_render_with_keyboard_interrupt():
+    # A render of about a minute; SIGINT once it has started must end it
+    # after the batch in progress (at most about half a second of passes).
+    script = (
+        "import fspec\n"
+        "print('started', flush=True)\n"
+        "try:\n"
+        "    fspec.render('cornell', spp=100000, width=64, height=64)\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted', flush=True)\n"
+    )
+    process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    assert process.stdout.readline().strip() == "started"
+    time.sleep(1.0)
+    signalled = time.monotonic()
+    process.send_signal(signal.SIGINT)
+    out, _ = process.communicate(timeout=60)
+    assert "interrupted" in out
+    # Generous for a loaded machine, far below the render's own length.
+    assert time.monotonic() - signalled < 20.0
