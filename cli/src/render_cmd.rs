@@ -677,12 +677,13 @@ pub fn check_memory(
     Ok(())
 }
 
-struct Reporter {
+struct Reporter<'a> {
     bar: Option<ProgressBar>,
+    observer: &'a dyn RenderObserver,
 }
 
-impl Reporter {
-    fn new(total: u32, quiet: bool) -> Self {
+impl<'a> Reporter<'a> {
+    fn new(total: u32, quiet: bool, observer: &'a dyn RenderObserver) -> Self {
         let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
             let bar = ProgressBar::new(u64::from(total));
             let style =
@@ -691,7 +692,7 @@ impl Reporter {
             bar.set_style(style);
             bar
         });
-        Self { bar }
+        Self { bar, observer }
     }
 
     fn update(&self, p: &Progress) -> bool {
@@ -700,7 +701,7 @@ impl Reporter {
             let rate = p.samples as f64 / p.elapsed.as_secs_f64().max(1e-9);
             bar.set_message(format!("{:.2} M samples/s", rate / 1e6));
         }
-        !interrupted()
+        self.observer.keep_going()
     }
 
     fn finish(&self) {
@@ -928,6 +929,7 @@ struct RenderTask<'a> {
     scene: &'a Scene,
     settings: &'a RenderSettings,
     quiet: bool,
+    observer: &'a dyn RenderObserver,
     preflight: Preflight<'a>,
     job: PassJob<'a>,
 }
@@ -950,7 +952,7 @@ impl TransportTask for RenderTask<'_> {
             }
             + splat_apron_bytes(self.settings, film_pixel);
         let memory = (self.preflight)(pixel_bytes, size_of::<T>() as u64)?;
-        let reporter = Reporter::new(self.settings.spp, self.quiet);
+        let reporter = Reporter::new(self.settings.spp, self.quiet, self.observer);
         let result = render_passes(transport, self.scene, self.settings, &self.job, &mut |p| {
             reporter.update(p)
         })
@@ -1352,10 +1354,91 @@ fn plan_parts(
     })
 }
 
+/// What a render tells its caller while it runs (`fspec render` prints
+/// to stderr and stops on Ctrl-C; an embedding, such as the Python
+/// package, collects the notices and checks its own interruptions).
+pub trait RenderObserver {
+    /// A warning or a note about the scene, one line.
+    fn notice(&self, notice: &RenderNotice);
+    /// Checked after every batch of passes: `false` stops the render there
+    /// (the passes done so far are kept).
+    fn keep_going(&self) -> bool;
+}
+
+/// A line a render reports before it starts.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum RenderNotice {
+    /// Something in the scene or the options was ignored or changed.
+    Warning(String),
+    /// A fact about the scene worth knowing (instances flattened).
+    Note(String),
+}
+
+impl std::fmt::Display for RenderNotice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Warning(text) => write!(f, "warning: {text}"),
+            Self::Note(text) => f.write_str(text),
+        }
+    }
+}
+
+/// `fspec render`'s observer: notices on stderr, Ctrl-C stops the render.
+struct CommandLineObserver;
+
+impl RenderObserver for CommandLineObserver {
+    fn notice(&self, notice: &RenderNotice) {
+        eprintln!("fspec: {notice}");
+    }
+
+    fn keep_going(&self) -> bool {
+        !interrupted()
+    }
+}
+
+/// A finished render, before any file is written.
+#[derive(Debug)]
+pub struct RenderedFrame {
+    /// The image (XYZ per pixel) and, for a spectral buffer, the
+    /// coefficient planes.
+    pub result: RenderResult,
+    /// The spectral range of the scene (and of the coefficients).
+    pub range: SpectralRange,
+    /// The film's sums, when `output` keeps a partial film.
+    pub partial: Option<PartialFilm>,
+    /// The memory predicted before the render started.
+    pub memory: MemoryPrediction,
+}
+
 /// Runs `fspec render`.
 pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
     let output = OutputOptions::of(args);
     output.check(TransportSpec::of(args).keeps_coefficients())?;
+    let frame = render(args, &output, &CommandLineObserver)?;
+    let mut written = output.write_images(&frame.result, &frame.range)?;
+    if let Some(film) = &frame.partial {
+        written.extend(output.write_partials(film)?);
+    }
+    Ok(RenderSummary {
+        passes: frame.result.passes,
+        samples: frame.result.samples,
+        rejected: frame.result.rejected,
+        elapsed: frame.result.elapsed,
+        written,
+        interrupted: interrupted(),
+        memory: frame.memory,
+    })
+}
+
+/// Loads the scene of `args`, checks the settings, the outputs' memory and
+/// the pass range, and renders: everything `fspec render` does but write
+/// the files (the caller has checked `output`, which sizes the memory
+/// prediction and says whether a partial film is kept).
+pub fn render(
+    args: &RenderArgs,
+    output: &OutputOptions,
+    observer: &dyn RenderObserver,
+) -> Result<RenderedFrame, CliError> {
     if (args.passes.is_some() || args.resume.is_some() || output.keeps_state())
         && args.transport == TransportKind::Cv
     {
@@ -1385,8 +1468,8 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
             args.scene
         ));
     }
-    for warning in &warnings {
-        eprintln!("fspec: warning: {warning}");
+    for warning in warnings {
+        observer.notice(&RenderNotice::Warning(warning));
     }
     let mut settings = settings_from(args, &defaults)?;
     if settings.film == FilmMode::Splat && args.transport == TransportKind::Cv {
@@ -1398,14 +1481,14 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
         .build()
         .map_err(|e| CliError::input(format!("{}: {e}", args.scene)))?;
     if scene.skipped_triangles() > 0 {
-        eprintln!(
-            "fspec: warning: {} degenerate triangles skipped",
+        observer.notice(&RenderNotice::Warning(format!(
+            "{} degenerate triangles skipped",
             scene.skipped_triangles()
-        );
+        )));
     }
     if defaults.instances.copies > 0 {
-        eprintln!(
-            "fspec: {} instance(s) flattened into {} triangles of the scene's {} (about {:.1} MiB of its {:.1} MiB)",
+        observer.notice(&RenderNotice::Note(format!(
+            "{} instance(s) flattened into {} triangles of the scene's {} (about {:.1} MiB of its {:.1} MiB)",
             defaults.instances.copies,
             defaults.instances.triangles,
             scene.triangles().len(),
@@ -1413,7 +1496,7 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
                 / scene.triangles().len().max(1) as f64
                 / f64::from(1 << 20),
             scene.memory_bytes() as f64 / f64::from(1 << 20),
-        );
+        )));
     }
     // The frame: the scene's crop window, or the whole film; a part's
     // --crop lies inside it.
@@ -1450,6 +1533,7 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
         scene: &scene,
         settings: &settings,
         quiet: args.quiet,
+        observer,
         preflight: &preflight,
         job: PassJob {
             first_pass: parts.job_first_pass,
@@ -1458,19 +1542,11 @@ pub fn run(args: &RenderArgs) -> Result<RenderSummary, CliError> {
         },
     };
     let (result, state, memory) = with_transport(&TransportSpec::of(args), scene.range(), task)?;
-    let mut written = output.write_images(&result, &scene.range())?;
-    if let Some(state) = state {
-        let requested = [parts.job_first_pass, parts.job_first_pass + parts.spp];
-        let film = PartialFilm::new(parts.identity, state, requested);
-        written.extend(output.write_partials(&film)?);
-    }
-    Ok(RenderSummary {
-        passes: result.passes,
-        samples: result.samples,
-        rejected: result.rejected,
-        elapsed: result.elapsed,
-        written,
-        interrupted: interrupted(),
+    let requested = [parts.job_first_pass, parts.job_first_pass + parts.spp];
+    Ok(RenderedFrame {
+        result,
+        range: scene.range(),
+        partial: state.map(|state| PartialFilm::new(parts.identity, state, requested)),
         memory,
     })
 }
