@@ -56,6 +56,7 @@ pub mod fuzzing;
 pub mod lane;
 pub mod mese;
 pub mod neural;
+pub mod observer;
 pub mod optics;
 pub mod range;
 pub mod registry;

@@ -3,6 +3,7 @@
 
 use super::{Buffer, Film, FilmMode, all_finite};
 use spectral_core::color::Xyz;
+use spectral_core::observer::Observer;
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, SpectralError, SpectralRange};
 
@@ -22,8 +23,18 @@ impl<const N: usize> FourierFilm<N> {
         buffer: Buffer,
         route: XyzRoute,
     ) -> Result<Self, SpectralError> {
+        Self::with_observer(range, buffer, route, &Observer::default())
+    }
+
+    /// The same converting to another observer's channels.
+    pub fn with_observer(
+        range: SpectralRange,
+        buffer: Buffer,
+        route: XyzRoute,
+        observer: &Observer,
+    ) -> Result<Self, SpectralError> {
         Ok(Self {
-            converter: Box::new(XyzConverter::new(range)?),
+            converter: Box::new(XyzConverter::with_observer(range, observer)?),
             buffer,
             route,
         })
