@@ -2,10 +2,11 @@
 """Control-variate / plain error ratios of `fspec experiment colorchecker`
 for every built-in illuminant and the spiky lamps of data/.
 
-    python3 tools/cv_ratios.py FSPEC_BINARY OUT_DIR [--runs 100] [--max-samples 1024]
+    python3 tools/cv_ratios.py FSPEC_BINARY OUT_DIR [--illuminants=a,b,…] [--runs 100] [--max-samples 1024]
 
 For each illuminant it runs the experiment and reads its CSV
-(`colorchecker-<slug>.csv`: method, samples, mean ΔE2000, mean ΔE76,
+(`colorchecker-<slug>.csv`; `--illuminants=` picks some, a name
+ending in .csv is a file of data/: method, samples, mean ΔE2000, mean ΔE76,
 standard error of the ΔE2000 mean over runs). For each strategy
 (uniform, stratified, hero) it prints the ratio of the control variate's
 mean ΔE2000 (8 wavelengths + 4 coefficients) to the same 8 wavelengths
@@ -42,9 +43,13 @@ def main():
     if len(args) < 2:
         sys.exit(__doc__)
     binary, out = args[0], pathlib.Path(args[1])
-    extra = args[2:]
     data = pathlib.Path(__file__).resolve().parent.parent / "data"
     illuminants = BUILTIN + [str(data / lamp) for lamp in LAMPS]
+    chosen = [a for a in args[2:] if a.startswith("--illuminants=")]
+    extra = [a for a in args[2:] if not a.startswith("--illuminants=")]
+    if chosen:
+        names = chosen[-1].split("=", 1)[1].split(",")
+        illuminants = [str(data / n) if n.endswith(".csv") else n for n in names]
     print("| illuminant | " + " | ".join(f"{s} geo | {s} last ± 2σ" for s in STRATEGIES) + " |")
     print("|---" * (1 + 2 * len(STRATEGIES)) + "|")
     for illuminant in illuminants:

@@ -137,8 +137,33 @@ impl SensorCurves {
         out
     }
 
+    /// The shape the parser guarantees: 3 to [`MAX_CURVES`] named curves,
+    /// each with a value per wavelength, at least two wavelengths, and a
+    /// matrix of three rows of one entry per curve (required unless there
+    /// are exactly three curves).
+    pub fn validate(&self) -> Result<(), CliError> {
+        let k = self.curves.len();
+        let shape_ok = (3..=MAX_CURVES).contains(&k)
+            && self.names.len() == k
+            && self.lambda_nm.len() >= 2
+            && self.curves.iter().all(|c| c.len() == self.lambda_nm.len())
+            && match &self.to_xyz {
+                Some(rows) => rows.iter().all(|r| r.len() == k),
+                None => k == 3,
+            };
+        if shape_ok {
+            Ok(())
+        } else {
+            Err(CliError::input(format!(
+                "{}: a sensor needs 3 to {MAX_CURVES} curves of one value per wavelength, at least two wavelengths, and a 3-row matrix unless it has exactly three curves",
+                self.origin
+            )))
+        }
+    }
+
     /// The observer the render uses (module docs).
     pub fn observer(&self) -> Result<Observer, CliError> {
+        self.validate()?;
         let raw: Vec<[f64; SAMPLES]> = (0..self.curves.len()).map(|k| self.on_grid(k)).collect();
         match &self.to_xyz {
             Some(matrix) => {

@@ -3,7 +3,9 @@
 //! worse than plain Monte Carlo where a pooled `α` is (the two broken
 //! choices are the negative controls).
 
-use spectral_core::control_variate::{AlphaStatistics, ControlVariate, CrossFitControlVariate};
+use spectral_core::control_variate::{
+    AlphaStatistics, ControlVariate, CrossFitColorControlVariate, CrossFitControlVariate,
+};
 
 /// xorshift64* — a small deterministic generator for the tests.
 struct Rng(u64);
@@ -160,4 +162,103 @@ fn folds_alternate_and_small_folds_use_no_alpha() {
     assert!((cv.alpha_for(1) - 0.5).abs() < 1e-12);
     let mean_d = d.iter().sum::<f64>() / 8.0;
     assert!((cv.estimate() - (2.0 + mean_d - 0.5 * mean_d)).abs() < 1e-12);
+}
+
+/// Colour: the three channels err together (a common `u`, as a line
+/// spectrum's hits raise X, Y and Z at once) and only channel 0's own
+/// control sees `u`. Per-channel `α`s subtract it from channel 0 alone and
+/// turn luminance noise into chromatic noise (the negative control); the
+/// 3 × 3 matrix regresses every channel on all three controls and makes
+/// no colour direction worse.
+#[test]
+fn the_colour_matrix_keeps_every_colour_direction_while_per_channel_alphas_do_not() {
+    const REPLICAS: usize = 2000;
+    const PASSES: usize = 64;
+    let truth = [1.0, 1.0, 1.0];
+    let mut rng = Rng(0xc010_5eed);
+    // Per replica: the chromatic (channel 0 − channel 1) and luminance
+    // (sum) errors of plain, per-channel and matrix estimates.
+    let mut errors: [[Vec<f64>; 3]; 2] = Default::default();
+    for _ in 0..REPLICAS {
+        let mut scalar = [CrossFitControlVariate::new(); 3];
+        let mut colour = CrossFitColorControlVariate::new();
+        let mut plain = [0.0f64; 3];
+        for _ in 0..PASSES {
+            let u = 2.0 * (rng.next_f64() - 0.5);
+            let small: [f64; 3] = core::array::from_fn(|_| 0.05 * (rng.next_f64() - 0.5));
+            let y: [f64; 3] = core::array::from_fn(|r| truth[r] + u + small[r]);
+            let d = [
+                u + 2.0 * (rng.next_f64() - 0.5),
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+            ];
+            for r in 0..3 {
+                scalar[r].add(y[r], d[r], 0.0);
+                scalar[r].end_batch();
+                plain[r] += y[r];
+            }
+            colour.add(y, d, [0.0; 3]);
+            colour.end_batch();
+        }
+        let estimates = [
+            plain.map(|v| v / PASSES as f64),
+            core::array::from_fn(|r| scalar[r].estimate()),
+            colour.estimate(),
+        ];
+        for (k, e) in estimates.iter().enumerate() {
+            errors[0][k].push(e[0] - e[1]);
+            errors[1][k].push(e.iter().sum::<f64>() - truth.iter().sum::<f64>());
+        }
+    }
+    let [chroma, luminance] = errors.map(|kinds| kinds.map(|e| mse(&e, 0.0)));
+    println!(
+        "chromatic MSE plain {:.3e} per-channel {:.3e} matrix {:.3e}; luminance plain {:.3e} per-channel {:.3e} matrix {:.3e}",
+        chroma[0], chroma[1], chroma[2], luminance[0], luminance[1], luminance[2]
+    );
+    let noise = 1.0 + 4.0 * (2.0 / REPLICAS as f64).sqrt();
+    assert!(
+        chroma[2] <= noise * chroma[0],
+        "the matrix made colour worse"
+    );
+    assert!(
+        luminance[2] <= noise * luminance[0],
+        "the matrix made luminance worse"
+    );
+    assert!(
+        luminance[2] < 0.9 * luminance[0],
+        "the matrix must still help"
+    );
+    // The negative control: per-channel α ruins the chromaticity.
+    assert!(chroma[1] > 3.0 * chroma[0], "per-channel: {}", chroma[1]);
+}
+
+/// The matrix version is unbiased too: convex integrands and controls.
+#[test]
+fn the_colour_matrix_is_unbiased() {
+    const REPLICAS: usize = 20_000;
+    const SAMPLES: usize = 16;
+    let truth = [
+        (3f64.exp() - 1.0) / 3.0,
+        (2f64.exp() - 1.0) / 2.0,
+        1.0 / 3.0,
+    ];
+    let mut rng = Rng(0xb1a5_0001);
+    let mut estimates: [Vec<f64>; 3] = Default::default();
+    for _ in 0..REPLICAS {
+        let mut cv = CrossFitColorControlVariate::new();
+        for _ in 0..SAMPLES {
+            let (u, v) = (rng.next_f64(), rng.next_f64());
+            let y = [(3.0 * u).exp(), (2.0 * u).exp(), u * u];
+            cv.add(y, [u, u * u, v], [0.5, 1.0 / 3.0, 0.5]);
+            cv.end_batch();
+        }
+        for (e, v) in estimates.iter_mut().zip(cv.estimate()) {
+            e.push(v);
+        }
+    }
+    for (e, t) in estimates.iter().zip(truth) {
+        let (mean, error) = mean_and_error(e);
+        println!("truth {t:.5}: {mean:.5} ± {error:.5}");
+        assert!((mean - t).abs() < 4.0 * error);
+    }
 }

@@ -21,10 +21,11 @@
 //!   wavelengths plus the 4-coefficient Fourier product as control variate
 //!   (`Y` the sampled estimate, `C` the Fourier product at the same
 //!   wavelengths through the same estimator, `μ` its exact XYZ by the
-//!   kernel), one batch per pass, cross-fitted per patch and channel
-//!   (`spectral_core::control_variate::CrossFitControlVariate`: the passes
-//!   of even index weighted by the shrunk `α` of the odd ones and vice
-//!   versa; unbiased because no `α` sees the samples it weights). The
+//!   kernel), one batch per pass, cross-fitted per patch with a 3 × 3
+//!   matrix (`spectral_core::control_variate::CrossFitColorControlVariate`:
+//!   the passes of even index weighted by the shrunk least-squares matrix
+//!   of the odd ones and vice versa; unbiased because no matrix sees the
+//!   samples it weights). The
 //!   tracer's pooled running `α` (`AlphaMode::Shared`), which this used
 //!   before, made spiky lamps worse than no control variate (the ratios
 //!   before and after are in `docs/results.md`).
@@ -47,7 +48,7 @@ use serde_json::{Value, json};
 use simd_tracer::sampling::rng::{Purpose, Rng};
 use spectral_core::cmf;
 use spectral_core::color::{Lab, Xyz};
-use spectral_core::control_variate::CrossFitControlVariate;
+use spectral_core::control_variate::CrossFitColorControlVariate;
 use spectral_core::data::tables::COLORCHECKER_NAMES;
 use spectral_core::delta_e::{delta_e76, delta_e2000};
 use spectral_core::observer::Observer;
@@ -358,7 +359,7 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
                 })
                 .collect();
             let mut sum_xyz = vec![[0.0f64; 3]; patches.len()];
-            let mut cvs = vec![[CrossFitControlVariate::new(); 3]; patches.len()];
+            let mut cvs = vec![CrossFitColorControlVariate::new(); patches.len()];
             let mut next = 0;
             for pass in 1..=config.max_samples {
                 match estimator {
@@ -398,10 +399,8 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
                             let c = SampledSpectrum::from_fourier(&patch.cv_spectrum, &range, &w)
                                 .to_channels(&w, &observer)
                                 .to_array();
-                            for r in 0..3 {
-                                cv[r].add(y[r], c[r], patch.cv_mu[r]);
-                                cv[r].end_batch();
-                            }
+                            cv.add(y, c, patch.cv_mu);
+                            cv.end_batch();
                         }
                     }
                 }
@@ -415,9 +414,7 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
                         Estimator::Sampled(_) | Estimator::SampledCv(_) => {
                             Xyz::from_array(sum_xyz[p].map(|v| v / pass as f64))
                         }
-                        Estimator::ControlVariate(_) => {
-                            Xyz::from_array(core::array::from_fn(|r| cvs[p][r].estimate()))
-                        }
+                        Estimator::ControlVariate(_) => Xyz::from_array(cvs[p].estimate()),
                     };
                     let lab = estimate.to_lab(white);
                     de[0] += delta_e2000(lab, patch.lab);
