@@ -12,6 +12,7 @@ pub mod partial_file;
 pub mod render_cmd;
 pub mod scene_file;
 pub mod scene_source;
+pub mod sensor_file;
 pub mod spectrum_cmd;
 pub mod spectrum_file;
 pub mod texture_file;

@@ -21,12 +21,14 @@ use crate::error::CliError;
 use crate::image_out::Exposure;
 use crate::partial_file::{self, FrameIdentity, PartialFilm};
 use crate::render_cmd::{
-    OutputOptions, ResolveTask, ToneKind, identity_difference, with_transport,
+    OutputOptions, ResolveTask, ToneKind, TransportBasis, identity_difference, with_transport,
 };
 use simd_tracer::render::{FilmState, PixelWindow};
 use spectral_core::SpectralRange;
+use spectral_core::observer::Observer;
 use std::ops::Range;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Arguments of `fspec merge`.
 #[derive(Debug, Clone, clap::Args)]
@@ -224,7 +226,13 @@ pub fn run(args: &MergeArgs) -> Result<MergeSummary, CliError> {
     let [min_nm, max_nm] = identity.range_nm;
     let range = SpectralRange::new(min_nm, max_nm)
         .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
-    let result = with_transport(&identity.transport, range, ResolveTask { state: &merged })?;
+    // Partial films are rendered with the default observer (render_cmd
+    // refuses another one for them).
+    let basis = TransportBasis {
+        range,
+        observer: &Arc::new(Observer::default()),
+    };
+    let result = with_transport(&identity.transport, basis, ResolveTask { state: &merged })?;
     let mut written = output.write_images(&result, &range)?;
     let passes = merged.passes.clone();
     let film = PartialFilm::new(identity, merged, [passes.start, passes.end]);

@@ -17,6 +17,7 @@ use crate::image_out::{
 use crate::partial_file::{self, FrameIdentity, PartialFilm};
 use crate::scene_file::{FilterChoice, MitsubaOptions};
 use crate::scene_source::{SceneDefaults, resolve_scene};
+use crate::sensor_file::{ObserverChoice, load_sensor_csv};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -34,10 +35,12 @@ use simd_tracer::transport::{
 };
 use spectral_core::SpectralRange;
 use spectral_core::color::Xyz;
+use spectral_core::observer::Observer;
 use spectral_core::sampling::WavelengthStrategy;
 use spectral_core::xyz::XyzRoute;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Duration;
 
@@ -288,6 +291,14 @@ pub struct RenderArgs {
     /// or estimate it per pixel.
     #[arg(long)]
     pub cv_alpha_per_pixel: bool,
+    /// What the channels measure: a CIE standard observer (cie1931-2, the
+    /// default, or cie1964-10); overrides the scene file's.
+    #[arg(long, value_name = "NAME", conflicts_with = "sensor")]
+    pub observer: Option<String>,
+    /// A camera sensor instead: a CSV of three or more response curves and
+    /// an optional matrix to XYZ (layout in docs/scene-format.md).
+    #[arg(long, value_name = "FILE.csv")]
+    pub sensor: Option<PathBuf>,
     /// Do not print progress (a one-line summary only).
     #[arg(long, short)]
     pub quiet: bool,
@@ -817,8 +828,18 @@ fn range_error(e: spectral_core::SpectralError) -> CliError {
     CliError::input(format!("spectral range: {e}"))
 }
 
+/// What every transport is built from besides its sizes: the range and
+/// the observer.
+#[derive(Debug, Clone, Copy)]
+pub struct TransportBasis<'a> {
+    /// The scene's spectral range.
+    pub range: SpectralRange,
+    /// What the film's channels measure.
+    pub observer: &'a Arc<Observer>,
+}
+
 fn fourier<const N: usize, K: TransportTask>(
-    range: SpectralRange,
+    basis: TransportBasis<'_>,
     buffer: BufferKind,
     to_color: ToColor,
     task: K,
@@ -828,20 +849,25 @@ fn fourier<const N: usize, K: TransportTask>(
         BufferKind::Rgb => Buffer::Xyz,
     };
     let transport =
-        FourierTransport::<N>::new(range, buffer, route(to_color)).map_err(range_error)?;
+        FourierTransport::<N>::with_observer(basis.range, buffer, route(to_color), basis.observer)
+            .map_err(range_error)?;
     task.run(&transport)
 }
 
 fn sampled<const C: usize, K: TransportTask>(
-    range: SpectralRange,
+    basis: TransportBasis<'_>,
     sampling: Sampling,
     task: K,
 ) -> Result<K::Output, CliError> {
-    task.run(&SampledTransport::<C>::new(range, strategy(sampling)))
+    task.run(&SampledTransport::<C>::with_observer(
+        basis.range,
+        strategy(sampling),
+        Arc::clone(basis.observer),
+    ))
 }
 
 fn cv<const C: usize, const N: usize, K: TransportTask>(
-    range: SpectralRange,
+    basis: TransportBasis<'_>,
     sampling: Sampling,
     alpha_per_pixel: bool,
     task: K,
@@ -851,16 +877,22 @@ fn cv<const C: usize, const N: usize, K: TransportTask>(
     } else {
         AlphaMode::Shared
     };
-    let transport = ControlVariateTransport::<C, N>::new(range, strategy(sampling), alpha)
-        .map_err(range_error)?;
+    let transport = ControlVariateTransport::<C, N>::with_observer(
+        basis.range,
+        strategy(sampling),
+        alpha,
+        Arc::clone(basis.observer),
+    )
+    .map_err(range_error)?;
     task.run(&transport)
 }
 
-/// Builds the transport of `spec` over `range` and runs `task` with it;
-/// sizes that are not compiled in are refused.
+/// Builds the transport of `spec` over `basis.range`, seen by
+/// `basis.observer`, and runs `task` with it; sizes that are not compiled
+/// in are refused.
 pub fn with_transport<K: TransportTask>(
     spec: &TransportSpec,
-    range: SpectralRange,
+    basis: TransportBasis<'_>,
     task: K,
 ) -> Result<K::Output, CliError> {
     let unsupported = |what: &str, value: usize, supported: &str| {
@@ -874,25 +906,25 @@ pub fn with_transport<K: TransportTask>(
             buffer,
             to_color,
         } => match coeffs {
-            4 => fourier::<4, K>(range, buffer, to_color, task),
-            8 => fourier::<8, K>(range, buffer, to_color, task),
-            12 => fourier::<12, K>(range, buffer, to_color, task),
-            16 => fourier::<16, K>(range, buffer, to_color, task),
-            24 => fourier::<24, K>(range, buffer, to_color, task),
-            32 => fourier::<32, K>(range, buffer, to_color, task),
+            4 => fourier::<4, K>(basis, buffer, to_color, task),
+            8 => fourier::<8, K>(basis, buffer, to_color, task),
+            12 => fourier::<12, K>(basis, buffer, to_color, task),
+            16 => fourier::<16, K>(basis, buffer, to_color, task),
+            24 => fourier::<24, K>(basis, buffer, to_color, task),
+            32 => fourier::<32, K>(basis, buffer, to_color, task),
             n => unsupported("--coeffs", n, "4, 8, 12, 16, 24, 32"),
         },
         TransportSpec::Sampled {
             wavelengths,
             sampling,
         } => match wavelengths {
-            1 => sampled::<1, K>(range, sampling, task),
-            2 => sampled::<2, K>(range, sampling, task),
-            4 => sampled::<4, K>(range, sampling, task),
-            8 => sampled::<8, K>(range, sampling, task),
-            12 => sampled::<12, K>(range, sampling, task),
-            16 => sampled::<16, K>(range, sampling, task),
-            32 => sampled::<32, K>(range, sampling, task),
+            1 => sampled::<1, K>(basis, sampling, task),
+            2 => sampled::<2, K>(basis, sampling, task),
+            4 => sampled::<4, K>(basis, sampling, task),
+            8 => sampled::<8, K>(basis, sampling, task),
+            12 => sampled::<12, K>(basis, sampling, task),
+            16 => sampled::<16, K>(basis, sampling, task),
+            32 => sampled::<32, K>(basis, sampling, task),
             c => unsupported("--wavelengths", c, "1, 2, 4, 8, 12, 16, 32"),
         },
         TransportSpec::Cv {
@@ -903,15 +935,15 @@ pub fn with_transport<K: TransportTask>(
         } => {
             let a = alpha_per_pixel;
             match (wavelengths, coeffs) {
-                (4, 4) => cv::<4, 4, K>(range, sampling, a, task),
-                (4, 8) => cv::<4, 8, K>(range, sampling, a, task),
-                (4, 12) => cv::<4, 12, K>(range, sampling, a, task),
-                (8, 4) => cv::<8, 4, K>(range, sampling, a, task),
-                (8, 8) => cv::<8, 8, K>(range, sampling, a, task),
-                (8, 12) => cv::<8, 12, K>(range, sampling, a, task),
-                (12, 4) => cv::<12, 4, K>(range, sampling, a, task),
-                (12, 8) => cv::<12, 8, K>(range, sampling, a, task),
-                (12, 12) => cv::<12, 12, K>(range, sampling, a, task),
+                (4, 4) => cv::<4, 4, K>(basis, sampling, a, task),
+                (4, 8) => cv::<4, 8, K>(basis, sampling, a, task),
+                (4, 12) => cv::<4, 12, K>(basis, sampling, a, task),
+                (8, 4) => cv::<8, 4, K>(basis, sampling, a, task),
+                (8, 8) => cv::<8, 8, K>(basis, sampling, a, task),
+                (8, 12) => cv::<8, 12, K>(basis, sampling, a, task),
+                (12, 4) => cv::<12, 4, K>(basis, sampling, a, task),
+                (12, 8) => cv::<12, 8, K>(basis, sampling, a, task),
+                (12, 12) => cv::<12, 12, K>(basis, sampling, a, task),
                 (c, n) => Err(CliError::input(format!(
                     "--transport cv with --wavelengths {c} --coeffs {n} is not supported (C and N in 4, 8, 12)"
                 ))),
@@ -1510,6 +1542,14 @@ pub fn render(
             "--crop must lie inside the scene's crop window for --passes, --resume and .fspart outputs",
         ));
     }
+    let observer_choice = observer_choice(args, &defaults)?;
+    if splitting && !observer_choice.is_default() {
+        return Err(CliError::input(format!(
+            "{}: partial films (--passes, --resume, .fspart) record no observer yet: render with the default cie1931-2",
+            observer_choice.describe()
+        )));
+    }
+    let observer = Arc::new(observer_choice.observer()?);
     let identity = frame_identity(args, &settings, frame, &scene);
     let parts = plan_parts(args, &settings, identity)?;
     settings.spp = parts.spp;
@@ -1541,7 +1581,11 @@ pub fn render(
             keep_state: output.keeps_state(),
         },
     };
-    let (result, state, memory) = with_transport(&TransportSpec::of(args), scene.range(), task)?;
+    let basis = TransportBasis {
+        range: scene.range(),
+        observer: &observer,
+    };
+    let (result, state, memory) = with_transport(&TransportSpec::of(args), basis, task)?;
     let requested = [parts.job_first_pass, parts.job_first_pass + parts.spp];
     Ok(RenderedFrame {
         result,
@@ -1549,6 +1593,21 @@ pub fn render(
         partial: state.map(|state| PartialFilm::new(parts.identity, state, requested)),
         memory,
     })
+}
+
+/// What the channels measure: `--observer` or `--sensor`, else the scene
+/// file's `[render]` choice, else CIE 1931 2°.
+fn observer_choice(
+    args: &RenderArgs,
+    defaults: &SceneDefaults,
+) -> Result<ObserverChoice, CliError> {
+    if let Some(name) = &args.observer {
+        return ObserverChoice::standard(name);
+    }
+    if let Some(path) = &args.sensor {
+        return load_sensor_csv(path).map(ObserverChoice::Sensor);
+    }
+    Ok(defaults.observer.clone().unwrap_or_default())
 }
 
 /// The final line: time, samples/s, rejected samples, predicted peak

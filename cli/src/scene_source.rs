@@ -10,8 +10,10 @@ use spectral_core::SpectralRange;
 use std::path::Path;
 
 /// Render settings a scene file may set (CLI flags override them).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct SceneDefaults {
+    /// What the channels measure.
+    pub observer: Option<crate::sensor_file::ObserverChoice>,
     /// Width, pixels.
     pub width: Option<u32>,
     /// Height, pixels.
@@ -70,6 +72,7 @@ pub fn resolve_scene(
         }
     };
     let defaults = SceneDefaults {
+        observer: loaded.render.observer.clone(),
         width: loaded.render.width,
         height: loaded.render.height,
         spp: loaded.render.spp,

@@ -15,6 +15,13 @@ fn csv_spectrum_corpus() -> TestResult {
 }
 
 #[test]
+fn sensor_csv_corpus() -> TestResult {
+    let count = replay_corpus("sensor_csv", fspec_cli::sensor_file::fuzz_sensor_csv)?;
+    assert!(count >= 5, "only {count} seeds");
+    Ok(())
+}
+
+#[test]
 fn scene_toml_corpus() -> TestResult {
     let count = replay_corpus("scene_toml", fspec_cli::scene_file::fuzz_scene_toml)?;
     assert!(count >= 5, "only {count} seeds");

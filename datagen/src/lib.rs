@@ -196,6 +196,28 @@ pub fn generate(data_dir: &Path) -> Result<String, String> {
         doc.remove(0);
     }
 
+    // CIE 1964 10° colour-matching functions, on the same 1 nm grid.
+    let cmf10 = read_table(&data_dir.join("cie1964_10deg_cmf.csv"))?;
+    if cmf10.column(0) != nm {
+        return Err("cie1964_10deg_cmf.csv: wavelengths differ from the CIE 1931 table's".into());
+    }
+    let mut doc = cmf10.comments.clone();
+    for (index, name) in [
+        (1, "CIE1964_X_BAR"),
+        (2, "CIE1964_Y_BAR"),
+        (3, "CIE1964_Z_BAR"),
+    ] {
+        doc.insert(
+            0,
+            format!(
+                "Column `{}` (on the grid of `CIE1931_NM`).",
+                cmf10.columns[index]
+            ),
+        );
+        write_array(&mut out, &doc, name, &cmf10.column(index));
+        doc.remove(0);
+    }
+
     // Illuminants.
     for (_, ident, file) in ILLUMINANTS {
         let table = read_table(&data_dir.join(file))?;

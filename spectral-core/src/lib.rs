@@ -111,6 +111,7 @@ pub mod lane;
 pub mod math {}
 pub mod mese;
 pub mod neural;
+pub mod observer;
 pub mod optics;
 pub mod range;
 pub mod registry;

@@ -31,6 +31,7 @@ use crate::basis::FourierBasis;
 use crate::cmf::{self, Y_BAR_INTEGRAL};
 use crate::color::Xyz;
 use crate::fourier::FourierSpectrum;
+use crate::observer::Observer;
 use crate::range::SpectralRange;
 use crate::spectrum::Spectrum;
 use core::ops::{Add, AddAssign, Mul, MulAssign};
@@ -265,6 +266,28 @@ impl<const C: usize> SampledSpectrum<C> {
         Self {
             values: self.values.map(|v| v * factor),
         }
+    }
+
+    /// The same estimate for another observer's channels
+    /// ([`crate::observer`]): `(1/C) Σ L(λ_i) r_k(λ_i)/p(λ_i) / ∫r_1`,
+    /// the same arithmetic as [`to_xyz`](Self::to_xyz) (bit for bit for
+    /// CIE 1931).
+    pub fn to_channels(&self, wavelengths: &SampledWavelengths<C>, observer: &Observer) -> Xyz {
+        let mut sums = [0.0f64; 3];
+        for ((&value, &lambda_nm), &pdf) in self
+            .values
+            .iter()
+            .zip(&wavelengths.lambda_nm)
+            .zip(&wavelengths.pdf_per_nm)
+        {
+            if pdf > 0.0 {
+                let weight = f64::from(value) / f64::from(pdf);
+                for (acc, c) in sums.iter_mut().zip(observer.at(f64::from(lambda_nm))) {
+                    *acc += weight * c;
+                }
+            }
+        }
+        Xyz::from_array(sums.map(|v| v / (C as f64 * observer.normaliser_nm())))
     }
 
     /// The film estimate `(1/C) Σ L(λ_i) x̄(λ_i)/p(λ_i) / ∫ȳ` (zero-pdf

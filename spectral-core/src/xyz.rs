@@ -40,6 +40,7 @@ use crate::color::Xyz;
 use crate::fourier::FourierSpectrum;
 use crate::lane::Lane;
 use crate::mese::Mese;
+use crate::observer::Observer;
 use crate::range::SpectralRange;
 use crate::spectrum::{Spectrum, TabulatedSpectrum};
 
@@ -84,12 +85,19 @@ impl<const N: usize> XyzKernel<N> {
     /// # Ok::<(), spectral_core::SpectralError>(())
     /// ```
     pub fn new(basis: &FourierBasis<N>) -> Result<Self, SpectralError> {
+        Self::for_observer(basis, &Observer::default())
+    }
+
+    /// The kernel of another observer's three curves
+    /// ([`crate::observer`]): rows `(λ1−λ0) r_{k,j}/∫r_1` (doubled for
+    /// `j > 0`), `r_{k,j}` the exact projection of curve `k`; the same
+    /// `Err` as [`new`](Self::new).
+    pub fn for_observer(basis: &FourierBasis<N>, observer: &Observer) -> Result<Self, SpectralError> {
         let range = basis.range();
         check_inside_table(range)?;
-        let scale = range.width_nm() / Y_BAR_INTEGRAL;
-        let cmfs = cmf::cmfs();
+        let scale = range.width_nm() / observer.normaliser_nm();
         let rows = core::array::from_fn(|r| {
-            let coeffs = cmfs[r].project::<N>(range);
+            let coeffs = observer.project::<N>(r, range);
             core::array::from_fn(|j| {
                 let doubling = if j == 0 { 1.0 } else { 2.0 };
                 doubling * scale * coeffs.coeffs[j]
@@ -187,8 +195,18 @@ impl<const N: usize> XyzConverter<N> {
     /// A converter for `basis`; `Err(InvalidRange)` unless its range lies
     /// in the CMF table (360–830 nm).
     pub fn new(basis: &FourierBasis<N>) -> Result<Self, SpectralError> {
+        Self::with_observer(basis, &Observer::default())
+    }
+
+    /// A converter to another observer's channels ([`crate::observer`]):
+    /// every route uses its curves and normaliser; the same `Err` as
+    /// [`new`](Self::new).
+    pub fn with_observer(
+        basis: &FourierBasis<N>,
+        observer: &Observer,
+    ) -> Result<Self, SpectralError> {
         let range = *basis.range();
-        let kernel = XyzKernel::new(basis)?;
+        let kernel = XyzKernel::for_observer(basis, observer)?;
         let mut cosines = [[0.0f32; N]; cmf::SAMPLES];
         let mut weighted_cmf = [[0.0f32; 3]; cmf::SAMPLES];
         let mut first_sample = None;
@@ -198,8 +216,8 @@ impl<const N: usize> XyzConverter<N> {
             for (j, c) in cosines[row].iter_mut().enumerate() {
                 *c = libm::cos(j as f64 * phase) as f32;
             }
-            let cmf_i = cmf::sample(i);
-            weighted_cmf[row] = cmf_i.map(|v| (v * weight / Y_BAR_INTEGRAL) as f32);
+            let curves_i = observer.sample(i);
+            weighted_cmf[row] = curves_i.map(|v| (v * weight / observer.normaliser_nm()) as f32);
             sample_count = row + 1;
         }
         Ok(Self {
@@ -207,7 +225,7 @@ impl<const N: usize> XyzConverter<N> {
             kernel,
             cosines,
             weighted_cmf,
-            mese_kernel: XyzKernel::new(&FourierBasis::new(range))?,
+            mese_kernel: XyzKernel::for_observer(basis, observer)?,
             first_sample: first_sample.unwrap_or(0),
             sample_count,
         })

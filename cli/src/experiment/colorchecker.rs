@@ -21,10 +21,17 @@
 //!   wavelengths plus the 4-coefficient Fourier product as control variate
 //!   (`Y` the sampled estimate, `C` the Fourier product at the same
 //!   wavelengths through the same estimator, `μ` its exact XYZ by the
-//!   kernel), one batch per pass over the 24 patches, `α` per channel pooled
-//!   over the patches' earlier passes — the tracer's default
-//!   (`AlphaMode::Shared`), unbiased because `α` never sees the batch it
-//!   weights (the first pass is plain Monte Carlo).
+//!   kernel), one batch per pass, cross-fitted per patch with a 3 × 3
+//!   matrix (`spectral_core::control_variate::CrossFitColorControlVariate`:
+//!   the passes of even index weighted by the shrunk least-squares matrix
+//!   of the odd ones and vice versa; unbiased because no matrix sees the
+//!   samples it weights). The
+//!   tracer's pooled running `α` (`AlphaMode::Shared`), which this used
+//!   before, made spiky lamps worse than no control variate (the ratios
+//!   before and after are in `docs/results.md`).
+//!
+//! `--observer cie1964-10` computes everything (reference, white, every
+//! estimator's weights and kernels) with the CIE 1964 10° observer.
 //!
 //! For each run (independent seeds) the estimate after `n` samples
 //! (`n` = 1, 2, 4, …, `--max-samples`; the estimates after `n` samples are
@@ -42,11 +49,12 @@ use simd_tracer::sampling::rng::{Purpose, Rng};
 use spectral_core::FourierBasis;
 use spectral_core::cmf::{self, Y_BAR_INTEGRAL};
 use spectral_core::color::{Lab, Xyz};
-use spectral_core::control_variate::{AlphaStatistics, ControlVariate};
+use spectral_core::control_variate::CrossFitColorControlVariate;
 use spectral_core::data::tables::COLORCHECKER_NAMES;
 use spectral_core::delta_e::{delta_e76, delta_e2000};
+use spectral_core::observer::Observer;
 use spectral_core::registry::Builtin;
-use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy, cmf_at};
+use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy};
 use spectral_core::xyz::XyzKernel;
 use spectral_core::{FourierSpectrum, SpectralRange, Spectrum, TabulatedSpectrum};
 use std::fmt::Write as _;
@@ -153,6 +161,11 @@ impl Illuminant {
 /// Exact XYZ (normalised by `∫ȳ`) over 360–830 nm of the product of at most
 /// two polylines (module docs); more factors would need a higher-order rule.
 pub fn exact_xyz(factors: &[TabulatedSpectrum<'_>]) -> Xyz {
+    exact_channels(factors, &Observer::default())
+}
+
+/// [`exact_xyz`] seen by another observer (normalised by its `∫ r_1`).
+pub fn exact_channels(factors: &[TabulatedSpectrum<'_>], observer: &Observer) -> Xyz {
     debug_assert!(factors.len() <= 2, "Simpson is exact up to cubics");
     let (lo, hi) = (cmf::FIRST_NM, cmf::LAST_NM);
     let mut breaks: Vec<f64> = (0..cmf::SAMPLES)
@@ -170,7 +183,7 @@ pub fn exact_xyz(factors: &[TabulatedSpectrum<'_>]) -> Xyz {
     breaks.dedup();
     let integrand = |l: f64| {
         let v: f64 = factors.iter().map(|f| f.value(l)).product();
-        cmf_at(l).map(|c| c * v)
+        observer.at(l).map(|c| c * v)
     };
     let mut xyz = [0.0; 3];
     for pair in breaks.windows(2) {
@@ -180,7 +193,7 @@ pub fn exact_xyz(factors: &[TabulatedSpectrum<'_>]) -> Xyz {
             xyz[r] += (b - a) / 6.0 * (fa[r] + 4.0 * fm[r] + fb[r]);
         }
     }
-    Xyz::from_array(xyz.map(|v| v / Y_BAR_INTEGRAL))
+    Xyz::from_array(xyz.map(|v| v / observer.normaliser_nm()))
 }
 
 /// An estimator of the experiment.
@@ -271,25 +284,27 @@ fn uniforms<const C: usize>(rng: &mut Rng) -> [f32; C] {
 fn sampled_xyz<const C: usize>(
     strategy: WavelengthStrategy,
     rng: &mut Rng,
+    observer: &Observer,
     radiance: impl Fn(f32) -> f32,
 ) -> [f64; 3] {
     let w = SampledWavelengths::<C>::sample(strategy, &SpectralRange::VISIBLE, uniforms(rng));
     let values = SampledSpectrum {
         values: w.lambda_nm().map(radiance),
     };
-    values.to_xyz(&w).to_array()
+    values.to_channels(&w, observer).to_array()
 }
 
 /// Computes the experiment for one illuminant.
 pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliError> {
     let range = SpectralRange::VISIBLE;
     let e = illuminant.tabulated()?;
-    let raw_white = exact_xyz(&[e]);
+    let observer = Observer::standard(config.observer);
+    let raw_white = exact_channels(&[e], &observer);
     let k = WHITE_Y / raw_white.y;
     let white = raw_white.scale(k);
-    let kernel = XyzKernel::<COEFFS>::new(&FourierBasis::new(range))
+    let kernel = XyzKernel::<COEFFS>::for_observer(&FourierBasis::new(range), &observer)
         .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
-    let cv_kernel = XyzKernel::<CV_COEFFS>::new(&FourierBasis::new(range))
+    let cv_kernel = XyzKernel::<CV_COEFFS>::for_observer(&FourierBasis::new(range), &observer)
         .map_err(|e| CliError::input(format!("spectral range: {e}")))?;
     let e12 = e.project::<COEFFS>(&range).scale(k);
     let e4 = e.project::<CV_COEFFS>(&range).scale(k);
@@ -298,7 +313,7 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
         let reflectance = Builtin::ColorChecker(index).tabulated().ok_or_else(|| {
             CliError::input(format!("colorchecker patch {} has no table", index + 1))
         })?;
-        let xyz = exact_xyz(&[e, reflectance]).scale(k);
+        let xyz = exact_channels(&[e, reflectance], &observer).scale(k);
         let product12 = e12.product(&reflectance.project::<COEFFS>(&range));
         let product4 = e4.product(&reflectance.project::<CV_COEFFS>(&range));
         patches.push(Patch {
@@ -345,23 +360,14 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
                 })
                 .collect();
             let mut sum_xyz = vec![[0.0f64; 3]; patches.len()];
-            let mut cvs = vec![[ControlVariate::new(); 3]; patches.len()];
+            let mut cvs = vec![CrossFitColorControlVariate::new(); patches.len()];
             let mut next = 0;
             for pass in 1..=config.max_samples {
                 match estimator {
                     Estimator::Fourier => {}
                     Estimator::Sampled(strategy) => {
                         for ((patch, rng), acc) in patches.iter().zip(&mut rngs).zip(&mut sum_xyz) {
-                            let xyz =
-                                sampled_xyz::<WAVELENGTHS>(strategy, rng, |l| radiance(patch, l));
-                            for (a, v) in acc.iter_mut().zip(xyz) {
-                                *a += v;
-                            }
-                        }
-                    }
-                    Estimator::SampledCv(strategy) => {
-                        for ((patch, rng), acc) in patches.iter().zip(&mut rngs).zip(&mut sum_xyz) {
-                            let xyz = sampled_xyz::<CV_WAVELENGTHS>(strategy, rng, |l| {
+                            let xyz = sampled_xyz::<WAVELENGTHS>(strategy, rng, &observer, |l| {
                                 radiance(patch, l)
                             });
                             for (a, v) in acc.iter_mut().zip(xyz) {
@@ -369,14 +375,18 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
                             }
                         }
                     }
-                    Estimator::ControlVariate(strategy) => {
-                        let mut pooled = [AlphaStatistics::default(); 3];
-                        for cv in &cvs {
-                            for (p, c) in pooled.iter_mut().zip(cv) {
-                                p.merge(c.statistics());
+                    Estimator::SampledCv(strategy) => {
+                        for ((patch, rng), acc) in patches.iter().zip(&mut rngs).zip(&mut sum_xyz) {
+                            let xyz =
+                                sampled_xyz::<CV_WAVELENGTHS>(strategy, rng, &observer, |l| {
+                                    radiance(patch, l)
+                                });
+                            for (a, v) in acc.iter_mut().zip(xyz) {
+                                *a += v;
                             }
                         }
-                        let alpha = pooled.map(|p| p.alpha());
+                    }
+                    Estimator::ControlVariate(strategy) => {
                         for ((patch, rng), cv) in patches.iter().zip(&mut rngs).zip(&mut cvs) {
                             let w = SampledWavelengths::<CV_WAVELENGTHS>::sample(
                                 strategy,
@@ -386,18 +396,16 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
                             let values = SampledSpectrum {
                                 values: w.lambda_nm().map(|l| radiance(patch, l)),
                             };
-                            let y = values.to_xyz(&w).to_array();
+                            let y = values.to_channels(&w, &observer).to_array();
                             let c = SampledSpectrum::from_fourier(
                                 &patch.cv_spectrum,
                                 &FourierBasis::new(range),
                                 &w,
                             )
-                            .to_xyz(&w)
+                            .to_channels(&w, &observer)
                             .to_array();
-                            for r in 0..3 {
-                                cv[r].add(y[r], c[r], patch.cv_mu[r]);
-                                cv[r].end_batch_with_alpha(alpha[r]);
-                            }
+                            cv.add(y, c, patch.cv_mu);
+                            cv.end_batch();
                         }
                     }
                 }
@@ -411,9 +419,7 @@ pub fn compute(config: &Config, illuminant: &Illuminant) -> Result<Outcome, CliE
                         Estimator::Sampled(_) | Estimator::SampledCv(_) => {
                             Xyz::from_array(sum_xyz[p].map(|v| v / pass as f64))
                         }
-                        Estimator::ControlVariate(_) => {
-                            Xyz::from_array(core::array::from_fn(|r| cvs[p][r].estimate()))
-                        }
+                        Estimator::ControlVariate(_) => Xyz::from_array(cvs[p].estimate()),
                     };
                     let lab = estimate.to_lab(white);
                     de[0] += delta_e2000(lab, patch.lab);

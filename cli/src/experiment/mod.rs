@@ -33,6 +33,7 @@ pub mod truncation;
 use crate::error::CliError;
 use clap::ValueEnum;
 use report::{Claim, Section, claims_markdown, write_text};
+use spectral_core::observer::StandardObserver;
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -114,6 +115,9 @@ pub struct ExperimentArgs {
     /// file (default d65; `all` runs d65 and led-b4).
     #[arg(long)]
     pub illuminant: Option<String>,
+    /// Colorchecker observer: cie1931-2 (default) or cie1964-10.
+    #[arg(long)]
+    pub observer: Option<String>,
     /// Colorchecker only: print the results as JSON on stdout.
     #[arg(long)]
     pub json: bool,
@@ -145,6 +149,8 @@ pub struct Config {
     pub max_samples: usize,
     /// Render threads.
     pub threads: Option<usize>,
+    /// The colorchecker's observer.
+    pub observer: StandardObserver,
 }
 
 impl Config {
@@ -205,6 +211,12 @@ impl Config {
             truncation_spp: (spp / 4).max(1),
             runs,
             max_samples,
+            observer: match &args.observer {
+                Some(name) => StandardObserver::lookup(name).map_err(|_| {
+                    CliError::input(format!("--observer {name}: use cie1931-2 or cie1964-10"))
+                })?,
+                None => StandardObserver::Cie1931,
+            },
             threads: args.threads,
         })
     }
@@ -261,14 +273,14 @@ pub fn run(args: &ExperimentArgs, out: &mut dyn Write) -> Result<(), CliError> {
             "--json is only for `fspec experiment colorchecker`",
         ));
     }
-    if args.illuminant.is_some()
+    if (args.illuminant.is_some() || args.observer.is_some())
         && !matches!(
             args.name,
             ExperimentName::Colorchecker | ExperimentName::All
         )
     {
         return Err(CliError::input(
-            "--illuminant is only for the colorchecker experiment (or `all`)",
+            "--illuminant and --observer are only for the colorchecker experiment (or `all`)",
         ));
     }
     match (args.name, &args.manifest) {

@@ -216,8 +216,10 @@ pub struct LoadedScene {
 }
 
 /// Render settings a scene file may preset (command-line flags override).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct RenderDefaults {
+    /// What the channels measure (`observer` or `sensor` in `[render]`).
+    pub observer: Option<crate::sensor_file::ObserverChoice>,
     /// Image width, pixels.
     pub width: Option<u32>,
     /// Image height, pixels.

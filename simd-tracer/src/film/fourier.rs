@@ -4,6 +4,7 @@
 use super::{Buffer, Film, FilmMode, all_finite};
 use spectral_core::FourierBasis;
 use spectral_core::color::Xyz;
+use spectral_core::observer::Observer;
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, SpectralError, SpectralRange};
 
@@ -23,8 +24,18 @@ impl<const N: usize> FourierFilm<N> {
         buffer: Buffer,
         route: XyzRoute,
     ) -> Result<Self, SpectralError> {
+        Self::with_observer(range, buffer, route, &Observer::default())
+    }
+
+    /// The same converting to another observer's channels.
+    pub fn with_observer(
+        range: SpectralRange,
+        buffer: Buffer,
+        route: XyzRoute,
+        observer: &Observer,
+    ) -> Result<Self, SpectralError> {
         Ok(Self {
-            converter: Box::new(XyzConverter::new(&FourierBasis::new(range))?),
+            converter: Box::new(XyzConverter::with_observer(&FourierBasis::new(range), observer)?),
             buffer,
             route,
         })

@@ -12,9 +12,11 @@ use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum};
 use crate::simd::{LANES, LaneMask};
 use spectral_core::FourierBasis;
+use spectral_core::observer::Observer;
 use spectral_core::sampling::{SampledSpectrum, WavelengthStrategy};
 use spectral_core::xyz::XyzRoute;
 use spectral_core::{FourierSpectrum, Lane, SpectralError, SpectralRange};
+use std::sync::Arc;
 use wide::f32x8;
 
 // ---------------------------------------------------------------- control variate
@@ -35,9 +37,26 @@ impl<const C: usize, const N: usize> ControlVariateTransport<C, N> {
         strategy: WavelengthStrategy,
         alpha: AlphaMode,
     ) -> Result<Self, SpectralError> {
+        Self::with_observer(range, strategy, alpha, Arc::new(Observer::default()))
+    }
+
+    /// The same seen by another observer: `Y` and `C` weighted by its
+    /// curves, `μ` by the projection of its curves (the same linear map
+    /// twice, so `E[C] = μ` still holds exactly).
+    pub fn with_observer(
+        range: SpectralRange,
+        strategy: WavelengthStrategy,
+        alpha: AlphaMode,
+        observer: Arc<Observer>,
+    ) -> Result<Self, SpectralError> {
         Ok(Self {
-            fourier: FourierTransport::new(range, Buffer::Xyz, XyzRoute::Zeroth)?,
-            sampled: SampledTransport::new(range, strategy),
+            fourier: FourierTransport::with_observer(
+                range,
+                Buffer::Xyz,
+                XyzRoute::Zeroth,
+                &observer,
+            )?,
+            sampled: SampledTransport::with_observer(range, strategy, observer),
             range,
             film: ControlVariateFilm { alpha },
         })
@@ -152,13 +171,14 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
         let mu = self.fourier.film.converter.zeroth(&radiance.0);
         core::array::from_fn(|lane| {
             let w = wavelengths.camera_lane(lane);
-            let y = sampled_lane(&radiance.1, lane).to_xyz(w);
+            let observer = &self.sampled.observer;
+            let y = sampled_lane(&radiance.1, lane).to_channels(w, observer);
             let series: FourierSpectrum<f32, N> =
                 FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
                     radiance.0.coeffs[j].to_array()[lane]
                 }));
-            let c =
-                SampledSpectrum::from_fourier(&series, &FourierBasis::new(self.range), w).to_xyz(w);
+            let c = SampledSpectrum::from_fourier(&series, &FourierBasis::new(self.range), w)
+                .to_channels(w, observer);
             CvSample {
                 y: y.to_array().map(|v| v as f32),
                 c: c.to_array().map(|v| v as f32),

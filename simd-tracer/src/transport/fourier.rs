@@ -9,6 +9,7 @@ use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum, SpectralRef};
 use crate::simd::{LANES, LaneMask};
 use crate::spectra::MAX_COEFFS;
+use spectral_core::observer::Observer;
 use spectral_core::xyz::{XyzConverter, XyzRoute};
 use spectral_core::{FourierSpectrum, Lane, SpectralError, SpectralRange};
 use wide::bytemuck::cast;
@@ -34,6 +35,19 @@ impl<const N: usize> FourierTransport<N> {
         Ok(Self {
             film: FourierFilm::new(range, buffer, route)?,
             width_nm: range.width_nm() as f32,
+        })
+    }
+
+    /// The same seen by another observer ([`spectral_core::observer`]):
+    /// the film's kernel and routes project its curves instead.
+    pub fn with_observer(
+        range: SpectralRange,
+        buffer: Buffer,
+        route: XyzRoute,
+        observer: &Observer,
+    ) -> Result<Self, SpectralError> {
+        Ok(Self {
+            film: FourierFilm::with_observer(range, buffer, route, observer)?,
         })
     }
 

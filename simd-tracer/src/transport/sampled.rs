@@ -10,22 +10,41 @@ use crate::shading::material::{Fluorescence, LaneSpectrum, SpectralRef};
 use crate::simd::{LANES, LaneMask};
 use crate::spectra::DensePoint;
 use spectral_core::SpectralRange;
+use spectral_core::observer::Observer;
 use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy};
+use std::sync::Arc;
 use wide::f32x8;
 
 // ---------------------------------------------------------------- sampled
 
-/// Light as `C` sampled wavelengths per path.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Light as `C` sampled wavelengths per path, each sample weighted by the
+/// observer's curves at its wavelengths (CIE 1931 unless chosen).
+#[derive(Debug, Clone, PartialEq)]
 pub struct SampledTransport<const C: usize> {
     pub(super) strategy: WavelengthStrategy,
     pub(super) range: SpectralRange,
+    pub(super) observer: Arc<Observer>,
 }
 
 impl<const C: usize> SampledTransport<C> {
-    /// `C` wavelengths per path over `range`, drawn by `strategy`.
+    /// `C` wavelengths per path over `range`, drawn by `strategy`, seen by
+    /// the CIE 1931 observer.
     pub fn new(range: SpectralRange, strategy: WavelengthStrategy) -> Self {
-        Self { strategy, range }
+        Self::with_observer(range, strategy, Arc::new(Observer::default()))
+    }
+
+    /// The same with another observer ([`spectral_core::observer`]): an
+    /// exact change of weights, no extra noise.
+    pub fn with_observer(
+        range: SpectralRange,
+        strategy: WavelengthStrategy,
+        observer: Arc<Observer>,
+    ) -> Self {
+        Self {
+            strategy,
+            range,
+            observer,
+        }
     }
 }
 
@@ -292,7 +311,7 @@ impl<const C: usize> Transport for SampledTransport<C> {
     ) -> [[f32; 3]; LANES] {
         core::array::from_fn(|lane| {
             sampled_lane(radiance, lane)
-                .to_xyz(wavelengths.camera_lane(lane))
+                .to_channels(wavelengths.camera_lane(lane), &self.observer)
                 .to_array()
                 .map(|v| v as f32)
         })

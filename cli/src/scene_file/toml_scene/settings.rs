@@ -6,6 +6,7 @@ use crate::error::CliError;
 use crate::scene_file::construction::MapSettings;
 use crate::scene_file::toml_reader::Item;
 use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults};
+use crate::sensor_file::{ObserverChoice, load_sensor_csv};
 use glam::{Mat3, Vec3};
 use simd_tracer::film::FilmMode;
 use simd_tracer::scene::camera::{Camera, CameraError};
@@ -26,14 +27,33 @@ impl Loader<'_> {
                 "seed",
                 "hide_emitters",
                 "film",
+                "observer",
+                "sensor",
             ],
             "[render]",
         )?;
+        let observer = match (table.get("observer"), table.get("sensor")) {
+            (Some(_), Some(sensor)) => {
+                return Err(sensor.err(src, "give `observer` or `sensor`, not both"));
+            }
+            (Some(name), None) => Some(
+                ObserverChoice::standard(name.string(src)?)
+                    .map_err(|e| name.err(src, e.to_string()))?,
+            ),
+            (None, Some(sensor)) => {
+                let path = self.file(&sensor)?;
+                Some(ObserverChoice::Sensor(
+                    load_sensor_csv(&path).map_err(|e| sensor.err(src, e.to_string()))?,
+                ))
+            }
+            (None, None) => None,
+        };
         let get = |key: &str, min: i64, max: i64| -> Result<Option<i64>, CliError> {
             table.get(key).map(|i| i.integer(src, min, max)).transpose()
         };
         let u32_max = i64::from(u32::MAX);
         Ok(RenderDefaults {
+            observer,
             width: get("width", 1, MAX_IMAGE_EDGE)?.map(|v| v as u32),
             height: get("height", 1, MAX_IMAGE_EDGE)?.map(|v| v as u32),
             spp: get("spp", 1, u32_max)?.map(|v| v as u32),
