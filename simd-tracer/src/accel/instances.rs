@@ -240,6 +240,11 @@ impl InstanceBvh {
         self.placed.get(instance as usize).map(|p| p.mesh)
     }
 
+    /// The object-to-world map of instance `instance`.
+    pub fn object_to_world(&self, instance: u32) -> Option<Affine3A> {
+        self.object_to_world.get(instance as usize).copied()
+    }
+
     /// Bounds of every instance together (`None` without instances).
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         self.top

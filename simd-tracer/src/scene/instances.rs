@@ -358,7 +358,8 @@ impl Instances {
     /// Checks the meshes' layout (one material per triangle, texture
     /// coordinates and shading indices for all triangles or none, shading
     /// indices in range), that every material exists and none emits, that
-    /// each instance's record is the one its placement makes, and the
+    /// each instance's record is the one its placement makes and names the
+    /// mesh and map of its tree entry, and the
     /// two-level tree ([`InstanceBvh::validate`]).
     pub fn validate(&self, materials: &[Material]) -> Result<(), String> {
         for (k, mesh) in self.meshes.iter().enumerate() {
@@ -389,9 +390,11 @@ impl Instances {
             if *shading != InstanceShading::new(shading.mesh, placement) {
                 return Err(format!("instance {k}: its shading record is stale"));
             }
-            if self.bvh.mesh_of(k as u32) != Some(shading.mesh) {
+            if self.bvh.mesh_of(k as u32) != Some(shading.mesh)
+                || self.bvh.object_to_world(k as u32) != Some(placement.transform.affine())
+            {
                 return Err(format!(
-                    "instance {k}: its tree and record name different meshes"
+                    "instance {k}: its tree and its records name different meshes or places"
                 ));
             }
             let mesh = self
