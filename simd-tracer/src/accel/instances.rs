@@ -280,7 +280,7 @@ impl InstanceBvh {
     /// Checks the invariants: every mesh's tree against its triangles
     /// ([`Bvh::validate`]); every instance's mesh exists and its record is
     /// the inverse of its world map; every top-level node bounds its
-    /// children, every leaf its instances' world boxes ([`world_box`] of
+    /// children, every leaf its instances' world boxes (`world_box` of
     /// the mesh's triangles), and every instance sits in exactly one leaf.
     pub fn validate(&self, mesh_triangles: &[&[[Vec3; 3]]]) -> Result<(), String> {
         if mesh_triangles.len() != self.meshes.len() {
