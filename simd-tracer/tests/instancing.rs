@@ -477,6 +477,9 @@ fn memory_grows_per_instance_not_per_triangle() -> TestResult {
     let floor = (fine_triangles * simd_tracer::scene::BVH_TRIANGLE_BYTES) as f64;
     assert!(flat_fine > floor, "{flat_fine} {floor}");
     let flat_coarse = growth(16, Instancing::Flatten)?;
+    eprintln!(
+        "bytes per added instance: instanced {coarse} ({coarse_triangles} triangles), {fine} ({fine_triangles}); flattened {flat_coarse}, {flat_fine}"
+    );
     assert!(
         flat_fine / flat_coarse > 0.5 * fine_triangles as f64 / coarse_triangles as f64,
         "{flat_fine} {flat_coarse}"
