@@ -1519,14 +1519,17 @@ pub fn render(
         )));
     }
     if defaults.instances.copies > 0 {
+        let (kept, meshes) = scene
+            .instances()
+            .map_or((0, 0), |i| (i.len(), i.meshes().len()));
         observer.notice(&RenderNotice::Note(format!(
-            "{} instance(s) flattened into {} triangles of the scene's {} (about {:.1} MiB of its {:.1} MiB)",
+            "{} instance(s) placing {} triangles: {} kept as instances of {} shared mesh(es), {} flattened into the scene's own {} triangles; the scene holds {:.1} MiB",
             defaults.instances.copies,
             defaults.instances.triangles,
+            kept,
+            meshes,
+            defaults.instances.copies as usize - kept,
             scene.triangles().len(),
-            defaults.instances.triangles as f64 * scene.memory_bytes() as f64
-                / scene.triangles().len().max(1) as f64
-                / f64::from(1 << 20),
             scene.memory_bytes() as f64 / f64::from(1 << 20),
         )));
     }

@@ -34,7 +34,7 @@ pub struct SceneDefaults {
     pub filter: Option<crate::scene_file::FilterChoice>,
     /// The part of the film rendered.
     pub crop: Option<crate::scene_file::CropWindow>,
-    /// Instances placed (flattened into the triangle list).
+    /// Instances placed (kept as instances or flattened at build).
     pub instances: crate::scene_file::InstanceCount,
 }
 

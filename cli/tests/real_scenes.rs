@@ -393,27 +393,54 @@ fn environment_map_errors_name_the_key() -> TestResult {
     Ok(())
 }
 
-/// Instances copy the named mesh: the triangle count grows by the mesh's
-/// count per instance, a mirrored instance still faces outwards, and the
-/// count of flattened triangles is reported.
+/// Two instances of a named mesh share one copy of it (a two-level BVH);
+/// flattened (`Instancing::Flatten`), the triangle count grows by the
+/// mesh's count per instance. Either way a mirrored instance still faces
+/// outwards, and the instanced triangles are counted.
 #[test]
-fn instances_flatten_copies_of_a_named_mesh() -> TestResult {
+fn instances_share_a_named_mesh_or_flatten_into_copies() -> TestResult {
     let body = "[[shapes]]\ntype = \"sphere\"\nmaterial = \"grey\"\nname = \"ball\"\ninstanced_only = true\n\
                 [[instances]]\nmesh = \"ball\"\ntransform = [{ translate = [-2, 0, 0] }]\n\
                 [[instances]]\nmesh = \"ball\"\ntransform = [{ scale = [-1, 1, 1] }, { translate = [2, 0, 0] }]\n";
     let path = scene("instances", &format!("{HEAD}{body}"))?;
-    let loaded = load_scene_file(&path)?;
-    assert_eq!(loaded.instances.copies, 2);
-    let scene = loaded.builder.build()?;
-    assert_eq!(loaded.instances.triangles as usize, scene.triangles().len());
-    assert_eq!(scene.triangles().len() % 2, 0);
-    for (triangle, normal) in scene.triangles().iter().zip(scene.normals()) {
-        let centroid = (triangle[0] + triangle[1] + triangle[2]) / 3.0;
+    let outwards = |centroid: glam::Vec3, normal: glam::Vec3| {
         let centre = glam::Vec3::new(centroid.x.signum() * 2.0, 0.0, 0.0);
         assert!(
             normal.dot(centroid - centre) > 0.0,
             "inward face at {centroid}"
         );
+    };
+
+    let loaded = load_scene_file(&path)?;
+    assert_eq!(loaded.instances.copies, 2);
+    let scene = loaded.builder.build()?;
+    let instances = scene.instances().ok_or("the ball should be instanced")?;
+    assert_eq!((instances.len(), instances.meshes().len()), (2, 1));
+    assert!(scene.triangles().is_empty());
+    assert_eq!(
+        loaded.instances.triangles as usize,
+        instances.instanced_triangles()
+    );
+    let mesh = &instances.meshes()[0];
+    for instance in 0..2u32 {
+        let placement = instances.placement(instance).ok_or("placement")?;
+        for (index, triangle) in (0u32..).zip(mesh.triangles()) {
+            let centroid = placement
+                .transform
+                .point((triangle[0] + triangle[1] + triangle[2]) / 3.0);
+            outwards(centroid, scene.hit_normal(index, instance).ok_or("normal")?);
+        }
+    }
+
+    let mut loaded = load_scene_file(&path)?;
+    loaded
+        .builder
+        .set_instancing(simd_tracer::scene::instances::Instancing::Flatten);
+    let scene = loaded.builder.build()?;
+    assert!(scene.instances().is_none());
+    assert_eq!(loaded.instances.triangles as usize, scene.triangles().len());
+    for (triangle, normal) in scene.triangles().iter().zip(scene.normals()) {
+        outwards((triangle[0] + triangle[1] + triangle[2]) / 3.0, normal);
     }
     Ok(())
 }

@@ -87,6 +87,10 @@ pub const NO_ID: u32 = u32::MAX;
 /// Triangle index of packet lanes that hit nothing.
 pub const NO_TRIANGLE: u32 = u32::MAX;
 
+/// The instance of a hit on the scene's own (flattened) triangles: no
+/// instance ([`crate::packet::PacketHit::instance`]).
+pub const NO_INSTANCE: u32 = u32::MAX;
+
 #[cfg(test)]
 mod tests {
     use super::*;

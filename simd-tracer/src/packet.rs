@@ -82,8 +82,12 @@ pub struct PacketHit {
     pub u: f32x8,
     /// Barycentric `v` (weight of vertex 2) per lane.
     pub v: f32x8,
-    /// Triangle index (in the scene's original order) per lane.
+    /// Triangle index per lane: in the scene's original order, or, in
+    /// lanes that hit an instance, in the order of the instanced mesh.
     pub triangle: [u32; LANES],
+    /// The instance hit per lane, or [`crate::ids::NO_INSTANCE`] (a hit
+    /// on the scene's own triangles, or no hit).
+    pub instance: [u32; LANES],
     /// Lanes that hit something.
     pub hit: LaneMask,
 }
@@ -97,6 +101,7 @@ impl PacketHit {
             u: f32x8::ZERO,
             v: f32x8::ZERO,
             triangle: [crate::ids::NO_TRIANGLE; LANES],
+            instance: [crate::ids::NO_INSTANCE; LANES],
             hit: LaneMask::NONE,
         }
     }

@@ -211,7 +211,7 @@ pub struct LoadedScene {
     pub render: RenderDefaults,
     /// Warnings, one line each (`file:line: key: message`).
     pub warnings: Vec<String>,
-    /// Instances placed (flattened into the triangle list).
+    /// Instances placed (kept as instances or flattened at build).
     pub instances: InstanceCount,
 }
 

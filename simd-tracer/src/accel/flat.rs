@@ -4,9 +4,9 @@
 use super::packet_traversal::PacketRays;
 use super::triangle::{PreparedTriangle, weight};
 use super::{Bvh, WideStack, index_u32};
-use crate::ids::NO_TRIANGLE;
+use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::{PacketHit, RayPacket};
-use crate::simd::LaneMask;
+use crate::simd::{LANES, LaneMask};
 use core::ops::ControlFlow;
 use wide::f32x8;
 
@@ -78,6 +78,7 @@ impl FlatBest {
             u: hit_simd.select(weight(self.w1, self.sum, zero), zero),
             v: hit_simd.select(weight(self.w2, self.sum, zero), zero),
             triangle,
+            instance: [NO_INSTANCE; LANES],
             hit,
         }
     }

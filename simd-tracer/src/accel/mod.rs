@@ -168,6 +168,8 @@ mod packet_traversal;
 use packet_traversal::inside_x8;
 mod flat;
 pub use flat::TriangleSubset;
+mod instances;
+pub use instances::{BOUNDS_PAD, InstanceBvh, InstanceHit, InstanceInput};
 mod wide_tree;
 use wide_tree::WideBvh;
 pub use wide_tree::{WIDTH as WIDE_WIDTH, WideStack};

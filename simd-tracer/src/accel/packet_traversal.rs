@@ -4,11 +4,12 @@
 use super::triangle::{
     PreparedTriangle, cross, dot, edge_weight, edge_weights, plane_terms, safe_inverse_x8, weight,
 };
-use super::{Bvh, index_u32, with_node_stack};
-use crate::ids::NO_TRIANGLE;
+use super::{Bvh, NodeStack, index_u32, with_node_stack};
+use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::{PacketHit, RayPacket};
 use crate::simd::{LANES, LaneMask};
 use obvhs::aabb::Aabb;
+use obvhs::bvh2::node::Bvh2Node;
 use wide::f32x8;
 
 // ---------------------------------------------------------------------------
@@ -188,80 +189,93 @@ pub(super) fn inside_x8(w0: f32x8, w1: f32x8, w2: f32x8) -> (f32x8, f32x8) {
     (sum, inside & sum.abs().simd_gt(zero))
 }
 
+/// The packet traversal of [`Bvh::traverse_packet`] over any obvhs node
+/// list (the triangles' tree, or the instances' top-level tree), with the
+/// caller's stack: `leaf(first, count, lanes, t_max)` visits the leaf's
+/// primitives `first..first + count` for the lanes in the mask `lanes`
+/// and returns `false` to stop.
+#[inline(always)]
+pub(super) fn traverse_nodes<F>(
+    nodes: &[Bvh2Node],
+    rays: &PacketRays,
+    t_max: &mut f32x8,
+    stack: &mut NodeStack,
+    mut leaf: F,
+) where
+    F: FnMut(usize, usize, f32x8, &mut f32x8) -> bool,
+{
+    let Some(root) = nodes.first() else {
+        return;
+    };
+    let all = f32x8::from_bits(wide::u32x8::splat(u32::MAX));
+    let (_, mut lanes) = rays.slab(root.aabb(), *t_max, all);
+    if !lanes.any() {
+        return;
+    }
+    let mut current = 0usize;
+    loop {
+        let mut next = None;
+        if let Some(node) = nodes.get(current) {
+            if node.is_leaf() {
+                let first = node.first_index as usize;
+                if !leaf(first, node.prim_count as usize, lanes, t_max) {
+                    return;
+                }
+            } else {
+                let left = node.first_index as usize;
+                if let (Some(left_node), Some(right_node)) = (nodes.get(left), nodes.get(left + 1))
+                {
+                    let (left_entry, left_hit) = rays.slab(left_node.aabb(), *t_max, lanes);
+                    let (right_entry, right_hit) = rays.slab(right_node.aabb(), *t_max, lanes);
+                    match (left_hit.any(), right_hit.any()) {
+                        (true, true) => {
+                            let left_first = left_entry.simd_lt(right_entry).to_bitmask();
+                            let right_first = right_entry.simd_lt(left_entry).to_bitmask();
+                            if left_first.count_ones() >= right_first.count_ones() {
+                                stack.push((index_u32(left + 1), right_entry));
+                                next = Some((left, left_hit));
+                            } else {
+                                stack.push((index_u32(left), left_entry));
+                                next = Some((left + 1, right_hit));
+                            }
+                        }
+                        (true, false) => next = Some((left, left_hit)),
+                        (false, true) => next = Some((left + 1, right_hit)),
+                        (false, false) => {}
+                    }
+                }
+            }
+        }
+        if next.is_none() {
+            while let Some((node, entry)) = stack.pop() {
+                let alive = entry.simd_lt(*t_max);
+                if alive.any() {
+                    next = Some((node as usize, alive));
+                    break;
+                }
+            }
+        }
+        match next {
+            Some((node, node_lanes)) => {
+                current = node;
+                lanes = node_lanes;
+            }
+            None => return,
+        }
+    }
+}
+
 impl Bvh {
     /// Packet traversal. `t_max` holds each lane's current limit (`−∞` in
     /// lanes that take no part); `leaf(first, count, lanes, t_max)` tests the
     /// triangles `first..first + count` for the lanes in the mask `lanes` and
     /// returns `false` to stop.
     #[inline(always)]
-    pub(super) fn traverse_packet<F>(&self, rays: &PacketRays, t_max: &mut f32x8, mut leaf: F)
+    pub(super) fn traverse_packet<F>(&self, rays: &PacketRays, t_max: &mut f32x8, leaf: F)
     where
         F: FnMut(usize, usize, f32x8, &mut f32x8) -> bool,
     {
-        let nodes = &self.bvh2.nodes;
-        let Some(root) = nodes.first() else {
-            return;
-        };
-        let all = f32x8::from_bits(wide::u32x8::splat(u32::MAX));
-        let (_, mut lanes) = rays.slab(root.aabb(), *t_max, all);
-        if !lanes.any() {
-            return;
-        }
-        with_node_stack(|stack| {
-            let mut current = 0usize;
-            loop {
-                let mut next = None;
-                if let Some(node) = nodes.get(current) {
-                    if node.is_leaf() {
-                        let first = node.first_index as usize;
-                        if !leaf(first, node.prim_count as usize, lanes, t_max) {
-                            return;
-                        }
-                    } else {
-                        let left = node.first_index as usize;
-                        if let (Some(left_node), Some(right_node)) =
-                            (nodes.get(left), nodes.get(left + 1))
-                        {
-                            let (left_entry, left_hit) = rays.slab(left_node.aabb(), *t_max, lanes);
-                            let (right_entry, right_hit) =
-                                rays.slab(right_node.aabb(), *t_max, lanes);
-                            match (left_hit.any(), right_hit.any()) {
-                                (true, true) => {
-                                    let left_first = left_entry.simd_lt(right_entry).to_bitmask();
-                                    let right_first = right_entry.simd_lt(left_entry).to_bitmask();
-                                    if left_first.count_ones() >= right_first.count_ones() {
-                                        stack.push((index_u32(left + 1), right_entry));
-                                        next = Some((left, left_hit));
-                                    } else {
-                                        stack.push((index_u32(left), left_entry));
-                                        next = Some((left + 1, right_hit));
-                                    }
-                                }
-                                (true, false) => next = Some((left, left_hit)),
-                                (false, true) => next = Some((left + 1, right_hit)),
-                                (false, false) => {}
-                            }
-                        }
-                    }
-                }
-                if next.is_none() {
-                    while let Some((node, entry)) = stack.pop() {
-                        let alive = entry.simd_lt(*t_max);
-                        if alive.any() {
-                            next = Some((node as usize, alive));
-                            break;
-                        }
-                    }
-                }
-                match next {
-                    Some((node, node_lanes)) => {
-                        current = node;
-                        lanes = node_lanes;
-                    }
-                    None => return,
-                }
-            }
-        });
+        with_node_stack(|stack| traverse_nodes(&self.bvh2.nodes, rays, t_max, stack, leaf));
     }
 
     /// Packet closest hit: the 8 rays traverse the tree together (slab test
@@ -310,6 +324,7 @@ impl Bvh {
             u: hit_simd.select(u, f32x8::ZERO),
             v: hit_simd.select(v, f32x8::ZERO),
             triangle,
+            instance: [NO_INSTANCE; LANES],
             hit,
         }
     }

@@ -3,7 +3,7 @@
 
 use super::triangle::{ScalarHit, accept_scalar, cross, dot, edge_terms, safe_inverse};
 use super::{Bvh, Hit};
-use crate::ids::NO_TRIANGLE;
+use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::{PacketHit, Ray, RayPacket};
 use crate::simd::{LANES, LaneMask};
 use glam::Vec3A;
@@ -36,6 +36,7 @@ pub(super) fn hits_by_lane(
         u: f32x8::new(u),
         v: f32x8::new(v),
         triangle,
+        instance: [NO_INSTANCE; LANES],
         hit: found,
     }
 }

@@ -160,6 +160,7 @@ pub fn intersect<const G: usize>(
             hit.u.as_mut_array()[lane] = found.u.as_array()[k];
             hit.v.as_mut_array()[lane] = found.v.as_array()[k];
             hit.triangle[lane] = found.triangle[k];
+            hit.instance[lane] = found.instance[k];
             hit.hit = hit.hit.with(lane);
         }
     });

@@ -113,7 +113,7 @@ pub fn trace_group<T: Transport, const G: usize>(
         // Camera rays are coherent: packets; the rest by the scene's choice.
         if depth == 1 {
             for (hit, rays) in hits.iter_mut().zip(&rays) {
-                *hit = scene.bvh().intersect_packet(rays);
+                *hit = scene.intersect_packet(rays);
             }
         } else if depth >= settings.max_depth
             && !scene.has_environment()
@@ -122,7 +122,7 @@ pub fn trace_group<T: Transport, const G: usize>(
             counts.shadow += last_segment_hits(scene, &rays, &mut hits, &mut shadows);
         } else {
             compaction::intersect(&rays, &mut hits, |packet| {
-                scene.bvh().intersect_incoherent(packet)
+                scene.intersect_incoherent(packet)
             });
         }
         for p in 0..G {
@@ -140,8 +140,7 @@ pub fn trace_group<T: Transport, const G: usize>(
             );
             counts.shadow += shadows[p].active.count() as u64;
         }
-        let blocked =
-            compaction::occluded(&shadows, |packet| scene.bvh().occluded_incoherent(packet));
+        let blocked = compaction::occluded(&shadows, |packet| scene.occluded_incoherent(packet));
         for p in 0..G {
             if !shadows[p].active.is_empty() {
                 paths[p].add_light_sample(transport, scene, &wavelengths[p], &nee[p], blocked[p]);

@@ -2,7 +2,7 @@
 //! are tested against the emitters alone.
 
 use super::compaction;
-use crate::ids::NO_TRIANGLE;
+use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::PacketHit;
 use crate::packet::RayPacket;
 use crate::scene::Scene;
@@ -44,7 +44,7 @@ pub(super) fn last_segment_hits<const G: usize>(
         };
         count += hit.hit.count() as u64;
     }
-    let blocked = compaction::occluded(shadows, |packet| scene.bvh().occluded_incoherent(packet));
+    let blocked = compaction::occluded(shadows, |packet| scene.occluded_incoherent(packet));
     for ((hit, rays), blocked) in hits.iter_mut().zip(rays).zip(blocked) {
         if !blocked.is_empty() {
             let missed = PacketHit::misses(rays);
@@ -59,6 +59,13 @@ pub(super) fn last_segment_hits<const G: usize>(
                         hit.triangle[lane]
                     } else {
                         NO_TRIANGLE
+                    }
+                }),
+                instance: core::array::from_fn(|lane| {
+                    if kept.contains(lane) {
+                        hit.instance[lane]
+                    } else {
+                        NO_INSTANCE
                     }
                 }),
                 hit: kept,

@@ -78,9 +78,8 @@ impl<'a> Shading<'a> {
         let bsdfs: [Option<&Bsdf>; LANES] = core::array::from_fn(|lane| {
             if active.contains(lane) {
                 scene
-                    .triangle_material()
-                    .get(hit.triangle[lane] as usize)
-                    .and_then(|&m| scene.materials().get(m.index()))
+                    .hit_material(hit.triangle[lane], hit.instance[lane])
+                    .and_then(|m| scene.materials().get(m.index()))
                     .map(|m| &m.bsdf)
             } else {
                 None
@@ -89,13 +88,11 @@ impl<'a> Shading<'a> {
         let (normal_lanes, front) = (normal.to_lanes(), front.to_bitmask());
         let (hit_u, hit_v) = (hit.u.to_array(), hit.v.to_array());
         let points = core::array::from_fn(|lane| {
-            let uv =
-                scene
-                    .uvs()
-                    .get(hit.triangle[lane] as usize)
-                    .map_or(Vec2::ZERO, |[a, b, c]| {
-                        *a * (1.0 - hit_u[lane] - hit_v[lane]) + *b * hit_u[lane] + *c * hit_v[lane]
-                    });
+            let uv = scene
+                .hit_uvs(hit.triangle[lane], hit.instance[lane])
+                .map_or(Vec2::ZERO, |[a, b, c]| {
+                    a * (1.0 - hit_u[lane] - hit_v[lane]) + b * hit_u[lane] + c * hit_v[lane]
+                });
             ShadingPoint {
                 n: normal_lanes[lane],
                 front: front & (1 << lane) != 0,
@@ -288,10 +285,11 @@ pub(super) fn shading_normals(
     let wo_lanes = wo.to_lanes();
     let mut lanes = geometric_lanes;
     for lane in active.iter() {
-        let Some([n0, n1, n2]) = scene.vertex_normals(hit.triangle[lane] as usize) else {
+        let Some([n0, n1, n2]) = scene.hit_vertex_normals(hit.triangle[lane], hit.instance[lane])
+        else {
             continue;
         };
-        let interpolated = *n0 * (1.0 - u[lane] - v[lane]) + *n1 * u[lane] + *n2 * v[lane];
+        let interpolated = n0 * (1.0 - u[lane] - v[lane]) + n1 * u[lane] + n2 * v[lane];
         let Some(n) = interpolated.try_normalize() else {
             continue;
         };
@@ -299,7 +297,7 @@ pub(super) fn shading_normals(
         // The vertex normals lie on the front side of the triangle; the
         // geometric normal here may have been turned to the back.
         let front = scene
-            .normal(hit.triangle[lane] as usize)
+            .hit_normal(hit.triangle[lane], hit.instance[lane])
             .is_none_or(|ng| ng.dot(g) >= 0.0);
         let n = if front { n } else { -n };
         if n.dot(wo_lanes[lane]) > 0.0 {
@@ -326,10 +324,11 @@ pub(super) fn front_shading_cosines(
     let wo_lanes = wo.to_lanes();
     let mut cosines = cos_geometric.to_array();
     for lane in lanes.iter() {
-        let Some([n0, n1, n2]) = scene.vertex_normals(hit.triangle[lane] as usize) else {
+        let Some([n0, n1, n2]) = scene.hit_vertex_normals(hit.triangle[lane], hit.instance[lane])
+        else {
             continue;
         };
-        let interpolated = *n0 * (1.0 - u[lane] - v[lane]) + *n1 * u[lane] + *n2 * v[lane];
+        let interpolated = n0 * (1.0 - u[lane] - v[lane]) + n1 * u[lane] + n2 * v[lane];
         if let Some(n) = interpolated.try_normalize() {
             cosines[lane] = n.dot(wo_lanes[lane]);
         }

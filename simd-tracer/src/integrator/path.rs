@@ -288,7 +288,7 @@ impl<S: Copy> PathState<S> {
         }
 
         // Shading frame, 8-wide, from the hit triangles' records.
-        let surface = scene.packed_surfaces().gather(&hit.triangle, active);
+        let surface = scene.hit_surfaces(hit, active);
         let direction = Vec3x8::from_array(rays.direction);
         let direction_length = direction.length();
         let wo = -direction * (f32x8::ONE / direction_length);

@@ -3,7 +3,8 @@
 //! checked to come from the same scene before they are merged.
 //!
 //! What it covers: the spectral range, every triangle's vertices, material,
-//! texture coordinates and vertex normals, the camera, the materials, the
+//! texture coordinates and vertex normals (of the scene's own triangles
+//! and of each instanced mesh, with every instance's placement), the camera, the materials, the
 //! spectra (their 32 Fourier coefficients), the constant environment, and
 //! the sizes of the textures, angular tables and environment map. Texels
 //! are not read (a texture file replaced by another of the same size is
@@ -85,6 +86,23 @@ impl Scene {
             hash.size(texture.memory_bytes());
         }
         hash.size(self.environment_map().map_or(0, |map| map.memory_bytes()));
+        // Instances (absent from scenes without them, whose digest is thus
+        // unchanged): each mesh's data, each instance's mesh, placement and
+        // material.
+        if let Some(instances) = self.instances() {
+            hash.size(instances.meshes().len());
+            for mesh in instances.meshes() {
+                hash.size(mesh.triangles().len());
+                for word in mesh.words() {
+                    hash.word(word);
+                }
+            }
+            hash.size(instances.len());
+            for (index, mesh) in (0u32..).zip(instances.instance_meshes()) {
+                hash.word(mesh);
+                hash.text(&format!("{:?}", instances.placement(index)));
+            }
+        }
         hash.0
     }
 }

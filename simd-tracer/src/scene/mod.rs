@@ -10,6 +10,7 @@ pub mod analytic;
 pub mod builtin;
 pub mod camera;
 mod fingerprint;
+pub mod instances;
 pub mod mesh;
 pub mod obj;
 pub mod ply;
@@ -18,15 +19,23 @@ pub mod serialized;
 pub mod shapes;
 pub mod transform;
 
-use crate::accel::{Bvh, TriangleSubset};
+use crate::accel::{Bvh, InstanceHit, TriangleSubset};
+use crate::ids::NO_INSTANCE;
 use crate::ids::{AngularId, FluorophoreId, MaterialId, NO_ID, SpectrumId, TextureId};
+use crate::packet::{PacketHit, Ray, RayPacket};
 use crate::scene::camera::Camera;
+use crate::scene::instances::{
+    InstancePlacement, InstanceRequest, InstancedMesh, InstancedMeshId, Instances, Instancing,
+    MIN_INSTANCE_USES,
+};
 use crate::scene::mesh::MeshData;
 use crate::scene::transform::Transform;
 use crate::shading::light::{Light, LightSet};
 use crate::shading::light_sampler::{DirectionalLight, LightSampler, PointLight, SceneLights};
 use crate::shading::material::{Bsdf, Material, MaterialTables, SceneFluorophore, tabulated_sides};
+use crate::shading::surface::SurfacePacket;
 use crate::shading::surface::{PackedSurfaces, Surface, triangle_area};
+use crate::simd::{LANES, LaneMask};
 use crate::spectra::angular::{AngularFunction, AngularSpectrum};
 use crate::spectra::environment::EnvironmentMap;
 use crate::spectra::texture::Texture;
@@ -138,6 +147,9 @@ pub struct Scene {
     /// packed for packet gathers; the only copy of the records and of the
     /// geometric normals ([`Scene::surface`], [`Scene::normal`]).
     packed_surfaces: PackedSurfaces,
+    /// Meshes placed by several instances, kept once
+    /// ([`instances`]); `None` when every instance was flattened.
+    instances: Option<Instances>,
     skipped_triangles: usize,
 }
 
@@ -216,10 +228,15 @@ impl Scene {
         self.vertex_normals.get(at as usize)
     }
 
-    /// Whether any triangle has vertex normals.
+    /// Whether any triangle (of the scene's own or of an instance) has
+    /// vertex normals.
     #[inline]
     pub fn has_vertex_normals(&self) -> bool {
         !self.vertex_normals.is_empty()
+            || self
+                .instances
+                .as_ref()
+                .is_some_and(Instances::has_vertex_normals)
     }
 
     /// camera
@@ -256,9 +273,158 @@ impl Scene {
         &self.light_sampler
     }
 
-    /// bvh
+    /// The tree over the scene's own (flattened) triangles; instances have
+    /// theirs in [`Scene::instances`]. Queries that must see everything go
+    /// through [`Scene::intersect_packet`], [`Scene::intersect_incoherent`]
+    /// and [`Scene::occluded_incoherent`].
     pub fn bvh(&self) -> &Bvh {
         &self.bvh
+    }
+
+    /// The meshes kept once for several instances, with the instances'
+    /// records and tree (`None` when the scene has none).
+    pub fn instances(&self) -> Option<&Instances> {
+        self.instances.as_ref()
+    }
+
+    /// Closest hits of a coherent packet (camera rays): the triangles'
+    /// packet traversal, then the instances' ([`crate::accel::InstanceBvh`]),
+    /// which keep a lane's hit unless theirs is nearer.
+    pub fn intersect_packet(&self, packet: &RayPacket) -> PacketHit {
+        let mut hit = self.bvh.intersect_packet(packet);
+        if let Some(instances) = &self.instances {
+            instances.bvh().intersect_packet(packet, &mut hit);
+        }
+        hit
+    }
+
+    /// Closest hits of incoherent rays (bounces): [`Bvh::intersect_incoherent`],
+    /// then the instances one ray at a time.
+    pub fn intersect_incoherent(&self, packet: &RayPacket) -> PacketHit {
+        let mut hit = self.bvh.intersect_incoherent(packet);
+        if let Some(instances) = &self.instances {
+            instances.bvh().intersect_lanes(packet, &mut hit);
+        }
+        hit
+    }
+
+    /// Occlusion of incoherent rays (shadows): [`Bvh::occluded_incoherent`],
+    /// then the instances for the lanes still unblocked.
+    pub fn occluded_incoherent(&self, packet: &RayPacket) -> LaneMask {
+        let blocked = self.bvh.occluded_incoherent(packet);
+        match &self.instances {
+            Some(instances) => {
+                let open = RayPacket {
+                    active: packet.active.and_not(blocked),
+                    ..*packet
+                };
+                if open.active.is_empty() {
+                    blocked
+                } else {
+                    blocked.or(instances.bvh().occluded_lanes(&open))
+                }
+            }
+            None => blocked,
+        }
+    }
+
+    /// The scalar oracle of [`Scene::intersect_packet`] and
+    /// [`Scene::intersect_incoherent`]: obvhs' per-ray traversal and the
+    /// scalar triangle test at every level. A hit on the scene's own
+    /// triangles has instance [`NO_INSTANCE`].
+    pub fn intersect(&self, ray: &Ray) -> Option<InstanceHit> {
+        let own = self.bvh.intersect(ray).map(|h| InstanceHit {
+            t: h.t,
+            u: h.u,
+            v: h.v,
+            triangle: h.triangle,
+            instance: NO_INSTANCE,
+        });
+        let Some(instances) = &self.instances else {
+            return own;
+        };
+        let t_max = own.map_or(ray.t_max, |h| h.t);
+        instances.bvh().intersect(&Ray { t_max, ..*ray }).or(own)
+    }
+
+    /// The scalar oracle of [`Scene::occluded_incoherent`].
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.bvh.occluded(ray)
+            || self
+                .instances
+                .as_ref()
+                .is_some_and(|i| i.bvh().occluded(ray))
+    }
+
+    /// The shading record of a hit: triangle `triangle` of the scene's own
+    /// triangles ([`NO_INSTANCE`]) or of instance `instance`'s mesh, in
+    /// world space.
+    pub fn hit_surface(&self, triangle: u32, instance: u32) -> Option<Surface> {
+        if instance == NO_INSTANCE {
+            return self.surface(triangle as usize);
+        }
+        self.instances
+            .as_ref()?
+            .surface(triangle, instance, &self.materials)
+    }
+
+    /// The packet's shading records in the lanes of `active`
+    /// ([`Surface::NONE`] elsewhere): one gather when no lane hit an
+    /// instance, else record by record.
+    pub fn hit_surfaces(&self, hit: &PacketHit, active: LaneMask) -> SurfacePacket {
+        let instanced = active
+            .iter()
+            .filter(|&lane| hit.instance[lane] != NO_INSTANCE)
+            .fold(LaneMask::NONE, LaneMask::with);
+        if instanced.is_empty() {
+            return self.packed_surfaces.gather(&hit.triangle, active);
+        }
+        let records: [Surface; LANES] = core::array::from_fn(|lane| {
+            if active.contains(lane) {
+                self.hit_surface(hit.triangle[lane], hit.instance[lane])
+                    .unwrap_or(Surface::NONE)
+            } else {
+                Surface::NONE
+            }
+        });
+        SurfacePacket::from_records(&records)
+    }
+
+    /// The material of a hit ([`Scene::hit_surface`]'s arguments).
+    #[inline]
+    pub fn hit_material(&self, triangle: u32, instance: u32) -> Option<MaterialId> {
+        if instance == NO_INSTANCE {
+            return self.triangle_material.get(triangle as usize).copied();
+        }
+        self.instances.as_ref()?.material(triangle, instance)
+    }
+
+    /// The texture coordinates of a hit triangle's vertices (`None` when
+    /// none are stored: all zero).
+    #[inline]
+    pub fn hit_uvs(&self, triangle: u32, instance: u32) -> Option<[Vec2; 3]> {
+        if instance == NO_INSTANCE {
+            return self.uvs.get(triangle as usize).copied();
+        }
+        self.instances.as_ref()?.uvs(triangle, instance)
+    }
+
+    /// The unit geometric normal of a hit triangle, in world space.
+    #[inline]
+    pub fn hit_normal(&self, triangle: u32, instance: u32) -> Option<Vec3> {
+        if instance == NO_INSTANCE {
+            return self.normal(triangle as usize);
+        }
+        self.instances.as_ref()?.normal(triangle, instance)
+    }
+
+    /// The unit vertex normals of a smooth hit triangle, in world space.
+    #[inline]
+    pub fn hit_vertex_normals(&self, triangle: u32, instance: u32) -> Option<[Vec3; 3]> {
+        if instance == NO_INSTANCE {
+            return self.vertex_normals(triangle as usize).copied();
+        }
+        self.instances.as_ref()?.vertex_normals(triangle, instance)
     }
 
     /// lights
@@ -321,7 +487,10 @@ impl Scene {
         if self.emitters != emitters(&self.bvh, &self.packed_surfaces) {
             return Err("the emitter subset does not match the shading records".to_owned());
         }
-        Ok(())
+        match &self.instances {
+            Some(instances) => instances.validate(&self.materials),
+            None => Ok(()),
+        }
     }
 
     /// The first spectra's Fourier coefficients in registers.
@@ -342,8 +511,10 @@ impl Scene {
     /// Bytes of memory the scene holds: geometry, BVH, light distribution,
     /// spectra (with their dense tables), angular Fourier tables or network
     /// weights, textures and materials. Exact for the vectors owned here
-    /// and the BVH ([`Bvh::memory_bytes`]); the light set is counted per
-    /// light ([`LIGHT_BYTES`]).
+    /// and the BVH ([`Bvh::memory_bytes`]); instanced meshes count once,
+    /// with a record and a top-level tree entry per instance
+    /// ([`Instances::memory_bytes`]); the light set is counted per light
+    /// ([`LIGHT_BYTES`]).
     pub fn memory_bytes(&self) -> usize {
         fn vec_bytes<T>(v: &Vec<T>) -> usize {
             v.capacity() * size_of::<T>()
@@ -354,7 +525,8 @@ impl Scene {
             + vec_bytes(&self.shading_index)
             + vec_bytes(&self.vertex_normals)
             + self.packed_surfaces.memory_bytes();
-        let bvh = self.bvh.memory_bytes();
+        let bvh =
+            self.bvh.memory_bytes() + self.instances.as_ref().map_or(0, Instances::memory_bytes);
         let lights = self.lights.len() * LIGHT_BYTES
             + self.lights.index_memory_bytes()
             + self.emitters.len() * size_of::<u32>()
@@ -457,6 +629,11 @@ pub struct SceneBuilder {
     environment_map: Option<EnvironmentMap>,
     point_lights: Vec<PointLight>,
     directional_lights: Vec<DirectionalLight>,
+    /// Meshes kept for instances ([`SceneBuilder::add_instanced_mesh`]).
+    instanced_meshes: Vec<Vec<(MeshData, MaterialId)>>,
+    /// Instances, resolved at build ([`instances`]).
+    instance_requests: Vec<InstanceRequest>,
+    instancing: Instancing,
     skipped: usize,
 }
 
@@ -515,6 +692,9 @@ impl SceneBuilder {
             environment_map: None,
             point_lights: Vec::new(),
             directional_lights: Vec::new(),
+            instanced_meshes: Vec::new(),
+            instance_requests: Vec::new(),
+            instancing: Instancing::Auto,
             skipped: 0,
         }
     }
@@ -866,14 +1046,130 @@ impl SceneBuilder {
         self.directional_lights.push(light);
     }
 
+    /// Keeps a mesh (its parts, each with its material, in object
+    /// coordinates) for [`SceneBuilder::add_instance`]; places nothing.
+    pub fn add_instanced_mesh(
+        &mut self,
+        parts: Vec<(MeshData, MaterialId)>,
+    ) -> Result<InstancedMeshId, SceneError> {
+        for (mesh, _) in &parts {
+            mesh.validate().map_err(SceneError::Mesh)?;
+        }
+        let id = u32::try_from(self.instanced_meshes.len())
+            .map_err(|_| SceneError::Mesh("too many instanced meshes".into()))?;
+        self.instanced_meshes.push(parts);
+        Ok(InstancedMeshId(id))
+    }
+
+    /// Places the mesh `mesh` once more. Whether it stays an instance or
+    /// is copied into the scene's triangles is decided at build
+    /// ([`instances`]); either way it renders the same.
+    pub fn add_instance(
+        &mut self,
+        mesh: InstancedMeshId,
+        placement: InstancePlacement,
+    ) -> Result<(), SceneError> {
+        if mesh.0 as usize >= self.instanced_meshes.len() {
+            return Err(SceneError::Mesh(format!(
+                "instance of mesh {}, which does not exist",
+                mesh.0
+            )));
+        }
+        self.instance_requests
+            .push(InstanceRequest { mesh, placement });
+        Ok(())
+    }
+
+    /// Sets what [`SceneBuilder::build`] does with instances.
+    pub fn set_instancing(&mut self, instancing: Instancing) {
+        self.instancing = instancing;
+    }
+
+    /// Whether an instance may stay one: its materials exist and none
+    /// emits ([`instances`]).
+    fn instance_qualifies(&self, request: &InstanceRequest) -> bool {
+        let parts = self
+            .instanced_meshes
+            .get(request.mesh.0 as usize)
+            .map_or(&[][..], Vec::as_slice);
+        parts.iter().all(|(_, own)| {
+            let id = request.placement.material.unwrap_or(*own);
+            self.materials
+                .get(id.index())
+                .is_some_and(|m| m.emission.is_none())
+        })
+    }
+
+    /// Resolves the instances ([`instances`]): those that stay instances
+    /// are returned with their meshes in object coordinates; the others
+    /// are copied into the soup, in the order they were added.
+    fn resolve_instances(&mut self) -> Result<Option<Instances>, SceneError> {
+        let requests = core::mem::take(&mut self.instance_requests);
+        let qualifies: Vec<bool> = requests
+            .iter()
+            .map(|r| self.instancing == Instancing::Auto && self.instance_qualifies(r))
+            .collect();
+        let parts_of = core::mem::take(&mut self.instanced_meshes);
+        let mut uses = vec![0usize; parts_of.len()];
+        for (request, &ok) in requests.iter().zip(&qualifies) {
+            if ok {
+                uses[request.mesh.0 as usize] += 1;
+            }
+        }
+        let mut mesh_index: Vec<Option<u32>> = vec![None; parts_of.len()];
+        let mut meshes = Vec::new();
+        let mut mesh_skipped = Vec::new();
+        let mut kept = Vec::new();
+        for (request, ok) in requests.iter().zip(qualifies) {
+            let k = request.mesh.0 as usize;
+            let parts = parts_of.get(k).map_or(&[][..], Vec::as_slice);
+            let placement = &request.placement;
+            if ok && uses[k] >= MIN_INSTANCE_USES {
+                let index = match mesh_index[k] {
+                    Some(index) => index,
+                    None => {
+                        let (mesh, skipped) = InstancedMesh::new(self.range, parts)?;
+                        meshes.push(mesh);
+                        mesh_skipped.push(skipped);
+                        let index = (meshes.len() - 1) as u32;
+                        mesh_index[k] = Some(index);
+                        index
+                    }
+                };
+                // Degenerate triangles count once per copy, as flattened.
+                self.skipped += mesh_skipped[index as usize];
+                kept.push((index, *placement));
+            } else {
+                for (mesh, own) in parts {
+                    self.add_mesh_data(
+                        mesh,
+                        &MeshPlacement {
+                            transform: &placement.transform,
+                            material: placement.material.unwrap_or(*own),
+                            flip_normals: placement.flip_normals,
+                            face_normals: placement.face_normals,
+                        },
+                    )?;
+                }
+            }
+        }
+        if kept.is_empty() {
+            return Ok(None);
+        }
+        Instances::new(meshes, kept)
+            .map(Some)
+            .map_err(SceneError::Bvh)
+    }
+
     /// Builds the BVH and the light distribution.
     pub fn build(mut self) -> Result<Scene, SceneError> {
+        let instances = self.resolve_instances()?;
         // Pushes left up to twice the space the soup needs.
         self.triangles.shrink_to_fit();
         self.triangle_material.shrink_to_fit();
         self.uvs.shrink_to_fit();
         let camera = self.camera.ok_or(SceneError::NoCamera)?;
-        if self.triangles.is_empty() {
+        if self.triangles.is_empty() && instances.is_none() {
             return Err(SceneError::Empty);
         }
         if let Some(&bad) = self
@@ -923,6 +1219,11 @@ impl SceneBuilder {
         }
         let bvh = Bvh::build(&self.triangles);
         bvh.validate(&self.triangles).map_err(SceneError::Bvh)?;
+        if let Some(instances) = &instances {
+            instances
+                .validate(&self.materials)
+                .map_err(SceneError::Bvh)?;
+        }
         let mut shading_index = self.shading_index;
         if !self.vertex_normals.is_empty() {
             shading_index.resize(self.triangles.len(), NO_ID);
@@ -952,9 +1253,14 @@ impl SceneBuilder {
                 ));
             }
         }
-        let scene_radius = bvh
-            .bounds()
-            .map_or(1.0, |(min, max)| 0.5 * (max - min).length());
+        let bounds = [
+            bvh.bounds(),
+            instances.as_ref().and_then(|i| i.bvh().bounds()),
+        ]
+        .into_iter()
+        .flatten()
+        .reduce(|(min, max), (lo, hi)| (min.min(lo), max.max(hi)));
+        let scene_radius = bounds.map_or(1.0, |(min, max)| 0.5 * (max - min).length());
         let light_sampler = LightSampler::new(&SceneLights {
             triangle_power: lights.total_power(),
             points: &self.point_lights,
@@ -993,6 +1299,7 @@ impl SceneBuilder {
             emitters,
             spectrum_registers,
             packed_surfaces,
+            instances,
             skipped_triangles: self.skipped,
         })
     }

@@ -15,6 +15,7 @@ use crate::error::CliError;
 use crate::scene_file::source::{Spot, read_bytes};
 use glam::{Vec2, Vec3};
 use simd_tracer::ids::MaterialId;
+use simd_tracer::scene::instances::InstancePlacement;
 use simd_tracer::scene::mesh::MeshData;
 use simd_tracer::scene::obj::{
     ObjError, add_default_material, load_obj_file, load_options, mtl_material,
@@ -465,10 +466,11 @@ impl Construction<'_> {
         self.named_meshes.contains_key(name)
     }
 
-    /// Places the named mesh again (flattened into the scene's triangles;
-    /// the copies and their triangles are counted in
-    /// [`Construction::instances`]), every part in `material` if given.
-    /// `false` if there is no mesh of that name.
+    /// Places the named mesh again as an instance (the builder keeps it an
+    /// instance or flattens it when the scene is built; the copies and
+    /// their triangles are counted in [`Construction::instances`]), every
+    /// part in `material` if given. `false` if there is no mesh of that
+    /// name.
     pub(crate) fn instance(
         &mut self,
         at: &Spot,
@@ -479,14 +481,38 @@ impl Construction<'_> {
         let Some(parts) = self.named_meshes.get(name) else {
             return Ok(false);
         };
-        let parts: MeshParts = match material {
-            Some(m) => parts.iter().map(|(mesh, _)| (mesh.clone(), m)).collect(),
-            None => parts.clone(),
+        let triangles: usize = parts.iter().map(|(mesh, _)| mesh.triangles.len()).sum();
+        let emissive = parts
+            .iter()
+            .any(|(_, own)| self.mesher.emissive.contains(&material.unwrap_or(*own)));
+        let id = match self.instanced_meshes.get(name) {
+            Some(&id) => id,
+            None => {
+                let id = self
+                    .builder
+                    .add_instanced_mesh(parts.clone())
+                    .map_err(|e| self.src.error_at(at, e.to_string()))?;
+                self.instanced_meshes.insert(name.to_string(), id);
+                id
+            }
         };
-        let before = self.mesher.triangles;
-        self.place(at, parts, placement, None)?;
+        self.builder
+            .add_instance(
+                id,
+                InstancePlacement {
+                    transform: placement.transform,
+                    material,
+                    flip_normals: placement.flip_normals,
+                    face_normals: placement.face_normals,
+                },
+            )
+            .map_err(|e| self.src.error_at(at, e.to_string()))?;
+        self.mesher.triangles += triangles;
+        if emissive {
+            self.mesher.emissive_triangles += triangles;
+        }
         self.instances.copies += 1;
-        self.instances.triangles += (self.mesher.triangles - before) as u64;
+        self.instances.triangles += triangles as u64;
         Ok(true)
     }
 

@@ -46,6 +46,7 @@ use materials::NamedMaterial;
 use simd_tracer::ids::{SpectrumId, TextureId};
 use simd_tracer::scene::SceneBuilder;
 use simd_tracer::scene::camera::Camera;
+use simd_tracer::scene::instances::InstancedMeshId;
 use spectra::NamedSpectrum;
 use spectral_core::SpectralRange;
 use std::collections::HashMap;
@@ -72,18 +73,21 @@ pub(crate) struct Construction<'s> {
     has_environment: bool,
     /// Meshes kept for instances, by name.
     named_meshes: HashMap<String, MeshParts>,
+    /// The builder's id of each named mesh that an instance placed.
+    instanced_meshes: HashMap<String, InstancedMeshId>,
     /// The instances placed so far.
     instances: InstanceCount,
     /// Point and directional lights added.
     lights: usize,
 }
 
-/// Instances placed, flattened into the scene's triangle list.
+/// Instances placed (kept as instances or flattened when the scene is
+/// built: `simd_tracer::scene::instances`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct InstanceCount {
     /// Copies placed.
     pub copies: u32,
-    /// Triangles they added.
+    /// Triangles they place (degenerate ones included).
     pub triangles: u64,
 }
 
@@ -107,6 +111,7 @@ impl<'s> Construction<'s> {
             mesher: Mesher::default(),
             has_environment: false,
             named_meshes: HashMap::new(),
+            instanced_meshes: HashMap::new(),
             instances: InstanceCount::default(),
             lights: 0,
         }

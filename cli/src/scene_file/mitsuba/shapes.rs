@@ -12,8 +12,10 @@
 //!   local shapes (`simd_tracer::scene::analytic`), tessellated finely
 //!   enough that the surface is within 10⁻³ radii of the exact one.
 //! * `shapegroup` (with an `id`; its shapes are kept, not placed) and
-//!   `instance` (a `<ref>` to a shapegroup and `to_world`): instances are
-//!   flattened into the triangle list.
+//!   `instance` (a `<ref>` to a shapegroup and `to_world`): a shapegroup
+//!   placed by several instances is kept once and instanced, one placed
+//!   once is flattened into the triangle list
+//!   (`simd_tracer::scene::instances`).
 //!
 //! Each shape takes a nested or referenced BSDF (default: a one-sided
 //! diffuse of reflectance 0.5, as Mitsuba, or of reflectance 0 when the
