@@ -1552,7 +1552,7 @@ pub fn render(
             observer_choice.describe()
         )));
     }
-    let observer = Arc::new(observer_choice.observer()?);
+    let colour_observer = Arc::new(observer_choice.observer()?);
     let identity = frame_identity(args, &settings, frame, &scene);
     let parts = plan_parts(args, &settings, identity)?;
     settings.spp = parts.spp;
@@ -1586,7 +1586,7 @@ pub fn render(
     };
     let basis = TransportBasis {
         range: scene.range(),
-        observer: &observer,
+        observer: &colour_observer,
     };
     let (result, state, memory) = with_transport(&TransportSpec::of(args), basis, task)?;
     let requested = [parts.job_first_pass, parts.job_first_pass + parts.spp];

@@ -92,7 +92,10 @@ impl<const N: usize> XyzKernel<N> {
     /// ([`crate::observer`]): rows `(λ1−λ0) r_{k,j}/∫r_1` (doubled for
     /// `j > 0`), `r_{k,j}` the exact projection of curve `k`; the same
     /// `Err` as [`new`](Self::new).
-    pub fn for_observer(basis: &FourierBasis<N>, observer: &Observer) -> Result<Self, SpectralError> {
+    pub fn for_observer(
+        basis: &FourierBasis<N>,
+        observer: &Observer,
+    ) -> Result<Self, SpectralError> {
         let range = basis.range();
         check_inside_table(range)?;
         let scale = range.width_nm() / observer.normaliser_nm();
@@ -225,7 +228,7 @@ impl<const N: usize> XyzConverter<N> {
             kernel,
             cosines,
             weighted_cmf,
-            mese_kernel: XyzKernel::for_observer(basis, observer)?,
+            mese_kernel: XyzKernel::for_observer(&FourierBasis::new(range), observer)?,
             first_sample: first_sample.unwrap_or(0),
             sample_count,
         })

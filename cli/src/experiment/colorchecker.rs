@@ -47,7 +47,7 @@ use crate::spectrum_file::{SpectrumSource, resolve};
 use serde_json::{Value, json};
 use simd_tracer::sampling::rng::{Purpose, Rng};
 use spectral_core::FourierBasis;
-use spectral_core::cmf::{self, Y_BAR_INTEGRAL};
+use spectral_core::cmf;
 use spectral_core::color::{Lab, Xyz};
 use spectral_core::control_variate::CrossFitColorControlVariate;
 use spectral_core::data::tables::COLORCHECKER_NAMES;

@@ -331,7 +331,13 @@ fn render_generation(
         camera: view,
         generation,
     };
-    render_cmd::with_transport(&settings.transport, built.scene.range(), task)
+    // The viewer shows CIE 1931 2° colour (its settings have no observer).
+    let observer = Arc::new(spectral_core::observer::Observer::default());
+    let basis = render_cmd::TransportBasis {
+        range: built.scene.range(),
+        observer: &observer,
+    };
+    render_cmd::with_transport(&settings.transport, basis, task)
 }
 
 /// The render of one generation with the transport's concrete type.

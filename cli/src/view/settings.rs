@@ -308,8 +308,12 @@ impl ViewSettings {
         if let Some(camera) = &self.camera {
             camera.camera()?;
         }
-        let film_pixel_bytes =
-            render_cmd::with_transport(&self.transport, SpectralRange::VISIBLE, FilmPixelBytes)?;
+        let observer = std::sync::Arc::new(spectral_core::observer::Observer::default());
+        let basis = render_cmd::TransportBasis {
+            range: SpectralRange::VISIBLE,
+            observer: &observer,
+        };
+        let film_pixel_bytes = render_cmd::with_transport(&self.transport, basis, FilmPixelBytes)?;
         // The film, the resolved frame beside it (XYZ and coefficients) and
         // the frame being encoded: three film-sized buffers at most.
         let film_copies = 3;

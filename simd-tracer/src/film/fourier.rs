@@ -35,7 +35,10 @@ impl<const N: usize> FourierFilm<N> {
         observer: &Observer,
     ) -> Result<Self, SpectralError> {
         Ok(Self {
-            converter: Box::new(XyzConverter::with_observer(&FourierBasis::new(range), observer)?),
+            converter: Box::new(XyzConverter::with_observer(
+                &FourierBasis::new(range),
+                observer,
+            )?),
             buffer,
             route,
         })

@@ -48,6 +48,7 @@ impl<const N: usize> FourierTransport<N> {
     ) -> Result<Self, SpectralError> {
         Ok(Self {
             film: FourierFilm::with_observer(range, buffer, route, observer)?,
+            width_nm: range.width_nm() as f32,
         })
     }
 
