@@ -22,7 +22,8 @@ use spectral_core::registry::Builtin;
 use spectral_core::upsample::{RgbIlluminant, RgbUnbounded, srgb_reflectance};
 use spectral_core::xyz::{self, XyzConverter, XyzRoute};
 use spectral_core::{
-    Blackbody, FourierSpectrum, SpectralError, SpectralRange, Spectrum, TabulatedSpectrum, Xyz, cmf,
+    Blackbody, FourierBasis, FourierSpectrum, SpectralError, SpectralRange, Spectrum,
+    TabulatedSpectrum, Xyz, cmf,
 };
 
 /// The widest range accepted, nm: projections of functions (blackbody,
@@ -388,7 +389,7 @@ fn reconstruct_n<const N: usize>(
 ) -> PyResult<Vec<f64>> {
     let coeff_rows = rows(input.coeffs, N, "coefficients")?;
     let mut out = Vec::with_capacity(coeff_rows.len() * input.lambda_nm.len());
-    let range = &input.range;
+    let range = &FourierBasis::<N>::new(input.range);
     for (row, coeffs) in coeff_rows.enumerate() {
         let spectrum = spectrum::<N>(coeffs)?;
         match how {
@@ -494,8 +495,10 @@ fn to_xyz_n<const N: usize>(
     range: SpectralRange,
 ) -> PyResult<Vec<f64>> {
     // About 70 KB for N = 32: on the heap, built once per call.
-    let converter =
-        Box::new(XyzConverter::<N>::new(range).map_err(|e| value_error(e.to_string()))?);
+    let converter = Box::new(
+        XyzConverter::<N>::new(&FourierBasis::new(range))
+            .map_err(|e| value_error(e.to_string()))?,
+    );
     let coeff_rows = rows(coeffs, N, "coefficients")?;
     let mut out = Vec::with_capacity(coeff_rows.len() * CHANNELS);
     for coeffs in coeff_rows {
