@@ -139,7 +139,14 @@ fn scenes_lists_every_builtin_with_a_description() -> TestResult {
     let output = fspec().arg("scenes").output()?;
     assert!(output.status.success());
     let text = String::from_utf8(output.stdout)?;
-    for name in ["cornell", "lamps", "laser", "materials", "colorchecker"] {
+    for name in [
+        "cornell",
+        "lamps",
+        "laser",
+        "materials",
+        "colorchecker",
+        "fluorescence",
+    ] {
         let line = text
             .lines()
             .find(|l| l.split_whitespace().next() == Some(name))
@@ -149,7 +156,7 @@ fn scenes_lists_every_builtin_with_a_description() -> TestResult {
             "no description: {line}"
         );
     }
-    assert_eq!(builtin_names()?.len(), 5);
+    assert_eq!(builtin_names()?.len(), 6);
     Ok(())
 }
 
