@@ -38,6 +38,7 @@
 //!   to rounding, about 1e-15 of the largest channel).
 
 use crate::error::CliError;
+use crate::spectrum_file::read_text_file;
 use spectral_core::cmf;
 use spectral_core::color::XYZ_TO_LINEAR_SRGB;
 use spectral_core::observer::{Observer, SAMPLES, StandardObserver};
@@ -386,22 +387,7 @@ pub fn parse_sensor_csv(text: &str, origin: &str) -> Result<SensorCurves, CliErr
 
 /// Reads and parses a sensor file.
 pub fn load_sensor_csv(path: &Path) -> Result<SensorCurves, CliError> {
-    let origin = path.display().to_string();
-    let metadata =
-        std::fs::metadata(path).map_err(|e| CliError::input(format!("{origin}: {e}")))?;
-    if metadata.is_dir() {
-        return Err(CliError::input(format!("{origin}: is a directory")));
-    }
-    if metadata.len() > MAX_FILE_BYTES {
-        return Err(CliError::input(format!(
-            "{origin}: {} bytes is larger than the {} MiB limit for a sensor file",
-            metadata.len(),
-            MAX_FILE_BYTES / (1024 * 1024)
-        )));
-    }
-    let bytes = std::fs::read(path).map_err(|e| CliError::input(format!("{origin}: {e}")))?;
-    let text = String::from_utf8(bytes)
-        .map_err(|_| CliError::input(format!("{origin}: not UTF-8 text")))?;
+    let (text, origin) = read_text_file(path, MAX_FILE_BYTES, "a sensor file")?;
     parse_sensor_csv(&text, &origin)
 }
 

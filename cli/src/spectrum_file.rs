@@ -83,23 +83,35 @@ fn describe(error: &SpectralError, data: &SpectrumData, origin: &str) -> String 
 
 /// Reads and parses a CSV spectrum file.
 pub fn load_csv(path: &Path) -> Result<SpectrumData, CliError> {
+    let (text, origin) = read_text_file(path, MAX_FILE_BYTES, "a spectrum file")?;
+    parse_csv(&text, &origin)
+}
+
+/// Reads a small text file whole, with the path as messages show it:
+/// refuses a directory, a file over `max_bytes` (`what` names the kind of
+/// file in that message) and bytes that are not UTF-8, one line each.
+pub(crate) fn read_text_file(
+    path: &Path,
+    max_bytes: u64,
+    what: &str,
+) -> Result<(String, String), CliError> {
     let origin = path.display().to_string();
     let metadata =
         std::fs::metadata(path).map_err(|e| CliError::input(format!("{origin}: {e}")))?;
     if metadata.is_dir() {
         return Err(CliError::input(format!("{origin}: is a directory")));
     }
-    if metadata.len() > MAX_FILE_BYTES {
+    if metadata.len() > max_bytes {
         return Err(CliError::input(format!(
-            "{origin}: {} bytes is larger than the {} MiB limit for a spectrum file",
+            "{origin}: {} bytes is larger than the {} MiB limit for {what}",
             metadata.len(),
-            MAX_FILE_BYTES / (1024 * 1024)
+            max_bytes / (1024 * 1024)
         )));
     }
     let bytes = std::fs::read(path).map_err(|e| CliError::input(format!("{origin}: {e}")))?;
     let text = String::from_utf8(bytes)
         .map_err(|_| CliError::input(format!("{origin}: not UTF-8 text")))?;
-    parse_csv(&text, &origin)
+    Ok((text, origin))
 }
 
 /// Where a spectrum argument resolved to.
