@@ -1159,8 +1159,9 @@ mod tests {
         assert_eq!(next_batch(1, ms(30), &limited, ms(1200), BATCH_TARGET), 1);
     }
 
-    #[test]
-    fn progress_reports_every_batch_up_to_the_requested_passes() -> Result<(), RenderError> {
+    /// The built-in Cornell box and a 4-coefficient Fourier transport, the
+    /// small setup of the batch and observer tests.
+    fn cornell_with_fourier4() -> (Scene, crate::transport::FourierTransport<4>) {
         use crate::film::Buffer;
         use crate::transport::FourierTransport;
         use spectral_core::xyz::XyzRoute;
@@ -1171,6 +1172,12 @@ mod tests {
         ) else {
             panic!("Cornell box and transport");
         };
+        (scene, transport)
+    }
+
+    #[test]
+    fn progress_reports_every_batch_up_to_the_requested_passes() -> Result<(), RenderError> {
+        let (scene, transport) = cornell_with_fourier4();
         let settings = RenderSettings {
             width: 16,
             height: 8,
@@ -1200,16 +1207,7 @@ mod tests {
 
     #[test]
     fn an_observer_sees_the_image_the_same_passes_render() -> Result<(), RenderError> {
-        use crate::film::Buffer;
-        use crate::transport::FourierTransport;
-        use spectral_core::xyz::XyzRoute;
-        let range = spectral_core::SpectralRange::VISIBLE;
-        let (Ok(scene), Ok(transport)) = (
-            crate::scene::builtin::cornell_box(range),
-            FourierTransport::<4>::new(range, Buffer::Spectral, XyzRoute::Zeroth),
-        ) else {
-            panic!("Cornell box and transport");
-        };
+        let (scene, transport) = cornell_with_fourier4();
         let settings = RenderSettings {
             width: 24,
             height: 16,
