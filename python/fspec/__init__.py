@@ -55,6 +55,13 @@ __all__ = [
     "srgb_encode",
     "srgb_decode",
     "to_srgb",
+    "MAX_WAVELENGTHS",
+    "TABLE_ROWS",
+    "sample_wavelengths",
+    "sampled_to_xyz",
+    "ControlVariateEstimate",
+    "control_variate",
+    "FourierTable",
     "render",
 ]
 
@@ -349,6 +356,186 @@ def to_srgb(coeffs: ArrayLike, route: str = "zeroth", range_nm: Range = VISIBLE_
     then :func:`xyz_to_linear_srgb`, then :func:`srgb_encode` (clamping
     out-of-gamut channels). Shape ``(..., 3)``."""
     return srgb_encode(xyz_to_linear_srgb(to_xyz(coeffs, route, range_nm)))
+
+
+#: The largest number of wavelengths per path of :func:`sample_wavelengths`.
+MAX_WAVELENGTHS: int = _fspec.MAX_WAVELENGTHS
+#: Rows of a :class:`FourierTable` (``cos theta`` in steps of ``1/(TABLE_ROWS - 1)``).
+TABLE_ROWS: int = _fspec.TABLE_ROWS
+
+
+def sample_wavelengths(
+    u: ArrayLike, strategy: str = "hero", range_nm: Range = VISIBLE_RANGE_NM
+) -> Tuple[np.ndarray, np.ndarray]:
+    """Draws wavelengths for sampled spectral transport, as the renderer does.
+
+    Args:
+        u: uniform numbers in ``[0, 1)``, shape ``(..., C)``, ``C`` wavelengths
+            per path, 1 to :data:`MAX_WAVELENGTHS`.
+        strategy: ``"uniform"`` (independent, ``pdf = 1/W``),
+            ``"stratified"`` (one in each of ``C`` equal sub-ranges),
+            ``"hero"`` (Wilkie et al. 2014: ``u[..., 0]`` rotated by ``W/C``),
+            ``"visible"`` (pbrt-v4's visible importance density) or
+            ``"visible-hero"`` (hero rotation in that density's CDF).
+        range_nm: the range to sample.
+
+    Returns:
+        ``(lambda_nm, pdf_per_nm)``, both of the shape of ``u``: the
+        wavelengths and the density (per nm) each estimate divides by.
+    """
+    flat, batch, count = _rows(u, None, "u")
+    lam, pdf = _fspec.sample_wavelengths(_range(range_nm), strategy, flat, count)
+    return lam.reshape(batch + (count,)), pdf.reshape(batch + (count,))
+
+
+def sampled_to_xyz(values: ArrayLike, lambda_nm: ArrayLike, pdf_per_nm: ArrayLike) -> np.ndarray:
+    """The sampled estimate of XYZ of paths: ``(1/C) sum_i L(l_i) xbar(l_i) / p(l_i) / int ybar``
+    (CIE 1931, zero outside 360-830 nm; zero-density wavelengths skipped),
+    normalised as :func:`to_xyz` so both estimate the same colour.
+
+    Args:
+        values: radiance at the wavelengths, shape ``(..., C)``.
+        lambda_nm, pdf_per_nm: as :func:`sample_wavelengths` returns, the
+            shape of ``values``.
+
+    Returns:
+        XYZ of shape ``(..., 3)``.
+    """
+    flat, batch, count = _rows(values, None, "values")
+    lam, _, _ = _rows(lambda_nm, count, "lambda_nm")
+    pdf, _, _ = _rows(pdf_per_nm, count, "pdf_per_nm")
+    return _fspec.sampled_to_xyz(flat, lam, pdf, count).reshape(batch + (3,))
+
+
+class ControlVariateEstimate(NamedTuple):
+    """What :func:`control_variate` returns."""
+
+    #: The control-variate estimate of ``E[Y]``.
+    estimate: np.ndarray
+    #: The plain Monte Carlo mean of the same samples, for comparison.
+    plain: np.ndarray
+
+
+def control_variate(
+    y: ArrayLike,
+    c: ArrayLike,
+    mu: ArrayLike,
+    batch: int = 4,
+    method: str = "cross-fit",
+) -> ControlVariateEstimate:
+    """Estimates ``E[Y]`` with the Fourier estimate as a control variate.
+
+    Per sample ``i``: ``y`` the sampled estimate, ``c`` the path's Fourier
+    spectrum pushed through the same estimator at the same wavelengths, ``mu``
+    its exact value (so ``E[c - mu] = 0``). Samples are fed in order, in
+    batches of ``batch``; every method is unbiased (spectral-core's
+    ``control_variate`` module proves it).
+
+    Args:
+        y, c: shape ``(..., S)`` (``S`` samples per estimator), or
+            ``(..., S, 3)`` for ``"cross-fit-color"``.
+        mu: broadcast to the shape of ``y``.
+        batch: samples per batch (the last batch may be shorter).
+        method: ``"cross-fit"`` (two folds of batches, each weighted by the
+            other's shrunk ``alpha``: never worse than plain beyond noise),
+            ``"cross-fit-color"`` (the same with a 3 x 3 matrix over XYZ) or
+            ``"running"`` (batch ``b`` weighted by ``alpha`` from batches
+            before it, the paper's estimator).
+
+    Returns:
+        A :class:`ControlVariateEstimate` of shape ``(...)``, or ``(..., 3)``
+        for colour.
+    """
+    y_array, c_array = _floats(y, "y"), _floats(c, "c")
+    if y_array.shape != c_array.shape:
+        raise ValueError(f"y of shape {y_array.shape} and c of shape {c_array.shape}: expected equal shapes")
+    try:
+        mu_array = np.broadcast_to(_floats(mu, "mu"), y_array.shape)
+    except ValueError as error:
+        raise ValueError(f"mu does not broadcast to the shape of y, {y_array.shape}") from error
+    color = method == "cross-fit-color"
+    minimum_axes = 2 if color else 1
+    if y_array.ndim < minimum_axes or (color and y_array.shape[-1] != 3):
+        expected = "(..., samples, 3)" if color else "(..., samples)"
+        raise ValueError(f"y of shape {y_array.shape}: expected {expected}")
+    if y_array.size == 0:
+        raise ValueError("y: empty array")
+    if isinstance(batch, bool) or not isinstance(batch, (int, np.integer)):
+        raise ValueError(f"batch = {batch!r}: expected a whole number of samples")
+    batch_shape = y_array.shape[:-2] if color else y_array.shape[:-1]
+    samples = y_array.shape[-2] if color else y_array.shape[-1]
+    y_flat, c_flat, mu_flat = (np.ascontiguousarray(a).reshape(-1) for a in (y_array, c_array, mu_array))
+    estimate, plain = _fspec.control_variate(method, y_flat, c_flat, mu_flat, samples, int(batch))
+    shape = batch_shape + ((3,) if color else ())
+    return ControlVariateEstimate(estimate.reshape(shape), plain.reshape(shape))
+
+
+class FourierTable:
+    """An angle-dependent reflectance as a Fourier table: :data:`TABLE_ROWS`
+    rows of ``n`` coefficients over evenly spaced ``cos theta`` in ``[0, 1]``,
+    linear between rows (the renderer's angle-dependent materials). Build one
+    with :meth:`dielectric` or :meth:`conductor`."""
+
+    def __init__(self, native: "_fspec.FourierTable", range_nm: Range) -> None:
+        self._native = native
+        #: The spectral range of the coefficients, nm.
+        self.range_nm: Range = range_nm
+
+    @property
+    def n(self) -> int:
+        """Coefficients per row."""
+        return int(self._native.n)
+
+    @classmethod
+    def dielectric(
+        cls,
+        wavelengths_nm: ArrayLike,
+        eta: ArrayLike,
+        n: int = 12,
+        range_nm: Range = VISIBLE_RANGE_NM,
+        from_inside: bool = False,
+    ) -> "FourierTable":
+        """Fresnel reflectance of a dielectric interface; ``eta = n_inside /
+        n_outside`` tabulated at ``wavelengths_nm`` (linear between samples,
+        flat beyond; positive). ``from_inside``: rays arrive from the denser
+        side (total internal reflection included)."""
+        lam = np.ascontiguousarray(_floats(wavelengths_nm, "wavelengths_nm")).reshape(-1)
+        eta_flat = np.ascontiguousarray(_floats(eta, "eta")).reshape(-1)
+        native = _fspec.dielectric_table(_range(range_nm), lam, eta_flat, _coeff_count(n), bool(from_inside))
+        return cls(native, _range(range_nm))
+
+    @classmethod
+    def conductor(
+        cls,
+        wavelengths_nm: ArrayLike,
+        eta: ArrayLike,
+        k: ArrayLike,
+        n: int = 12,
+        range_nm: Range = VISIBLE_RANGE_NM,
+        outside_index: float = 1.0,
+    ) -> "FourierTable":
+        """Fresnel reflectance of a conductor of complex index ``eta + i k``
+        (tabulated at ``wavelengths_nm``; ``eta > 0``, ``k >= 0``) seen from a
+        medium of index ``outside_index``."""
+        lam = np.ascontiguousarray(_floats(wavelengths_nm, "wavelengths_nm")).reshape(-1)
+        eta_flat = np.ascontiguousarray(_floats(eta, "eta")).reshape(-1)
+        k_flat = np.ascontiguousarray(_floats(k, "k")).reshape(-1)
+        native = _fspec.conductor_table(
+            _range(range_nm), lam, eta_flat, k_flat, _coeff_count(n), float(outside_index)
+        )
+        return cls(native, _range(range_nm))
+
+    def lookup(self, cos_theta: ArrayLike) -> np.ndarray:
+        """Coefficients at ``cos_theta`` (any shape, each in ``[0, 1]``):
+        shape ``cos_theta.shape + (n,)``."""
+        array = _floats(cos_theta, "cos_theta")
+        out = self._native.lookup(np.ascontiguousarray(array).reshape(-1))
+        return out.reshape(array.shape + (self.n,))
+
+    @property
+    def rows(self) -> np.ndarray:
+        """The table itself, shape ``(TABLE_ROWS, n)``."""
+        return self._native.rows().reshape(TABLE_ROWS, self.n)
 
 
 class Rendered(NamedTuple):

@@ -5,7 +5,7 @@ half (``fspec/__init__.py``) reshapes. Functions raise ``ValueError`` with a
 one-line message on bad input.
 """
 
-from typing import List, Optional, Tuple
+from typing import List, Optional, Tuple, final
 
 import numpy as np
 import numpy.typing as npt
@@ -14,7 +14,9 @@ __all__ = [
     "MAX_COEFFS", "CIE_RANGE_NM", "VISIBLE_RANGE_NM", "project_tabulated", "project_blackbody",
     "upsample_rgb", "project_builtin", "builtin_names", "builtin_table", "product", "evaluate",
     "mese", "bounded_mese", "to_xyz", "tabulated_xyz", "xyz_to_linear_srgb", "linear_srgb_to_xyz",
-    "srgb_encode", "srgb_decode", "render", "builtin_scenes",
+    "srgb_encode", "srgb_decode", "render", "builtin_scenes", "MAX_WAVELENGTHS",
+    "sample_wavelengths", "sampled_to_xyz", "control_variate", "TABLE_ROWS", "FourierTable",
+    "dielectric_table", "conductor_table",
 ]
 
 _F64 = npt.NDArray[np.float64]
@@ -76,3 +78,34 @@ def render(
 
 def builtin_scenes() -> List[Tuple[str, str]]:
     """``(name, description)`` of every built-in scene."""
+
+MAX_WAVELENGTHS: int
+TABLE_ROWS: int
+
+def sample_wavelengths(range_nm: _Range, strategy_name: str, u: _F64, count: int) -> Tuple[_F64, _F64]:
+    """Rows of ``count`` uniform numbers in [0, 1) -> ``(lambda_nm, pdf_per_nm)``, flat."""
+
+def sampled_to_xyz(values: _F64, lambda_nm: _F64, pdf_per_nm: _F64, count: int) -> _F64:
+    """Rows of ``count`` sampled values -> XYZ, 3 per row."""
+
+def control_variate(method: str, y: _F64, c: _F64, mu: _F64, samples: int, batch: int) -> Tuple[_F64, _F64]:
+    """``(estimate, plain)`` per estimator; ``method`` "running", "cross-fit" or "cross-fit-color"."""
+
+@final
+class FourierTable:
+    """A Fourier table of ``TABLE_ROWS`` rows of ``n`` coefficients over cos theta."""
+
+    @property
+    def n(self) -> int: ...
+    def lookup(self, cos_theta: _F64) -> _F64:
+        """Coefficients at each cos theta in [0, 1], row after row."""
+    def rows(self) -> _F64:
+        """Every row's coefficients, ``TABLE_ROWS * n`` values."""
+
+def dielectric_table(range_nm: _Range, lambda_nm: _F64, eta: _F64, n: int, from_inside: bool) -> FourierTable:
+    """Fresnel reflectance of a dielectric of relative index ``eta`` tabulated at ``lambda_nm``."""
+
+def conductor_table(
+    range_nm: _Range, lambda_nm: _F64, eta: _F64, k: _F64, n: int, outside_index: float
+) -> FourierTable:
+    """Fresnel reflectance of a conductor of index ``eta + i k`` tabulated at ``lambda_nm``."""

@@ -11,6 +11,11 @@
 //!   function. The coefficient count `n` is a run-time argument in
 //!   `1..=`[`MAX_COEFFS`], dispatched to the core's compile-time `N` (as in
 //!   `spectral-capi`).
+//! * [`sampling`]: wavelength sampling by each strategy of the core, the
+//!   sampled estimate of XYZ, and the control-variate estimators (running
+//!   `α`, cross-fitted, cross-fitted colour) over batches of samples.
+//! * [`tables`]: Fourier tables of Fresnel reflectance (dielectric,
+//!   conductor) against `cos θ`, built once and looked up from numpy.
 //! * [`render`]: `fspec render` through the CLI's library (`fspec_cli`),
 //!   so built-in scenes, TOML, Mitsuba XML and OBJ files load exactly as on
 //!   the command line, returning the image instead of writing files.
@@ -24,7 +29,9 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 mod render;
+mod sampling;
 mod spectra;
+mod tables;
 
 /// The largest coefficient count the functions accept (every count from 1
 /// up to it is supported; the renderer's largest `--coeffs` is 32 too).
@@ -74,6 +81,8 @@ pub(crate) use dispatch;
 fn _fspec(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("MAX_COEFFS", MAX_COEFFS)?;
     spectra::register(module)?;
+    sampling::register(module)?;
+    tables::register(module)?;
     render::register(module)?;
     Ok(())
 }

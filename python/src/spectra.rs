@@ -32,10 +32,10 @@ use spectral_core::{
 const MAX_RANGE_WIDTH_NM: f64 = 100_000.0;
 
 /// Channels of a colour (XYZ, RGB).
-const CHANNELS: usize = 3;
+pub(crate) const CHANNELS: usize = 3;
 
 /// A `ValueError` with `message`.
-fn value_error(message: impl Into<String>) -> PyErr {
+pub(crate) fn value_error(message: impl Into<String>) -> PyErr {
     PyValueError::new_err(message.into())
 }
 
@@ -45,7 +45,7 @@ fn row_error(row: usize, error: SpectralError) -> PyErr {
 }
 
 /// `range_nm` as the core's range, checked as in the module docs.
-fn spectral_range((min_nm, max_nm): (f64, f64)) -> PyResult<SpectralRange> {
+pub(crate) fn spectral_range((min_nm, max_nm): (f64, f64)) -> PyResult<SpectralRange> {
     let range = SpectralRange::new(min_nm, max_nm)
         .map_err(|e| value_error(format!("range_nm ({min_nm}, {max_nm}): {e}")))?;
     if range.width_nm() > MAX_RANGE_WIDTH_NM {
@@ -57,7 +57,7 @@ fn spectral_range((min_nm, max_nm): (f64, f64)) -> PyResult<SpectralRange> {
 }
 
 /// A range that must lie inside the CIE table (XYZ, RGB upsampling).
-fn colour_range(range_nm: (f64, f64)) -> PyResult<SpectralRange> {
+pub(crate) fn colour_range(range_nm: (f64, f64)) -> PyResult<SpectralRange> {
     let range = spectral_range(range_nm)?;
     if range.min_nm() < cmf::FIRST_NM || range.max_nm() > cmf::LAST_NM {
         return Err(value_error(format!(
@@ -72,7 +72,7 @@ fn colour_range(range_nm: (f64, f64)) -> PyResult<SpectralRange> {
 }
 
 /// `n` checked against `1..=MAX_COEFFS`.
-fn coeff_count(n: usize) -> PyResult<usize> {
+pub(crate) fn coeff_count(n: usize) -> PyResult<usize> {
     if (1..=MAX_COEFFS).contains(&n) {
         Ok(n)
     } else {
@@ -83,7 +83,7 @@ fn coeff_count(n: usize) -> PyResult<usize> {
 }
 
 /// `array` as a slice (the Python half passes C-contiguous arrays).
-fn slice<'a>(array: &'a PyReadonlyArray1<'_, f64>, name: &str) -> PyResult<&'a [f64]> {
+pub(crate) fn slice<'a>(array: &'a PyReadonlyArray1<'_, f64>, name: &str) -> PyResult<&'a [f64]> {
     array
         .as_slice()
         .map_err(|_| value_error(format!("{name}: expected a contiguous array")))
@@ -91,7 +91,7 @@ fn slice<'a>(array: &'a PyReadonlyArray1<'_, f64>, name: &str) -> PyResult<&'a [
 
 /// Splits `values` into rows of `width`, refusing a length that is not a
 /// multiple of it.
-fn rows<'a>(
+pub(crate) fn rows<'a>(
     values: &'a [f64],
     width: usize,
     name: &str,
@@ -106,7 +106,7 @@ fn rows<'a>(
 }
 
 /// `Err` naming the row and index of the first NaN or infinity.
-fn check_finite(values: &[f64], width: usize, name: &str) -> PyResult<()> {
+pub(crate) fn check_finite(values: &[f64], width: usize, name: &str) -> PyResult<()> {
     match values.iter().position(|v| !v.is_finite()) {
         None => Ok(()),
         Some(i) => Err(value_error(format!(

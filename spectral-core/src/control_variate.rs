@@ -433,6 +433,15 @@ impl CrossFitColorControlVariate {
         })
     }
 
+    /// The plain Monte Carlo mean of the closed batches, per channel.
+    pub fn plain_estimate(&self) -> [f64; CHANNELS] {
+        let n = self.samples();
+        if n <= 0.0 {
+            return [0.0; CHANNELS];
+        }
+        core::array::from_fn(|r| (self.folds[0].sum_y[r] + self.folds[1].sum_y[r]) / n)
+    }
+
     /// Number of samples in closed batches.
     pub fn samples(&self) -> f64 {
         self.folds[0].count + self.folds[1].count
