@@ -37,9 +37,11 @@
 //! # Ok::<(), spectral_core::SpectralError>(())
 //! ```
 
+use crate::error::SpectralError;
 use crate::fourier::FourierSpectrum;
 use crate::range::SpectralRange;
 use crate::spectrum::{Spectrum, project_function};
+use crate::table::FourierTable;
 
 /// The cosine basis of `N` functions over a [`SpectralRange`] (module docs).
 ///
@@ -92,6 +94,29 @@ impl<const N: usize> FourierBasis<N> {
     /// Gauss–Legendre quadrature ([`project_function`]).
     pub fn project_function(&self, f: impl Fn(f64) -> f64) -> FourierSpectrum<f64, N> {
         project_function(&self.range, f)
+    }
+
+    /// A [`FourierTable`] of `f(param, lambda_nm)` with `L` rows over
+    /// `[param_min, param_max]`, projected in this basis
+    /// ([`FourierTable::build`]), so its rows read with the same basis as
+    /// every other spectrum of the renderer.
+    ///
+    /// ```
+    /// use spectral_core::FourierBasis;
+    ///
+    /// let basis = FourierBasis::<8>::VISIBLE;
+    /// // A reflectance that brightens with cos θ and is flat in wavelength.
+    /// let table = basis.table::<16>(0.0, 1.0, |cos_theta, _lambda_nm| 0.04 + 0.5 * cos_theta)?;
+    /// assert!((table.lookup(0.5).eval(&basis, 550.0) - 0.29).abs() < 1e-6);
+    /// # Ok::<(), spectral_core::SpectralError>(())
+    /// ```
+    pub fn table<const L: usize>(
+        &self,
+        param_min: f64,
+        param_max: f64,
+        f: impl Fn(f64, f64) -> f64,
+    ) -> Result<FourierTable<N, L>, SpectralError> {
+        FourierTable::build(&self.range, param_min, param_max, f)
     }
 
     /// `cos φ(λ)`: the argument of every `eval_cos` of the crate.
