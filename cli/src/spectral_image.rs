@@ -55,7 +55,7 @@ use crate::error::CliError;
 use crate::texture_file::{check_texels, decode_exr_channels, error, read_exr_header};
 use simd_tracer::spectra::MAX_COEFFS;
 use simd_tracer::spectra::texture::MAX_TEXELS;
-use spectral_core::{SpectralRange, TabulatedSpectrum};
+use spectral_core::{FourierSpectrum, SpectralRange, Spectrum, TabulatedSpectrum};
 use std::io::{BufRead, Seek};
 use std::path::Path;
 
@@ -199,11 +199,6 @@ impl SpectralImage {
             .collect()
     }
 
-    /// Bytes of the bins as read (`4` per value).
-    pub fn bin_bytes(&self) -> usize {
-        4 * self.values.len()
-    }
-
     /// Projects every texel to `n` (1 … [`MAX_COEFFS`]) coefficients over
     /// `range`, with its error (module docs).
     pub fn project(&self, n: usize, range: &SpectralRange) -> Result<ProjectedImage, String> {
@@ -217,7 +212,7 @@ impl SpectralImage {
         for texel in 0..texels {
             let values = self.texel(texel);
             let polyline = TabulatedSpectrum::new(&self.wavelengths_nm, &values)
-                .map_err(|e| format!("{}: {e}", self.bad_value_message(texel)))?;
+                .map_err(|e| format!("texel {texel}: {e}"))?;
             let (c, error) = project_polyline(&polyline, n, range);
             coeffs.extend(c.iter().map(|&v| v as f32));
             errors.push(error);
@@ -233,10 +228,9 @@ pub fn project_polyline(
     n: usize,
     range: &SpectralRange,
 ) -> (Vec<f64>, TexelError) {
-    use spectral_core::Spectrum;
     // The first `n` coefficients of the exact projection do not depend on
     // how many are computed, so one instantiation serves every `n`.
-    let all: spectral_core::FourierSpectrum<f64, MAX_COEFFS> = polyline.project(range);
+    let all: FourierSpectrum<f64, MAX_COEFFS> = polyline.project(range);
     let kept: Vec<f64> = all.coeffs.iter().take(n).copied().collect();
     let width_nm = range.width_nm();
     let norm_squared = polyline.integrate_product(polyline, range.min_nm(), range.max_nm());
@@ -251,12 +245,14 @@ pub fn project_polyline(
     } else {
         0.0
     };
-    let series = series_of(&kept);
+    let series = FourierSpectrum::<f64, MAX_COEFFS>::from_coeffs(core::array::from_fn(|j| {
+        kept.get(j).copied().unwrap_or(0.0)
+    }));
     let max_abs_at_bins = polyline
         .wavelengths_nm()
         .iter()
         .zip(polyline.values())
-        .map(|(&lambda_nm, &value)| (series.eval(range, lambda_nm) - value).abs())
+        .map(|(&lambda_nm, &value)| (series.eval_cos(range.cos_phase(lambda_nm)) - value).abs())
         .fold(0.0, f64::max);
     (
         kept,
@@ -265,24 +261,6 @@ pub fn project_polyline(
             max_abs_at_bins,
         },
     )
-}
-
-/// The series `c_0 + 2 Σ c_j cos(j φ)` of up to [`MAX_COEFFS`] coefficients.
-fn series_of(coeffs: &[f64]) -> Series {
-    Series {
-        coeffs: core::array::from_fn(|j| coeffs.get(j).copied().unwrap_or(0.0)),
-    }
-}
-
-struct Series {
-    coeffs: [f64; MAX_COEFFS],
-}
-
-impl Series {
-    fn eval(&self, range: &SpectralRange, lambda_nm: f64) -> f64 {
-        spectral_core::FourierSpectrum::<f64, MAX_COEFFS>::from_coeffs(self.coeffs)
-            .eval_cos(range.cos_phase(lambda_nm))
-    }
 }
 
 /// The wavelength (nm) of a channel named `<prefix><λ>nm`; `None` if the
@@ -409,16 +387,6 @@ pub fn read_spectral_exr_from(
 pub fn read_spectral_exr(path: &Path, preferred: SpectralKind) -> Result<SpectralImage, CliError> {
     let file = std::fs::File::open(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
     read_spectral_exr_from(std::io::BufReader::new(file), path, preferred)
-}
-
-/// Whether the OpenEXR file in `reader` (at its start; rewound after)
-/// has spectral channels in its first part.
-pub fn has_spectral_channels(
-    reader: &mut (impl BufRead + Seek),
-    path: &Path,
-) -> Result<bool, CliError> {
-    let header = read_exr_header(reader, path)?;
-    Ok(spectral_kind_of(&header, SpectralKind::Emissive).is_some())
 }
 
 /// Largest image the fuzz entry point decodes, samples (texels × channels
@@ -557,9 +525,8 @@ pub(crate) fn check_range(
 /// `range`: `∫ cos(jφ) ȳ dλ = W ȳ_j` (`ȳ_j` the exact projection of the CIE
 /// 1931 ȳ polyline), so `w_j = (1 or 2) · W ȳ_j / ∫ȳ`.
 fn luminance_weights(range: &SpectralRange) -> [f64; MAX_COEFFS] {
-    use spectral_core::Spectrum;
     let [_, y_bar, _] = spectral_core::cmf::cmfs();
-    let projected: spectral_core::FourierSpectrum<f64, MAX_COEFFS> = y_bar.project(range);
+    let projected: FourierSpectrum<f64, MAX_COEFFS> = y_bar.project(range);
     let scale = range.width_nm() / spectral_core::cmf::Y_BAR_INTEGRAL;
     core::array::from_fn(|j| {
         let doubling = if j == 0 { 1.0 } else { 2.0 };

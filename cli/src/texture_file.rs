@@ -34,7 +34,7 @@
 
 use crate::error::CliError;
 use crate::image_out::read_coefficients_exr_from;
-use crate::spectral_image::{SpectralKind, read_spectral_exr_from, spectral_kind_of};
+use crate::spectral_image::{SpectralKind, check_range, read_spectral_exr_from, spectral_kind_of};
 use exr::prelude::{ReadChannels, ReadLayers, read};
 use simd_tracer::spectra::texture::{MAX_TEXELS, TEXTURE_COEFFS, Texture};
 use spectral_core::SpectralRange;
@@ -361,17 +361,7 @@ fn load_exr(
             ));
         }
         let image = read_coefficients_exr_from(reader, path)?;
-        let (lo, hi) = image.range_nm;
-        if (lo - range.min_nm()).abs() > 1e-9 || (hi - range.max_nm()).abs() > 1e-9 {
-            return Err(error(
-                path,
-                format!(
-                    "coefficients over {lo}–{hi} nm, but the scene's range is {}–{} nm",
-                    range.min_nm(),
-                    range.max_nm()
-                ),
-            ));
-        }
+        check_range(path, image.range_nm, &range)?;
         return Texture::fourier(image.width, image.height, image.n, image.coeffs, range)
             .map_err(describe);
     }

@@ -93,8 +93,10 @@ fn spectral_exr_corpus() -> TestResult {
 fn spectral_exr_seeds_read_back() -> TestResult {
     use fspec_cli::spectral_image::{SpectralKind, read_spectral_exr};
     for (seed, kind, bands) in [
-        ("s0-3x2-31", SpectralKind::Emissive, 31),
-        ("t-2x2-4", SpectralKind::Reflective, 4),
+        ("s0-6x4-31", SpectralKind::Emissive, 31),
+        ("s0-cornell-3x2", SpectralKind::Emissive, 48),
+        ("t-5x4-31", SpectralKind::Reflective, 31),
+        ("t-unsorted-names", SpectralKind::Reflective, 3),
     ] {
         let image = read_spectral_exr(&corpus_dir("spectral_exr").join(seed), kind)
             .map_err(|e| format!("{seed}: {e}"))?;

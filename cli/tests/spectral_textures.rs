@@ -434,7 +434,7 @@ fn oracle_index(wrap: WrapMode, i: i64, n: i64) -> usize {
             let k = ((i % (2 * n)) + 2 * n) % (2 * n);
             if k < n { k } else { 2 * n - 1 - k }
         }
-        WrapMode::Clamp => i.max(0).min(n - 1),
+        WrapMode::Clamp => i.clamp(0, n - 1),
     };
     index as usize
 }

@@ -683,6 +683,62 @@ mod tests {
     }
 
     #[test]
+    fn spectral_maps_hold_their_coefficients_times_the_scale() {
+        let range = SpectralRange::VISIBLE;
+        const COEFFS: [f32; 6] = [0.5, 0.1, -0.05, 0.2, 0.0, 0.01];
+        let image = |n: usize, coeffs: &'static [f32], luminance: &'static [f32], scale: f32| {
+            SpectralEnvironmentImage {
+                width: 2,
+                height: 1,
+                n,
+                coeffs,
+                luminance,
+                scale,
+                to_world: Mat3::IDENTITY,
+            }
+        };
+        let Ok(map) = EnvironmentMap::spectral(&image(3, &COEFFS, &[1.0, 0.5], 2.0), range) else {
+            panic!("a valid spectral map was refused");
+        };
+        assert_eq!(map.coefficients_per_texel(), 3);
+        // Texel 0's centre: u = 1/4; every row is the same texel (H = 1).
+        let c: [f32; 4] = map.fourier_at([0.25, 0.5]);
+        assert_eq!(c, [1.0, 0.2, -0.1, 0.0]);
+        let series = FourierSpectrum::<f64, 3>::from_coeffs([1.0, 0.2, -0.1]);
+        let want = series.eval_cos(range.cos_phase(500.0)) as f32;
+        assert!((map.value_at([0.25, 0.5], 500.0) - want).abs() < 1e-6);
+        // Mean radiance over the sphere: the texels' mean c₀ when every row
+        // is the same (the rows' sin θ weights integrate to 2 within the
+        // midpoint rule's (π/H)²/24 relative error).
+        let rows = 64;
+        let tall_coeffs: Vec<f32> = (0..rows).flat_map(|_| COEFFS).collect();
+        let tall_luminance = vec![1.0f32; 2 * rows];
+        let tall = EnvironmentMap::spectral(
+            &SpectralEnvironmentImage {
+                height: rows as u32,
+                coeffs: &tall_coeffs,
+                luminance: &tall_luminance,
+                ..image(3, &COEFFS, &[1.0, 0.5], 2.0)
+            },
+            range,
+        );
+        let mean = tall.map(|m| m.mean_radiance()).unwrap_or(f64::NAN);
+        assert!((mean - 0.7).abs() < 1e-3, "{mean}");
+        assert_eq!(map.memory_bytes(), 4 * 6 + 4 * 2);
+        for bad in [
+            image(0, &[], &[1.0, 1.0], 1.0),
+            image(33, &[0.0; 66], &[1.0, 1.0], 1.0),
+            image(3, &[0.0; 5], &[1.0, 1.0], 1.0),
+            image(3, &COEFFS, &[1.0], 1.0),
+            image(3, &[f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0], &[1.0, 1.0], 1.0),
+            image(3, &COEFFS, &[-1.0, 1.0], 1.0),
+            image(3, &COEFFS, &[1.0, 1.0], f32::INFINITY),
+        ] {
+            assert!(EnvironmentMap::spectral(&bad, range).is_err(), "{bad:?}");
+        }
+    }
+
+    #[test]
     fn bad_maps_are_refused() {
         let image = |rgb: &'static [[f32; 3]], to_world: Mat3, scale: f32| EnvironmentImage {
             width: 2,
