@@ -10,7 +10,7 @@
 //!
 //! * spectral images: the piecewise-linear spectrum between the image's
 //!   wavelengths, held constant beyond them, exactly
-//!   ([`SpectralImage::project`]);
+//!   ([`crate::spectral_image::SpectralImage::project`]);
 //! * sRGB images: the Jakob–Hanika sigmoid of the texel's reflectance
 //!   (PNG values sRGB-decoded, EXR values linear; clamped to [0, 1] as the
 //!   albedo textures do), projected as [`simd_tracer::spectra::texture::Texture::rgb`]

@@ -186,20 +186,43 @@ fn a_texture_of_constant_spectra_renders_as_the_constant_material() -> TestResul
     let dir = test_dir("constant-albedo")?;
     write_flat(&dir.join("flat.exr"), "T.", (4, 3), 0.6)?;
     write_flat(&dir.join("wrong.exr"), "T.", (4, 3), 0.55)?;
+    // The converter's coefficient file is a texture too.
+    let converted = fspec()
+        .current_dir(&dir)
+        .args([
+            "texture",
+            "flat.exr",
+            "--coeffs",
+            "8",
+            "--out",
+            "converted.exr",
+        ])
+        .output()?;
+    assert!(
+        converted.status.success(),
+        "{}",
+        String::from_utf8_lossy(&converted.stderr)
+    );
     let sky = "spectrum = \"d65\"\nscale = 0.01";
     for (name, albedo) in [
         ("constant.toml", "albedo = { constant = 0.6 }"),
         ("textured.toml", "albedo_texture = \"flat.exr\""),
+        ("converted.toml", "albedo_texture = \"converted.exr\""),
         ("wrong.toml", "albedo_texture = \"wrong.exr\""),
     ] {
         fs::write(dir.join(name), scene_text(albedo, sky))?;
     }
     for transport in [&["--transport", "fourier"][..], &["--transport", "sampled"]] {
         let constant = render_rgb(&dir, "constant.toml", "8", transport)?;
-        let textured = render_rgb(&dir, "textured.toml", "8", transport)?;
         let wrong = render_rgb(&dir, "wrong.toml", "8", transport)?;
-        let same = max_relative_difference(&constant, &textured);
-        assert!(same < SAME_RENDER_TOLERANCE, "{transport:?}: {same}");
+        for scene in ["textured.toml", "converted.toml"] {
+            let textured = render_rgb(&dir, scene, "8", transport)?;
+            let same = max_relative_difference(&constant, &textured);
+            assert!(
+                same < SAME_RENDER_TOLERANCE,
+                "{scene} {transport:?}: {same}"
+            );
+        }
         // Negative control: 0.55 instead of 0.6 is far outside.
         let off = max_relative_difference(&constant, &wrong);
         assert!(off > 100.0 * SAME_RENDER_TOLERANCE, "{transport:?}: {off}");
@@ -397,6 +420,50 @@ fn a_round_trip_stays_within_the_measured_truncation_error() -> TestResult {
     );
     // … and fewer coefficients break it (negative control).
     assert!(!within(&round_trip(&dir, &input, 8)?));
+    Ok(())
+}
+
+#[test]
+fn srgb_images_convert_like_rgb_textures() -> TestResult {
+    let dir = test_dir("srgb")?;
+    let path = dir.join("colours.png");
+    let rgb8: [[u8; 3]; 4] = [[200, 30, 40], [20, 180, 60], [30, 40, 220], [128, 128, 128]];
+    let mut encoder = png::Encoder::new(fs::File::create(&path)?, 2, 2);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder
+        .write_header()?
+        .write_image_data(rgb8.as_flattened())?;
+    let range = SpectralRange::VISIBLE;
+    let n = 12;
+    let conversion = convert(&path, n, &range)?;
+    // The albedo texture of the same PNG: its first n coefficients.
+    let texture = load_texture(&path, TextureUse::Albedo, range)?;
+    for (t, (u, v)) in [(0.25, 0.75), (0.75, 0.75), (0.25, 0.25), (0.75, 0.25)]
+        .into_iter()
+        .enumerate()
+    {
+        let want = texture.fourier_at(u, v);
+        let got = &conversion.coeffs[t * n..(t + 1) * n];
+        for (j, (g, w)) in got.iter().zip(want).enumerate() {
+            assert!((g - w).abs() < 1e-6, "texel {t} c{j}: {g} vs {w}");
+        }
+        // The reported error against the sigmoid spectrum, densely.
+        let error = conversion.errors[t].relative_l2;
+        let (mut e2, mut g2) = (0.0, 0.0);
+        let series = series(got);
+        for i in 0..=4700 {
+            let l = 360.0 + 0.1 * f64::from(i);
+            let g = f64::from(texture.value_at(u, v, l as f32));
+            e2 += (series.eval_cos(range.cos_phase(l)) - g).powi(2);
+            g2 += g * g;
+        }
+        let dense = (e2 / g2).sqrt();
+        assert!(
+            (dense - error).abs() < 0.02 * dense + 1e-5,
+            "texel {t}: {error} vs {dense}"
+        );
+    }
     Ok(())
 }
 

@@ -141,8 +141,9 @@ enum Texels {
         /// [`ENVIRONMENT_COEFFS`] coefficients of each texel's shape
         /// `S · D65 / Y_D65`.
         fourier: Vec<f32>,
-        /// D65 at luminance 1.
-        illuminant: SceneSpectrum,
+        /// D65 at luminance 1 (boxed: a dense table, large beside the
+        /// other variant).
+        illuminant: Box<SceneSpectrum>,
     },
     /// Spectral radiance (module docs, "Spectral maps"): `n` coefficients
     /// per texel, the scale `k` included.
@@ -280,7 +281,7 @@ impl EnvironmentMap {
                 sigmoid,
                 intensity,
                 fourier,
-                illuminant,
+                illuminant: Box::new(illuminant),
             },
             luminance: rgb
                 .iter()
