@@ -20,7 +20,9 @@ use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, ReadChannels,
     ReadLayers, Text, WritableImage, read,
 };
-use fspec_cli::image_out::{XyzImage, read_coefficients_exr, write_spectral_exr};
+use fspec_cli::image_out::{
+    XyzImage, read_coefficients_exr, write_coefficients_exr, write_spectral_exr,
+};
 use fspec_cli::spectral_image::{SpectralKind, load_environment_coefficients, read_spectral_exr};
 use fspec_cli::texture_cmd::convert;
 use fspec_cli::texture_file::{TextureUse, load_texture};
@@ -801,6 +803,39 @@ fn bad_spectral_images_are_refused_by_scenes() -> TestResult {
             &dir,
             &["render", &scene, "--out", "out.png"],
             &[needle, &scene],
+        )?;
+    }
+    Ok(())
+}
+
+#[test]
+fn coefficient_files_over_another_range_are_refused_by_scenes() -> TestResult {
+    let dir = test_dir("other-range")?;
+    write_coefficients_exr(
+        &dir.join("narrow.exr"),
+        1,
+        1,
+        2,
+        &[0.5, 0.1],
+        (400.0, 700.0),
+    )?;
+    let sky = "spectrum = \"d65\"";
+    fs::write(
+        dir.join("albedo.toml"),
+        scene_text("albedo_texture = \"narrow.exr\"", sky),
+    )?;
+    fs::write(
+        dir.join("map.toml"),
+        scene_text("albedo = { constant = 0.5 }", "map = \"narrow.exr\""),
+    )?;
+    for scene in ["albedo.toml", "map.toml"] {
+        refused(
+            &dir,
+            &["render", scene, "--out", "out.png"],
+            &[
+                scene,
+                "coefficients over 400–700 nm, but the scene's range is 360–830 nm",
+            ],
         )?;
     }
     Ok(())
