@@ -6,6 +6,7 @@ use fspec_cli::experiment::{self, ExperimentArgs};
 use fspec_cli::merge_cmd::{self, MergeArgs};
 use fspec_cli::render_cmd::{self, RenderArgs};
 use fspec_cli::spectrum_cmd::{self, SpectrumArgs};
+use fspec_cli::texture_cmd::{self, TextureArgs};
 use fspec_cli::train::{self, TrainArgs};
 use fspec_cli::view::{self, ViewArgs};
 use std::process::ExitCode;
@@ -34,6 +35,9 @@ enum Command {
     /// Inspect one spectrum: Fourier coefficients, XYZ by every conversion
     /// route, sRGB preview and reconstruction error.
     Spectrum(SpectrumArgs),
+    /// Convert a spectral OpenEXR or an sRGB image to a Fourier-coefficient
+    /// texture (OpenEXR), reporting the reconstruction error and memory.
+    Texture(TextureArgs),
     /// Train the small sine network of a neural thin-film material.
     Train(TrainArgs),
     /// Interactive preview in the browser: a local web server showing the
@@ -60,6 +64,7 @@ fn run(cli: &Cli) -> Result<ExitCode, CliError> {
             Ok(())
         }
         Command::Spectrum(args) => spectrum_cmd::run(args, &mut out),
+        Command::Texture(args) => texture_cmd::run(args, &mut out),
         Command::View(args) => view::run(args),
         Command::Train(args) => {
             let trained = train::run(args, &mut out)?;

@@ -15,7 +15,11 @@
 //! * **OpenEXR** (first part; values are linear):
 //!   * albedo: channels `F0 … F{N−1}` make a Fourier texture read with
 //!     [`crate::image_out::read_coefficients_exr`] (its `fourierRangeNm` must equal the
-//!     scene's range); otherwise `R`, `G`, `B` (linear sRGB reflectance,
+//!     scene's range); spectral channels `T.<λ>nm` (else `S0.<λ>nm`, the
+//!     layout of Fichet et al. 2021) are read with
+//!     [`crate::spectral_image`] and each texel projected exactly to
+//!     [`SPECTRAL_TEXTURE_COEFFS`] coefficients, the polyline between the
+//!     wavelengths held constant beyond them; otherwise `R`, `G`, `B` (linear sRGB reflectance,
 //!     clamped to [0, 1] by the upsampling) or `Y` (grey);
 //!   * thickness: `Y`, else the only channel of a single-channel image.
 //!
@@ -30,13 +34,20 @@
 
 use crate::error::CliError;
 use crate::image_out::read_coefficients_exr_from;
+use crate::spectral_image::{SpectralKind, check_range, read_spectral_exr_from, spectral_kind_of};
 use exr::prelude::{ReadChannels, ReadLayers, read};
-use simd_tracer::spectra::texture::{MAX_TEXELS, Texture};
+use simd_tracer::spectra::texture::{MAX_TEXELS, TEXTURE_COEFFS, Texture};
 use spectral_core::SpectralRange;
 use spectral_core::color::srgb_decode;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
+
+/// Coefficients per texel of an albedo texture read from a spectral
+/// OpenEXR: as many as an RGB texture holds ([`TEXTURE_COEFFS`]), half the
+/// bytes of a 31-band image (`docs/performance.md`); `fspec texture
+/// --coeffs N` writes a coefficient file for any other `N`.
+pub const SPECTRAL_TEXTURE_COEFFS: usize = TEXTURE_COEFFS;
 
 /// Largest texture file accepted, bytes (512 MiB).
 pub const MAX_TEXTURE_FILE_BYTES: u64 = 512 * 1024 * 1024;
@@ -350,19 +361,29 @@ fn load_exr(
             ));
         }
         let image = read_coefficients_exr_from(reader, path)?;
-        let (lo, hi) = image.range_nm;
-        if (lo - range.min_nm()).abs() > 1e-9 || (hi - range.max_nm()).abs() > 1e-9 {
-            return Err(error(
-                path,
-                format!(
-                    "coefficients over {lo}–{hi} nm, but the scene's range is {}–{} nm",
-                    range.min_nm(),
-                    range.max_nm()
-                ),
-            ));
-        }
+        check_range(path, image.range_nm, &range)?;
         return Texture::fourier(image.width, image.height, image.n, image.coeffs, range)
             .map_err(describe);
+    }
+    if spectral_kind_of(&header, SpectralKind::Reflective).is_some() {
+        if usage == TextureUse::Thickness {
+            return Err(error(
+                path,
+                "a thickness texture must be a grey image (this EXR holds spectra)",
+            ));
+        }
+        let image = read_spectral_exr_from(reader, path, SpectralKind::Reflective)?;
+        let projected = image
+            .project(SPECTRAL_TEXTURE_COEFFS, &range)
+            .map_err(|e| error(path, e))?;
+        return Texture::fourier(
+            image.width,
+            image.height,
+            projected.n,
+            projected.coeffs,
+            range,
+        )
+        .map_err(describe);
     }
     let image = decode_exr_channels(reader, path)?;
     let (w32, h32) = (image.width, image.height);
@@ -388,7 +409,7 @@ fn load_exr(
                     return Err(error(
                         path,
                         format!(
-                            "an albedo EXR needs channels R, G, B, or Y, or F0 … (found {})",
+                            "an albedo EXR needs spectral channels T.<λ>nm or S0.<λ>nm, F0 …, R, G, B, or Y (found {})",
                             image.names()
                         ),
                     ));

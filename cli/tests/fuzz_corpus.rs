@@ -81,6 +81,34 @@ fn coefficient_exr_corpus() -> TestResult {
     Ok(())
 }
 
+#[test]
+fn spectral_exr_corpus() -> TestResult {
+    let count = replay_corpus("spectral_exr", fspec_cli::spectral_image::fuzz_spectral_exr)?;
+    assert!(count >= 5, "only {count} seeds");
+    Ok(())
+}
+
+/// The spectral seeds written by the project's writers read back.
+#[test]
+fn spectral_exr_seeds_read_back() -> TestResult {
+    use fspec_cli::spectral_image::{SpectralKind, read_spectral_exr};
+    for (seed, kind, bands) in [
+        ("s0-6x4-31", SpectralKind::Emissive, 31),
+        ("s0-cornell-3x2", SpectralKind::Emissive, 48),
+        ("t-5x4-31", SpectralKind::Reflective, 31),
+        ("t-unsorted-names", SpectralKind::Reflective, 3),
+    ] {
+        let image = read_spectral_exr(&corpus_dir("spectral_exr").join(seed), kind)
+            .map_err(|e| format!("{seed}: {e}"))?;
+        assert_eq!(
+            (image.kind, image.wavelengths_nm.len()),
+            (kind, bands),
+            "{seed}"
+        );
+    }
+    Ok(())
+}
+
 /// The coefficient seeds written by the project's writer read back.
 #[test]
 fn coefficient_exr_seeds_read_back() -> TestResult {

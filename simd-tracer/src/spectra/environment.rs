@@ -16,6 +16,21 @@
 //! `2m · S(·) · D65` exactly at their wavelengths. Memory per texel:
 //! `4 · ENVIRONMENT_COEFFS + 16` bytes.
 //!
+//! **Spectral maps** ([`EnvironmentMap::spectral`]): texels given as `n`
+//! Fourier coefficients of their radiance (a spectral OpenEXR projected
+//! once at load, or a coefficient file), times the scale `k`, with each
+//! texel's luminance for the sampling weights. Both transports read the
+//! coefficients: the Fourier transport the bilinear coefficients, the
+//! sampled ones their series at each wavelength (negative lobes clamped
+//! to 0). Why not keep the image's bins for the sampled transports: the
+//! coefficients take `4n` bytes per texel against `4B` for `B` bins (16
+//! against 31 for a 400–700 nm image at 10 nm), one copy serves every
+//! transport, and the transports then render the same spectrum, so their
+//! comparison measures the transport and not the representation; the
+//! price is the truncation error, which `fspec texture` reports per texel.
+//! Coefficients interpolate linearly, so the bilinear lookup is the
+//! projection of the bilinearly interpolated spectrum.
+//!
 //! **Mapping** (Mitsuba's `envmap`, local frame `+y` up): the direction
 //! `d = (sin φ sin θ, cos θ, −cos φ sin θ)` with `φ = 2π u`, `θ = π v`;
 //! inversely `u = atan2(d.x, −d.z) / 2π` (wrapped into [0, 1)),
@@ -35,11 +50,11 @@
 //! positive has weight 0), times `sin θ` at the row centre (the solid
 //! angle of the row). The direction pdf is `pdf(u, v) / (2π² sin θ)`.
 
-use crate::spectra::{SceneSpectrum, SpectrumSource};
+use crate::spectra::{MAX_COEFFS, SceneSpectrum, SpectrumSource};
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 use spectral_core::upsample::{SigmoidPolynomial, srgb_reflectance};
-use spectral_core::{SpectralError, SpectralRange, Spectrum};
+use spectral_core::{FourierSpectrum, SpectralError, SpectralRange, Spectrum};
 use std::f32::consts::{PI, TAU};
 
 /// Fourier coefficients stored per texel.
@@ -107,18 +122,60 @@ impl Projection {
 pub struct EnvironmentMap {
     width: u32,
     height: u32,
-    /// Sigmoid coefficients of `rgb / 2m` per texel.
-    sigmoid: Vec<[f32; 3]>,
-    /// `k · 2m` per texel.
-    intensity: Vec<f32>,
-    /// [`ENVIRONMENT_COEFFS`] coefficients of each texel's spectrum.
-    fourier: Vec<f32>,
-    /// Luminance `k · Y(rgb)` per texel.
+    texels: Texels,
+    /// Luminance `k · Y` per texel (the sampling weights' source).
     luminance: Vec<f32>,
-    /// D65 at luminance 1.
-    illuminant: SceneSpectrum,
     to_world: Mat3,
     to_local: Mat3,
+}
+
+/// What each texel holds.
+#[derive(Debug, Clone, PartialEq)]
+enum Texels {
+    /// RGB illuminants (module docs).
+    Rgb {
+        /// Sigmoid coefficients of `rgb / 2m` per texel.
+        sigmoid: Vec<[f32; 3]>,
+        /// `k · 2m` per texel.
+        intensity: Vec<f32>,
+        /// [`ENVIRONMENT_COEFFS`] coefficients of each texel's shape
+        /// `S · D65 / Y_D65`.
+        fourier: Vec<f32>,
+        /// D65 at luminance 1 (boxed: a dense table, large beside the
+        /// other variant).
+        illuminant: Box<SceneSpectrum>,
+    },
+    /// Spectral radiance (module docs, "Spectral maps"): `n` coefficients
+    /// per texel, the scale `k` included.
+    Spectral {
+        /// Coefficients per texel.
+        n: usize,
+        /// Texel-major coefficients.
+        fourier: Vec<f32>,
+        /// The range the coefficients are over.
+        range: SpectralRange,
+    },
+}
+
+/// What goes into a spectral [`EnvironmentMap`] (module docs, "Spectral
+/// maps").
+#[derive(Debug, Clone, Copy)]
+pub struct SpectralEnvironmentImage<'a> {
+    /// Width, texels.
+    pub width: u32,
+    /// Height, texels.
+    pub height: u32,
+    /// Coefficients per texel, 1 … [`MAX_COEFFS`].
+    pub n: usize,
+    /// Texel-major Fourier coefficients of each texel's radiance over the
+    /// map's range, row-major from the top-left, finite.
+    pub coeffs: &'a [f32],
+    /// Each texel's luminance `Y` (`∫ L ȳ dλ / ∫ ȳ dλ`), finite and ≥ 0.
+    pub luminance: &'a [f32],
+    /// Multiplier `k`.
+    pub scale: f32,
+    /// Local to world: a rotation.
+    pub to_world: Mat3,
 }
 
 /// What goes into an [`EnvironmentMap`].
@@ -136,6 +193,29 @@ pub struct EnvironmentImage<'a> {
     pub to_world: Mat3,
 }
 
+/// The checks every map shares: a size of 1 to
+/// [`MAX_ENVIRONMENT_TEXELS`] texels, a finite scale `>= 0`, a rotation;
+/// the texel count.
+fn check_map(width: u32, height: u32, scale: f32, to_world: Mat3) -> Result<usize, SpectralError> {
+    let texels = width as usize * height as usize;
+    if width == 0 || height == 0 || texels > MAX_ENVIRONMENT_TEXELS {
+        return Err(SpectralError::InvalidParameter(
+            "environment map size (1 to 2^26 texels)",
+        ));
+    }
+    if !(scale.is_finite() && scale >= 0.0) {
+        return Err(SpectralError::InvalidParameter(
+            "environment scale (finite, >= 0)",
+        ));
+    }
+    if !EnvironmentMap::is_rotation(to_world) {
+        return Err(SpectralError::InvalidParameter(
+            "environment transform (a rotation)",
+        ));
+    }
+    Ok(texels)
+}
+
 impl EnvironmentMap {
     /// The map of `image` over `range`.
     pub fn new(image: &EnvironmentImage<'_>, range: SpectralRange) -> Result<Self, SpectralError> {
@@ -146,22 +226,12 @@ impl EnvironmentMap {
             scale,
             to_world,
         } = *image;
-        let texels = width as usize * height as usize;
-        if width == 0 || height == 0 || texels > MAX_ENVIRONMENT_TEXELS {
-            return Err(SpectralError::InvalidParameter(
-                "environment map size (1 to 2^26 texels)",
-            ));
-        }
+        let texels = check_map(width, height, scale, to_world)?;
         if rgb.len() != texels {
             return Err(SpectralError::LengthMismatch {
                 wavelengths: texels,
                 values: rgb.len(),
             });
-        }
-        if !(scale.is_finite() && scale >= 0.0) {
-            return Err(SpectralError::InvalidParameter(
-                "environment scale (finite, >= 0)",
-            ));
         }
         if let Some(index) = rgb
             .iter()
@@ -169,11 +239,6 @@ impl EnvironmentMap {
             .position(|v| !(v.is_finite() && *v >= 0.0))
         {
             return Err(SpectralError::NonFiniteValue { index });
-        }
-        if !Self::is_rotation(to_world) {
-            return Err(SpectralError::InvalidParameter(
-                "environment transform (a rotation)",
-            ));
         }
         let illuminant = SceneSpectrum::new(SpectrumSource::RgbIlluminant([1.0; 3]), range)?;
         let projection = Projection::new(&range, &illuminant);
@@ -198,29 +263,78 @@ impl EnvironmentMap {
             })
             .collect();
         let prepared = prepared?;
-        let mut map = Self {
+        let mut sigmoid = Vec::with_capacity(texels);
+        let mut intensity = Vec::with_capacity(texels);
+        let mut fourier = Vec::with_capacity(texels * ENVIRONMENT_COEFFS);
+        for (shape, k, coefficients) in prepared {
+            sigmoid.push(shape);
+            intensity.push(k);
+            fourier.extend_from_slice(&coefficients);
+        }
+        if let Some(index) = fourier.iter().position(|c| !c.is_finite()) {
+            return Err(SpectralError::NonFiniteValue { index });
+        }
+        Ok(Self {
             width,
             height,
-            sigmoid: Vec::with_capacity(texels),
-            intensity: Vec::with_capacity(texels),
-            fourier: Vec::with_capacity(texels * ENVIRONMENT_COEFFS),
+            texels: Texels::Rgb {
+                sigmoid,
+                intensity,
+                fourier,
+                illuminant: Box::new(illuminant),
+            },
             luminance: rgb
                 .iter()
                 .map(|c| scale * (LUMINANCE[0] * c[0] + LUMINANCE[1] * c[1] + LUMINANCE[2] * c[2]))
                 .collect(),
-            illuminant,
             to_world,
             to_local: to_world.transpose(),
-        };
-        for (sigmoid, intensity, fourier) in prepared {
-            map.sigmoid.push(sigmoid);
-            map.intensity.push(intensity);
-            map.fourier.extend_from_slice(&fourier);
+        })
+    }
+
+    /// The spectral map of `image` over `range` (module docs, "Spectral
+    /// maps"): the coefficients and luminances times the scale.
+    pub fn spectral(
+        image: &SpectralEnvironmentImage<'_>,
+        range: SpectralRange,
+    ) -> Result<Self, SpectralError> {
+        let SpectralEnvironmentImage {
+            width,
+            height,
+            n,
+            coeffs,
+            luminance,
+            scale,
+            to_world,
+        } = *image;
+        let texels = check_map(width, height, scale, to_world)?;
+        if n == 0 || n > MAX_COEFFS {
+            return Err(SpectralError::InvalidParameter(
+                "environment coefficients (1 to 32)",
+            ));
         }
-        if let Some(index) = map.fourier.iter().position(|c| !c.is_finite()) {
+        if coeffs.len() != texels * n || luminance.len() != texels {
+            return Err(SpectralError::LengthMismatch {
+                wavelengths: texels * n,
+                values: coeffs.len(),
+            });
+        }
+        let fourier: Vec<f32> = coeffs.iter().map(|c| c * scale).collect();
+        if let Some(index) = fourier.iter().position(|c| !c.is_finite()) {
             return Err(SpectralError::NonFiniteValue { index });
         }
-        Ok(map)
+        let luminance: Vec<f32> = luminance.iter().map(|y| y * scale).collect();
+        if let Some(index) = luminance.iter().position(|y| !(y.is_finite() && *y >= 0.0)) {
+            return Err(SpectralError::NonFiniteValue { index });
+        }
+        Ok(Self {
+            width,
+            height,
+            texels: Texels::Spectral { n, fourier, range },
+            luminance,
+            to_world,
+            to_local: to_world.transpose(),
+        })
     }
 
     /// Whether `m` is a rotation (or a rotation with a mirror) a map may
@@ -240,11 +354,30 @@ impl EnvironmentMap {
 
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
-        self.sigmoid.capacity() * 12
-            + self.intensity.capacity() * 4
-            + self.fourier.capacity() * 4
-            + self.luminance.capacity() * 4
-            + self.illuminant.memory_bytes()
+        let texels = match &self.texels {
+            Texels::Rgb {
+                sigmoid,
+                intensity,
+                fourier,
+                illuminant,
+            } => {
+                sigmoid.capacity() * 12
+                    + intensity.capacity() * 4
+                    + fourier.capacity() * 4
+                    + illuminant.memory_bytes()
+            }
+            Texels::Spectral { fourier, .. } => fourier.capacity() * 4,
+        };
+        texels + self.luminance.capacity() * 4
+    }
+
+    /// Coefficients per texel: [`ENVIRONMENT_COEFFS`] for RGB maps, the
+    /// image's `n` for spectral ones.
+    pub fn coefficients_per_texel(&self) -> usize {
+        match &self.texels {
+            Texels::Rgb { .. } => ENVIRONMENT_COEFFS,
+            Texels::Spectral { n, .. } => *n,
+        }
     }
 
     /// The map coordinates `(u, v)` of the world direction `direction`
@@ -295,50 +428,84 @@ impl EnvironmentMap {
         ]
     }
 
-    /// The bilinear intensity `Σ w k` at `(u, v)`.
-    fn intensity_at(&self, footprint: &[(usize, f32); 4]) -> f32 {
+    /// The bilinear intensity `Σ w k` of an RGB map's `footprint`.
+    fn intensity_at(intensity: &[f32], footprint: &[(usize, f32); 4]) -> f32 {
         footprint
             .iter()
-            .map(|&(texel, weight)| weight * self.intensity.get(texel).copied().unwrap_or(0.0))
+            .map(|&(texel, weight)| weight * intensity.get(texel).copied().unwrap_or(0.0))
             .sum()
     }
 
-    /// Fourier coefficients at `(u, v)` (module docs: the bilinear
-    /// shape's coefficients times the bilinear intensity; zero past
-    /// [`ENVIRONMENT_COEFFS`]).
-    pub fn fourier_at<const M: usize>(&self, uv: [f32; 2]) -> [f32; M] {
-        let footprint = self.footprint(uv);
+    /// The bilinear combination of `n` coefficients per texel over
+    /// `footprint` (zero past `n`).
+    fn bilinear<const M: usize>(
+        fourier: &[f32],
+        n: usize,
+        footprint: &[(usize, f32); 4],
+    ) -> [f32; M] {
         let mut out = [0.0f32; M];
-        for &(texel, weight) in &footprint {
-            let start = texel * ENVIRONMENT_COEFFS;
-            if let Some(c) = self.fourier.get(start..start + ENVIRONMENT_COEFFS) {
+        for &(texel, weight) in footprint {
+            let start = texel * n;
+            if let Some(c) = fourier.get(start..start + n) {
                 for (o, &value) in out.iter_mut().zip(c) {
                     *o += weight * value;
                 }
             }
         }
-        let k = self.intensity_at(&footprint);
-        out.map(|c| c * k)
+        out
     }
 
-    /// The radiance at `(u, v)` and `lambda_nm` (module docs: the bilinear
-    /// shape at `λ` times the bilinear intensity times D65).
+    /// Fourier coefficients at `(u, v)` (module docs: for RGB maps the
+    /// bilinear shape's coefficients times the bilinear intensity, for
+    /// spectral maps the bilinear coefficients; zero past those stored).
+    pub fn fourier_at<const M: usize>(&self, uv: [f32; 2]) -> [f32; M] {
+        let footprint = self.footprint(uv);
+        match &self.texels {
+            Texels::Rgb {
+                intensity, fourier, ..
+            } => {
+                let k = Self::intensity_at(intensity, &footprint);
+                Self::bilinear::<M>(fourier, ENVIRONMENT_COEFFS, &footprint).map(|c| c * k)
+            }
+            Texels::Spectral { n, fourier, .. } => Self::bilinear::<M>(fourier, *n, &footprint),
+        }
+    }
+
+    /// The radiance at `(u, v)` and `lambda_nm` (module docs: for RGB maps
+    /// the bilinear shape at `λ` times the bilinear intensity times D65,
+    /// for spectral maps the series of the bilinear coefficients at `λ`,
+    /// negative values clamped to 0).
     pub fn value_at(&self, uv: [f32; 2], lambda_nm: f32) -> f32 {
         let lambda = f64::from(lambda_nm);
         let footprint = self.footprint(uv);
-        let shapes: f32 = footprint
-            .iter()
-            .map(|&(texel, weight)| {
-                let Some(c) = self.sigmoid.get(texel) else {
-                    return 0.0;
-                };
-                let shape = SigmoidPolynomial {
-                    coeffs: c.map(f64::from),
-                };
-                weight * shape.value(lambda) as f32
-            })
-            .sum();
-        shapes * self.intensity_at(&footprint) * self.illuminant.value(lambda_nm)
+        match &self.texels {
+            Texels::Rgb {
+                sigmoid,
+                intensity,
+                illuminant,
+                ..
+            } => {
+                let shapes: f32 = footprint
+                    .iter()
+                    .map(|&(texel, weight)| {
+                        let Some(c) = sigmoid.get(texel) else {
+                            return 0.0;
+                        };
+                        let shape = SigmoidPolynomial {
+                            coeffs: c.map(f64::from),
+                        };
+                        weight * shape.value(lambda) as f32
+                    })
+                    .sum();
+                shapes * Self::intensity_at(intensity, &footprint) * illuminant.value(lambda_nm)
+            }
+            Texels::Spectral { n, fourier, range } => {
+                let c = Self::bilinear::<MAX_COEFFS>(fourier, *n, &footprint);
+                let series: FourierSpectrum<f64, MAX_COEFFS> =
+                    FourierSpectrum::from_coeffs(c.map(f64::from));
+                (series.eval_cos(range.cos_phase(lambda)) as f32).max(0.0)
+            }
+        }
     }
 
     /// Per-texel weights for importance sampling (module docs), row-major.
@@ -366,6 +533,20 @@ impl EnvironmentMap {
         weights
     }
 
+    /// Texel `texel`'s mean radiance over the range, `c₀` (times `k` for
+    /// RGB maps).
+    fn mean_of_texel(&self, texel: usize) -> f32 {
+        match &self.texels {
+            Texels::Rgb {
+                intensity, fourier, ..
+            } => {
+                let c0 = fourier.get(texel * ENVIRONMENT_COEFFS).copied();
+                c0.unwrap_or(0.0) * intensity.get(texel).copied().unwrap_or(0.0)
+            }
+            Texels::Spectral { n, fourier, .. } => fourier.get(texel * n).copied().unwrap_or(0.0),
+        }
+    }
+
     /// The mean spectral radiance over the sphere and the spectral range
     /// (`∫ c₀ dω / 4π`, `c₀` each texel's mean over the range), for the
     /// light's share of next-event estimation.
@@ -375,12 +556,7 @@ impl EnvironmentMap {
         for r in 0..h {
             let sin_theta = f64::from((PI * (r as f32 + 0.5) / h as f32).sin());
             let row: f64 = (0..w)
-                .map(|c| {
-                    let texel = r * w + c;
-                    let c0 = self.fourier.get(texel * ENVIRONMENT_COEFFS).copied();
-                    let k = self.intensity.get(texel).copied();
-                    f64::from(c0.unwrap_or(0.0) * k.unwrap_or(0.0))
-                })
+                .map(|c| f64::from(self.mean_of_texel(r * w + c)))
                 .sum();
             sum += row * sin_theta;
         }
@@ -496,12 +672,71 @@ mod tests {
         }
         // A uniform white map's mean radiance is the mean of D65 at Y = 1.
         let uniform = map(16, 8, &[[1.0; 3]; 128]);
-        let d65 = uniform.illuminant.mean();
+        let Texels::Rgb { illuminant, .. } = &uniform.texels else {
+            panic!("not an RGB map");
+        };
+        let d65 = illuminant.mean();
         assert!(
             (uniform.mean_radiance() / d65 - 1.0).abs() < 0.01,
             "{} vs {d65}",
             uniform.mean_radiance()
         );
+    }
+
+    #[test]
+    fn spectral_maps_hold_their_coefficients_times_the_scale() {
+        let range = SpectralRange::VISIBLE;
+        const COEFFS: [f32; 6] = [0.5, 0.1, -0.05, 0.2, 0.0, 0.01];
+        let image = |n: usize, coeffs: &'static [f32], luminance: &'static [f32], scale: f32| {
+            SpectralEnvironmentImage {
+                width: 2,
+                height: 1,
+                n,
+                coeffs,
+                luminance,
+                scale,
+                to_world: Mat3::IDENTITY,
+            }
+        };
+        let Ok(map) = EnvironmentMap::spectral(&image(3, &COEFFS, &[1.0, 0.5], 2.0), range) else {
+            panic!("a valid spectral map was refused");
+        };
+        assert_eq!(map.coefficients_per_texel(), 3);
+        // Texel 0's centre: u = 1/4; every row is the same texel (H = 1).
+        let c: [f32; 4] = map.fourier_at([0.25, 0.5]);
+        assert_eq!(c, [1.0, 0.2, -0.1, 0.0]);
+        let series = FourierSpectrum::<f64, 3>::from_coeffs([1.0, 0.2, -0.1]);
+        let want = series.eval_cos(range.cos_phase(500.0)) as f32;
+        assert!((map.value_at([0.25, 0.5], 500.0) - want).abs() < 1e-6);
+        // Mean radiance over the sphere: the texels' mean c₀ when every row
+        // is the same (the rows' sin θ weights integrate to 2 within the
+        // midpoint rule's (π/H)²/24 relative error).
+        let rows = 64;
+        let tall_coeffs: Vec<f32> = (0..rows).flat_map(|_| COEFFS).collect();
+        let tall_luminance = vec![1.0f32; 2 * rows];
+        let tall = EnvironmentMap::spectral(
+            &SpectralEnvironmentImage {
+                height: rows as u32,
+                coeffs: &tall_coeffs,
+                luminance: &tall_luminance,
+                ..image(3, &COEFFS, &[1.0, 0.5], 2.0)
+            },
+            range,
+        );
+        let mean = tall.map(|m| m.mean_radiance()).unwrap_or(f64::NAN);
+        assert!((mean - 0.7).abs() < 1e-3, "{mean}");
+        assert_eq!(map.memory_bytes(), 4 * 6 + 4 * 2);
+        for bad in [
+            image(0, &[], &[1.0, 1.0], 1.0),
+            image(33, &[0.0; 66], &[1.0, 1.0], 1.0),
+            image(3, &[0.0; 5], &[1.0, 1.0], 1.0),
+            image(3, &COEFFS, &[1.0], 1.0),
+            image(3, &[f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0], &[1.0, 1.0], 1.0),
+            image(3, &COEFFS, &[-1.0, 1.0], 1.0),
+            image(3, &COEFFS, &[1.0, 1.0], f32::INFINITY),
+        ] {
+            assert!(EnvironmentMap::spectral(&bad, range).is_err(), "{bad:?}");
+        }
     }
 
     #[test]

@@ -2,16 +2,20 @@
 //! (delta lights with an intensity or irradiance spectrum and a scale),
 //! and equirectangular environment maps (RGBE, OpenEXR or PNG images of
 //! linear radiance, upsampled per texel as RGB illuminants:
-//! `simd_tracer::spectra::environment`).
+//! `simd_tracer::spectra::environment`; spectral OpenEXRs and coefficient
+//! OpenEXRs as spectral maps, `crate::spectral_image`).
 
 use super::Construction;
 use crate::error::CliError;
 use crate::hdr_image::load_rgb_image;
 use crate::scene_file::source::Spot;
+use crate::spectral_image::load_environment_coefficients;
 use glam::{Mat3, Vec3};
 use simd_tracer::ids::SpectrumId;
 use simd_tracer::shading::light_sampler::{DirectionalLight, PointLight};
-use simd_tracer::spectra::environment::{EnvironmentImage, EnvironmentMap};
+use simd_tracer::spectra::environment::{
+    EnvironmentImage, EnvironmentMap, SpectralEnvironmentImage,
+};
 use std::path::Path;
 
 /// What an environment map is made of.
@@ -64,6 +68,29 @@ impl Construction<'_> {
         at: &Spot,
         settings: &MapSettings<'_>,
     ) -> Result<(), CliError> {
+        if let Some(texels) = load_environment_coefficients(settings.path, &self.range)
+            .map_err(|e| self.src.error_at(at, e))?
+        {
+            let map = EnvironmentMap::spectral(
+                &SpectralEnvironmentImage {
+                    width: texels.width,
+                    height: texels.height,
+                    n: texels.n,
+                    coeffs: &texels.coeffs,
+                    luminance: &texels.luminance,
+                    scale: settings.scale,
+                    to_world: settings.to_world,
+                },
+                self.range,
+            )
+            .map_err(|e| {
+                self.src
+                    .error_at(at, format!("{}: {e}", settings.path.display()))
+            })?;
+            self.builder.set_environment_map(map);
+            self.has_environment = true;
+            return Ok(());
+        }
         let image = load_rgb_image(settings.path).map_err(|e| self.src.error_at(at, e))?;
         if image.negative_clamped > 0 {
             self.warn(
