@@ -225,7 +225,7 @@ fn unsupported_hybrid_sizes_and_transport_names_are_refused() -> TestResult {
         &["--spectral-exr", "--transport fourier"],
     )?;
     let scene = dir.join("transport.toml");
-    std::fs::write(&scene, format!("[render]\ntransport = \"magic\"\n{QUAD}"))?;
+    fs::write(&scene, format!("[render]\ntransport = \"magic\"\n{QUAD}"))?;
     let path = scene.to_string_lossy().into_owned();
     refused(
         &dir,

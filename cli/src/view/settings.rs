@@ -449,8 +449,8 @@ mod tests {
                 coeffs: 12,
                 wavelengths: 8,
                 sampling: Sampling::Visible,
-                buffer: crate::render_cmd::BufferKind::Rgb,
-                to_color: crate::render_cmd::ToColor::Series,
+                buffer: BufferKind::Rgb,
+                to_color: ToColor::Series,
             },
         ] {
             let s = ViewSettings {
