@@ -31,7 +31,8 @@ use simd_tracer::render::{
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::SceneOptions;
 use simd_tracer::transport::{
-    ControlVariateTransport, FourierTransport, SampledTransport, Transport,
+    ControlVariateTransport, FourierTransport, HybridSettings, HybridTransport, SampledTransport,
+    Transport,
 };
 use spectral_core::SpectralRange;
 use spectral_core::color::Xyz;
@@ -82,6 +83,9 @@ pub enum TransportKind {
     Sampled,
     /// Sampled wavelengths with the Fourier estimate as a control variate.
     Cv,
+    /// N Fourier coefficients until a path meets dispersion, then C sampled
+    /// wavelengths; the film adds both.
+    Hybrid,
 }
 
 /// How the sampled wavelengths are chosen.
@@ -196,14 +200,17 @@ pub struct RenderArgs {
     /// scene's, else 5).
     #[arg(long)]
     pub rr_depth: Option<u32>,
-    /// What a path carries.
-    #[arg(long, value_enum, default_value_t = TransportKind::Fourier)]
-    pub transport: TransportKind,
-    /// Fourier coefficients N (4, 8, 12, 16, 24, 32; cv: 4, 8, 12).
+    /// What a path carries (default: the scene's `[render] transport`,
+    /// else fourier). hybrid: Fourier until a path meets a dispersive
+    /// dielectric, sampled wavelengths after it.
+    #[arg(long, value_enum)]
+    pub transport: Option<TransportKind>,
+    /// Fourier coefficients N (4, 8, 12, 16, 24, 32; cv: 4, 8, 12; hybrid: 12).
     #[arg(long, default_value_t = 12)]
     pub coeffs: usize,
-    /// Sampled wavelengths per path C (1, 2, 4, 8, 12, 16, 32; cv: 4, 8, 12).
-    /// Default 4 for sampled, 8 for cv.
+    /// Sampled wavelengths per path C (1, 2, 4, 8, 12, 16, 32; cv: 4, 8, 12;
+    /// hybrid: 1, 4, 8, drawn where a path meets dispersion). Default 4 for
+    /// sampled and hybrid, 8 for cv.
     #[arg(long)]
     pub wavelengths: Option<usize>,
     /// How sampled wavelengths are chosen.
@@ -450,7 +457,7 @@ pub fn settings_from(
             .film
             .map(FilmMode::from)
             .or(defaults.film)
-            .unwrap_or(default_film(args.transport)),
+            .unwrap_or(default_film(args.transport_kind())),
     })
 }
 
@@ -462,7 +469,7 @@ pub fn settings_from(
 pub fn default_film(transport: TransportKind) -> FilmMode {
     match transport {
         TransportKind::Cv => FilmMode::Sample,
-        TransportKind::Fourier | TransportKind::Sampled => FilmMode::Splat,
+        TransportKind::Fourier | TransportKind::Sampled | TransportKind::Hybrid => FilmMode::Splat,
     }
 }
 
@@ -593,7 +600,7 @@ pub fn predict_memory(
     let xyz = per_pixel(size_of::<Xyz>() as u64);
     let coefficients = args.coeffs as u64;
     let spectral_buffer =
-        args.transport == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
+        args.transport_kind() == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
     let planes = if spectral_buffer {
         per_pixel(coefficients * F32_BYTES)
     } else {
@@ -759,6 +766,19 @@ pub enum TransportSpec {
         /// `α` per pixel instead of pooled.
         alpha_per_pixel: bool,
     },
+    /// Fourier coefficients until dispersion, sampled wavelengths after.
+    Hybrid {
+        /// N.
+        coeffs: usize,
+        /// C, drawn at the split.
+        wavelengths: usize,
+        /// How the wavelengths are drawn.
+        sampling: Sampling,
+        /// Where the Fourier part becomes colour.
+        buffer: BufferKind,
+        /// How the Fourier part's coefficients become colour.
+        to_color: ToColor,
+    },
 }
 
 impl TransportSpec {
@@ -777,7 +797,7 @@ impl TransportSpec {
 
     /// The transport `args` ask for (default wavelength counts filled in).
     pub fn of(args: &RenderArgs) -> Self {
-        match args.transport {
+        match args.transport_kind() {
             TransportKind::Fourier => Self::Fourier {
                 coeffs: args.coeffs,
                 buffer: args.buffer,
@@ -793,8 +813,41 @@ impl TransportSpec {
                 sampling: args.sampling,
                 alpha_per_pixel: args.cv_alpha_per_pixel,
             },
+            TransportKind::Hybrid => Self::Hybrid {
+                coeffs: args.coeffs,
+                wavelengths: args.wavelengths.unwrap_or(HYBRID_WAVELENGTHS),
+                sampling: args.sampling,
+                buffer: args.buffer,
+                to_color: args.to_color,
+            },
         }
     }
+}
+
+/// Wavelengths drawn where a hybrid path meets dispersion when
+/// `--wavelengths` is not given: 4, measured against 1 and 8 on the
+/// `prism` scene (docs/results.md, "Hybrid transport").
+pub const HYBRID_WAVELENGTHS: usize = 4;
+
+impl RenderArgs {
+    /// The transport asked for (`--transport`, else Fourier; a scene's
+    /// `[render] transport` is filled in by [`render`]).
+    pub fn transport_kind(&self) -> TransportKind {
+        self.transport.unwrap_or(TransportKind::Fourier)
+    }
+}
+
+/// `args` with the scene's transport where `--transport` is not given.
+fn with_scene_transport(args: &RenderArgs, defaults: &SceneDefaults) -> Option<RenderArgs> {
+    let name = defaults
+        .transport
+        .as_deref()
+        .filter(|_| args.transport.is_none())?;
+    let kind = TransportKind::from_str(name, false).ok()?;
+    Some(RenderArgs {
+        transport: Some(kind),
+        ..args.clone()
+    })
 }
 
 /// Work that needs the transport's concrete type (its sizes are const
@@ -887,6 +940,27 @@ fn cv<const C: usize, const N: usize, K: TransportTask>(
     task.run(&transport)
 }
 
+fn hybrid<const N: usize, const C: usize, K: TransportTask>(
+    basis: TransportBasis<'_>,
+    sampling: Sampling,
+    buffer: BufferKind,
+    to_color: ToColor,
+    task: K,
+) -> Result<K::Output, CliError> {
+    let transport = HybridTransport::<N, C>::new(&HybridSettings {
+        range: basis.range,
+        buffer: match buffer {
+            BufferKind::Spectral => Buffer::Spectral,
+            BufferKind::Rgb => Buffer::Xyz,
+        },
+        route: route(to_color),
+        strategy: strategy(sampling),
+        observer: basis.observer,
+    })
+    .map_err(range_error)?;
+    task.run(&transport)
+}
+
 /// Builds the transport of `spec` over `basis.range`, seen by
 /// `basis.observer`, and runs `task` with it; sizes that are not compiled
 /// in are refused.
@@ -949,6 +1023,20 @@ pub fn with_transport<K: TransportTask>(
                 ))),
             }
         }
+        TransportSpec::Hybrid {
+            coeffs,
+            wavelengths,
+            sampling,
+            buffer,
+            to_color,
+        } => match (coeffs, wavelengths) {
+            (12, 1) => hybrid::<12, 1, K>(basis, sampling, buffer, to_color, task),
+            (12, 4) => hybrid::<12, 4, K>(basis, sampling, buffer, to_color, task),
+            (12, 8) => hybrid::<12, 8, K>(basis, sampling, buffer, to_color, task),
+            (n, c) => Err(CliError::input(format!(
+                "--transport hybrid with --coeffs {n} --wavelengths {c} is not supported (N = 12, C in 1, 4, 8)"
+            ))),
+        },
     }
 }
 
@@ -1471,13 +1559,6 @@ pub fn render(
     output: &OutputOptions,
     observer: &dyn RenderObserver,
 ) -> Result<RenderedFrame, CliError> {
-    if (args.passes.is_some() || args.resume.is_some() || output.keeps_state())
-        && args.transport == TransportKind::Cv
-    {
-        return Err(CliError::input(
-            "--passes, --resume and .fspart outputs need --transport fourier or sampled: control variates weight each pass by every earlier pass",
-        ));
-    }
     let options = SceneOptions {
         illuminant: args
             .illuminant
@@ -1494,6 +1575,16 @@ pub fn render(
         lenient: args.lenient,
     };
     let (builder, defaults, mut warnings) = resolve_scene(&args.scene, &options, &mitsuba)?;
+    let scene_args = with_scene_transport(args, &defaults);
+    let args = scene_args.as_ref().unwrap_or(args);
+    output.check(TransportSpec::of(args).keeps_coefficients())?;
+    if (args.passes.is_some() || args.resume.is_some() || output.keeps_state())
+        && args.transport_kind() == TransportKind::Cv
+    {
+        return Err(CliError::input(
+            "--passes, --resume and .fspart outputs need --transport fourier, sampled or hybrid: control variates weight each pass by every earlier pass",
+        ));
+    }
     if args.illuminant.is_some() && args.scene != COLORCHECKER {
         warnings.push(format!(
             "--illuminant only applies to the {COLORCHECKER} scene: ignored for {}",
@@ -1504,9 +1595,9 @@ pub fn render(
         observer.notice(&RenderNotice::Warning(warning));
     }
     let mut settings = settings_from(args, &defaults)?;
-    if settings.film == FilmMode::Splat && args.transport == TransportKind::Cv {
+    if settings.film == FilmMode::Splat && args.transport_kind() == TransportKind::Cv {
         return Err(CliError::input(
-            "--film splat (or the scene's `film = \"splat\"`) needs --transport fourier or sampled: control variates weight each pass by every earlier pass, so their pixels are no weighted sums to splat into",
+            "--film splat (or the scene's `film = \"splat\"`) needs --transport fourier, sampled or hybrid: control variates weight each pass by every earlier pass, so their pixels are no weighted sums to splat into",
         ));
     }
     let scene = builder
@@ -1640,4 +1731,57 @@ pub fn summary_line(summary: &RenderSummary) -> String {
         format_bytes(summary.memory.scene_bytes),
         files.join(", ")
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Render {
+        #[command(flatten)]
+        args: RenderArgs,
+    }
+
+    fn args(argv: &[&str]) -> RenderArgs {
+        let Ok(render) =
+            Render::try_parse_from(std::iter::once("render").chain(argv.iter().copied()))
+        else {
+            panic!("{argv:?}");
+        };
+        render.args
+    }
+
+    /// A scene's `[render] transport` applies where `--transport` is not
+    /// given, and every name it may hold is a transport of the command
+    /// line (an unknown name would otherwise be ignored).
+    #[test]
+    fn the_scene_transport_fills_in_a_missing_flag() {
+        let scene = SceneDefaults {
+            transport: Some("hybrid".into()),
+            ..SceneDefaults::default()
+        };
+        let Some(filled) = with_scene_transport(&args(&[]), &scene) else {
+            panic!("not filled in");
+        };
+        assert_eq!(filled.transport_kind(), TransportKind::Hybrid);
+        assert!(matches!(
+            TransportSpec::of(&filled),
+            TransportSpec::Hybrid {
+                coeffs: 12,
+                wavelengths: HYBRID_WAVELENGTHS,
+                ..
+            }
+        ));
+        assert!(with_scene_transport(&args(&["--transport", "sampled"]), &scene).is_none());
+        assert!(with_scene_transport(&args(&[]), &SceneDefaults::default()).is_none());
+        for name in crate::scene_file::TRANSPORT_NAMES {
+            assert!(TransportKind::from_str(name, false).is_ok(), "{name}");
+        }
+        assert_eq!(
+            TransportKind::value_variants().len(),
+            crate::scene_file::TRANSPORT_NAMES.len()
+        );
+    }
 }

@@ -203,6 +203,38 @@ fn unsupported_control_variate_sizes_are_refused() -> TestResult {
     Ok(())
 }
 
+/// The hybrid transport is compiled for N = 12 and C in 1, 4, 8; a scene
+/// file's `[render] transport` must name a transport; the hybrid film
+/// keeps no coefficient planes for spectral outputs.
+#[test]
+fn unsupported_hybrid_sizes_and_transport_names_are_refused() -> TestResult {
+    let dir = test_dir("hybrid")?;
+    refused(
+        &dir,
+        &["--transport", "hybrid", "--wavelengths", "2"],
+        &["--transport hybrid", "--wavelengths 2", "C in 1, 4, 8"],
+    )?;
+    refused(
+        &dir,
+        &["--transport", "hybrid", "--coeffs", "16"],
+        &["--coeffs 16"],
+    )?;
+    refused(
+        &dir,
+        &["--transport", "hybrid", "--spectral-exr", "s.exr"],
+        &["--spectral-exr", "--transport fourier"],
+    )?;
+    let scene = dir.join("transport.toml");
+    fs::write(&scene, format!("[render]\ntransport = \"magic\"\n{QUAD}"))?;
+    let path = scene.to_string_lossy().into_owned();
+    refused(
+        &dir,
+        &[&path],
+        &["transport.toml:2", "transport `magic`", "hybrid"],
+    )?;
+    Ok(())
+}
+
 // ---------------------------------------------------------------------------
 // Semantic
 // ---------------------------------------------------------------------------

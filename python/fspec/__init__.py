@@ -602,8 +602,10 @@ def render(
         spp, width, height, max_depth (-1: unlimited), rr_depth, seed: as the
             command line.
         transport: ``"fourier"`` (``coeffs`` in 4, 8, 12, 16, 24, 32),
-            ``"sampled"`` (``wavelengths`` in 1, 2, 4, 8, 12, 16, 32) or
-            ``"cv"`` (control variates; both in 4, 8, 12).
+            ``"sampled"`` (``wavelengths`` in 1, 2, 4, 8, 12, 16, 32),
+            ``"cv"`` (control variates; both in 4, 8, 12) or ``"hybrid"``
+            (Fourier until a path meets dispersion, sampled after it;
+            ``coeffs`` 12, ``wavelengths`` in 1, 4, 8).
         sampling: ``"uniform"``, ``"stratified"``, ``"hero"``, ``"visible"``.
         to_color: route from coefficients to colour (:func:`to_xyz`).
         buffer: ``"spectral"`` (coefficients per pixel, converted once) or

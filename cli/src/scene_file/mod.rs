@@ -241,7 +241,13 @@ pub struct RenderDefaults {
     pub filter: Option<FilterChoice>,
     /// The part of the film rendered (Mitsuba's crop window).
     pub crop: Option<CropWindow>,
+    /// What a path carries, one of [`TRANSPORT_NAMES`] (TOML scenes only).
+    pub transport: Option<String>,
 }
+
+/// The transports a TOML scene's `[render] transport` may name: those of
+/// `fspec render --transport`.
+pub const TRANSPORT_NAMES: [&str; 4] = ["fourier", "sampled", "cv", "hybrid"];
 
 /// A pixel reconstruction filter named by a scene file.
 #[derive(Debug, Clone, Copy, PartialEq)]

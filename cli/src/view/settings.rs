@@ -246,6 +246,26 @@ impl ViewSettings {
                     args.push("--cv-alpha-per-pixel".into());
                 }
             }
+            TransportSpec::Hybrid {
+                coeffs,
+                wavelengths,
+                sampling: s,
+                buffer,
+                to_color,
+            } => args.extend([
+                "--transport".into(),
+                "hybrid".into(),
+                "--coeffs".into(),
+                coeffs.to_string(),
+                "--wavelengths".into(),
+                wavelengths.to_string(),
+                "--sampling".into(),
+                sampling(s),
+                "--buffer".into(),
+                name(&|| buffer.to_possible_value()),
+                "--to-color".into(),
+                name(&|| to_color.to_possible_value()),
+            ]),
         }
         args.extend([
             "--exposure".into(),
@@ -424,6 +444,13 @@ mod tests {
                 coeffs: 8,
                 sampling: Sampling::Hero,
                 alpha_per_pixel: true,
+            },
+            TransportSpec::Hybrid {
+                coeffs: 12,
+                wavelengths: 8,
+                sampling: Sampling::Visible,
+                buffer: BufferKind::Rgb,
+                to_color: ToColor::Series,
             },
         ] {
             let s = ViewSettings {

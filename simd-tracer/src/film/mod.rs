@@ -9,6 +9,8 @@
 //! * [`FourierFilm<N>`]: per-pixel coefficient sums converted once by the
 //!   chosen route (spectral buffer), or XYZ per sample ([`Buffer::Xyz`]).
 //! * [`XyzFilm`]: the sampled transports' XYZ estimates, averaged.
+//! * [`HybridFilm<N>`]: a Fourier film's sums plus the XYZ sums of the
+//!   paths the hybrid transport sampled after dispersion.
 //! * [`ControlVariateFilm`]: per pixel and XYZ channel a control variate,
 //!   `α` pooled over all pixels ([`AlphaMode::Shared`]) or per pixel.
 //!
@@ -38,10 +40,12 @@ pub mod filter;
 
 mod control_variate;
 mod fourier;
+mod hybrid;
 mod xyz;
 
 pub use control_variate::{AlphaMode, ControlVariateFilm, CvPixel, CvSample};
 pub use fourier::{FourierFilm, FourierPixel, FourierSample};
+pub use hybrid::{HybridFilm, HybridPixel, HybridSample};
 pub use xyz::{XyzFilm, XyzPixel};
 
 use spectral_core::color::Xyz;

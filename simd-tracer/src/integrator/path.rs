@@ -17,7 +17,7 @@ use crate::shading::material::{Fluorescence, LaneSpectrum, SampleUniforms, Spect
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
 use crate::spectra::environment::EnvironmentMap;
-use crate::transport::{Transport, emitted_ids};
+use crate::transport::{SplitLanes, Transport, emitted_ids};
 use glam::Vec3;
 use wide::f32x8;
 
@@ -27,6 +27,20 @@ use wide::f32x8;
 #[inline(always)]
 fn departure(direction: Vec3x8, normal: Vec3x8, above: Vec3x8, below: Vec3x8) -> Vec3x8 {
     Vec3x8::select(direction.dot(normal).simd_lt(f32x8::ZERO), below, above)
+}
+
+/// The lanes of `active` whose hit material's directions depend on
+/// wavelength ([`crate::shading::material::Bsdf::disperses`]).
+fn dispersive_lanes(scene: &Scene, hit: &PacketHit, active: LaneMask) -> LaneMask {
+    active
+        .iter()
+        .filter(|&lane| {
+            scene
+                .hit_material(hit.triangle[lane], hit.instance[lane])
+                .and_then(|m| scene.materials().get(m.index()))
+                .is_some_and(|m| m.bsdf.disperses())
+        })
+        .fold(LaneMask::NONE, LaneMask::with)
 }
 
 /// The largest `f32` below 1: a rescaled light number stays in [0, 1).
@@ -355,6 +369,15 @@ impl<S: Copy> PathState<S> {
                 lanes: active,
             }
         } else {
+            if T::SPLITS_AT_DISPERSION {
+                let lanes = SplitLanes {
+                    lanes: dispersive_lanes(scene, hit, active),
+                    past_event: self.fluorescence.shifted,
+                };
+                if !lanes.lanes.is_empty() {
+                    transport.split(&mut self.throughput, wavelengths, lanes, rngs);
+                }
+            }
             Shading::general(
                 scene,
                 transport,

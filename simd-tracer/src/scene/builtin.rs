@@ -8,6 +8,7 @@
 //! | `materials` | the paper's figure 4: diffuse, gold, copper, glass, coated plastic, a single-layer and a multi-layer thin film, on a textured floor |
 //! | `colorchecker` | the 24 ColorChecker patches lit directly by an illuminant (a constant environment, D65 by default, scaled to Y = 1) in front of a black backdrop |
 //! | `fluorescence` | fluorescent patches (fluorescein highlighter, brightened paper) beside plain patches of their daylight colours, under a UV-rich lamp and a white LED (`builtin/fluorescence.rs`) |
+//! | `prism` | white light through a dispersive (SF11) prism onto a wall, beside a diffuse sphere under an FL11 lamp: the hybrid transport's scene (`builtin/prism.rs`) |
 
 use crate::ids::{MaterialId, SpectrumId};
 use crate::scene::camera::Camera;
@@ -25,6 +26,7 @@ use spectral_core::registry::Builtin;
 use spectral_core::table::{FilmQuantity, FilmSide};
 
 pub mod fluorescence;
+pub mod prism;
 
 /// The Cornell box OBJ (also at `scenes/cornell/cornell.obj`).
 pub const CORNELL_OBJ: &str = include_str!("../../../scenes/cornell/cornell.obj");
@@ -48,7 +50,7 @@ pub struct SceneInfo {
 pub const FILM_NETWORK: &[u8] = include_bytes!("../../../scenes/assets/film-400nm.nn");
 
 /// Every built-in scene.
-pub const SCENES: [SceneInfo; 6] = [
+pub const SCENES: [SceneInfo; 7] = [
     SceneInfo {
         name: "cornell",
         description: "Mitsuba 3's Cornell box (RGB materials upsampled, RGB illuminant light) — the default",
@@ -72,6 +74,10 @@ pub const SCENES: [SceneInfo; 6] = [
     SceneInfo {
         name: "fluorescence",
         description: "a fluorescein highlighter and a brightened paper beside plain patches of their daylight colours, under a UV-rich lamp and a white LED",
+    },
+    SceneInfo {
+        name: "prism",
+        description: "white light through a dispersive SF11 prism spread into a spectrum on a wall, beside a sphere under an FL11 lamp (for --transport hybrid)",
     },
 ];
 
@@ -134,6 +140,7 @@ pub fn builtin_scene(
         "materials" => materials(range),
         "colorchecker" => colorchecker(range, options),
         "fluorescence" => fluorescence::fluorescence(range),
+        "prism" => prism::prism(range),
         other => Err(BuiltinError::Unknown(other.to_string())),
     }
 }

@@ -17,10 +17,14 @@
 //!   earlier passes only — pooled over all pixels ([`AlphaMode::Shared`](crate::film::AlphaMode::Shared),
 //!   the default: a single pixel's tens of samples give a noisy `α`) or per
 //!   pixel ([`AlphaMode::PerPixel`](crate::film::AlphaMode::PerPixel)).
+//! * [`HybridTransport<N, C>`]: Fourier coefficients until a path meets a
+//!   surface whose directions depend on wavelength, `C` sampled wavelengths
+//!   from there on; the film adds both parts (`hybrid.rs`: the estimator
+//!   and why it is unbiased).
 
 use crate::film::Film;
 use crate::ids::SpectrumId;
-use crate::sampling::rng::Rng;
+use crate::sampling::rng::{Rng, RngPacket};
 use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum};
 use crate::simd::{LANES, LaneMask};
@@ -32,6 +36,20 @@ mod sampled;
 pub use sampled::{PacketWavelengths, SampledTransport};
 mod control_variate;
 pub use control_variate::ControlVariateTransport;
+mod hybrid;
+pub use hybrid::{HybridSettings, HybridTransport, HybridWavelengths};
+
+/// The lanes of a [`Transport::split`]: those that meet dispersion, and of
+/// them those past a fluorescent event (whose excited side is integrated
+/// from values that carry their wavelengths' `1/pdf`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SplitLanes {
+    /// Lanes whose hit surface's directions depend on wavelength.
+    pub lanes: LaneMask,
+    /// Lanes past a fluorescent event.
+    pub past_event: LaneMask,
+}
+
 /// A spectral representation of light paths (module docs).
 pub trait Transport: Sync {
     /// Per-packet wavelengths (unit for Fourier).
@@ -45,6 +63,22 @@ pub trait Transport: Sync {
     fn describe(&self) -> String;
     /// The film this transport's samples go to.
     fn film(&self) -> &Self::Film;
+    /// Whether paths change from Fourier coefficients to sampled
+    /// wavelengths where they meet a surface whose directions depend on
+    /// wavelength ([`Transport::split`]): only the hybrid transport's. A
+    /// constant, so the other transports' bounces never look for it.
+    const SPLITS_AT_DISPERSION: bool = false;
+    /// Moves the lanes of `lanes` that still carry a series to sampled
+    /// wavelengths drawn from `rngs`, their throughput to the series'
+    /// values there (`hybrid.rs`); nothing for the other transports.
+    fn split(
+        &self,
+        _throughput: &mut Self::Spectra,
+        _wavelengths: &mut Self::Wavelengths,
+        _lanes: SplitLanes,
+        _rngs: &mut RngPacket,
+    ) {
+    }
     /// Draws the wavelengths of a packet; `stream(lane)` makes a lane's
     /// wavelength random stream on demand (hashing its key costs about as
     /// much as the camera ray, so transports that draw no wavelengths,

@@ -85,16 +85,27 @@ impl<const C: usize> PacketWavelengths<C> {
     /// Moves lane `lane` to the wavelengths `moved` (a fluorescent event);
     /// the camera's stay.
     fn shift(&mut self, lane: usize, moved: SampledWavelengths<C>) {
+        self.place(lane, moved, false);
+    }
+
+    /// Places lane `lane` (modulo [`LANES`]) at the wavelengths `drawn`:
+    /// the path's, and the camera's too where `camera` (else the lane
+    /// counts as moved by a fluorescent event and the camera's stay).
+    pub(super) fn place(&mut self, lane: usize, drawn: SampledWavelengths<C>, camera: bool) {
         let lane = lane % LANES;
-        self.lanes[lane] = moved;
-        self.points[lane] = moved.lambda_nm().map(|l| DensePoint::new(&self.grid, l));
-        self.shifted = self.shifted.with(lane);
+        self.lanes[lane] = drawn;
+        self.points[lane] = drawn.lambda_nm().map(|l| DensePoint::new(&self.grid, l));
+        if camera {
+            self.camera[lane] = drawn;
+        } else {
+            self.shifted = self.shifted.with(lane);
+        }
     }
 
     /// Per lane, the integral over wavelength estimated from values that
     /// carry their wavelengths' `1/pdf`: their mean, or the hero's value
     /// alone once the secondaries are terminated.
-    fn integral(&self, values: &[f32x8; C]) -> f32x8 {
+    pub(super) fn integral(&self, values: &[f32x8; C]) -> f32x8 {
         let mean =
             values.iter().fold(f32x8::ZERO, |acc, &v| acc + v) * f32x8::splat(1.0 / C as f32);
         let hero = values.first().copied().unwrap_or(f32x8::ZERO);

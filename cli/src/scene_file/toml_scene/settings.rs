@@ -5,7 +5,7 @@ use super::Loader;
 use crate::error::CliError;
 use crate::scene_file::construction::MapSettings;
 use crate::scene_file::toml_reader::Item;
-use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults};
+use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults, TRANSPORT_NAMES};
 use crate::sensor_file::{ObserverChoice, load_sensor_csv};
 use glam::{Mat3, Vec3};
 use simd_tracer::film::FilmMode;
@@ -27,6 +27,7 @@ impl Loader<'_> {
                 "seed",
                 "hide_emitters",
                 "film",
+                "transport",
                 "observer",
                 "sensor",
             ],
@@ -69,6 +70,21 @@ impl Loader<'_> {
                     let name = i.string(src)?;
                     FilmMode::from_name(name)
                         .ok_or_else(|| i.err(src, format!("film `{name}`: use sample or splat")))
+                })
+                .transpose()?,
+            transport: table
+                .get("transport")
+                .map(|i| {
+                    let name = i.string(src)?;
+                    TRANSPORT_NAMES
+                        .contains(&name)
+                        .then(|| name.to_string())
+                        .ok_or_else(|| {
+                            i.err(
+                                src,
+                                format!("transport `{name}`: use {}", TRANSPORT_NAMES.join(", ")),
+                            )
+                        })
                 })
                 .transpose()?,
             ..RenderDefaults::default()

@@ -41,6 +41,7 @@ function transportOfControls() {
   const sampling = $("sampling").value;
   if (kind === "fourier") return { kind, coeffs: n, buffer: $("buffer").value, to_color: $("to_color").value };
   if (kind === "sampled") return { kind, wavelengths: c, sampling };
+  if (kind === "hybrid") return { kind, coeffs: n, wavelengths: c, sampling, buffer: $("buffer").value, to_color: $("to_color").value };
   return { kind, wavelengths: c, coeffs: n, sampling, alpha_per_pixel: false };
 }
 

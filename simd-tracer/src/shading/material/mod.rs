@@ -262,6 +262,14 @@ impl Material {
 }
 
 impl Bsdf {
+    /// Whether the directions it samples depend on wavelength: a dielectric
+    /// with a dispersive index (its refraction follows the hero
+    /// wavelength). Where this holds the hybrid transport leaves Fourier
+    /// coefficients for sampled wavelengths.
+    pub fn disperses(&self) -> bool {
+        matches!(self, Self::Dielectric { ior, .. } if ior.is_dispersive())
+    }
+
     /// Whether the BSDF transmits light through the surface (then it
     /// scatters from both faces whatever [`Material::sides`] says).
     pub fn transmits(&self) -> bool {
