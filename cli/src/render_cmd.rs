@@ -3,13 +3,15 @@
 //! planes, with a progress bar on a terminal.
 //!
 //! Defaults: the `cornell` scene, 512 × 512, 64 spp, max depth 8 (Mitsuba's
-//! Cornell box setting), Fourier transport with N = 12 coefficients and a
+//! Cornell box setting), Fourier transport with N chosen from the scene's
+//! spectra (`--coeffs auto`, [`crate::coefficient_choice`]) and a
 //! spectral buffer converted by the zeroth-coefficient route, Gaussian
 //! filter, outputs `render.png` and `render.exr` in the current folder.
 //! Supported sizes: N ∈ {4, 8, 12, 16, 24, 32} (`--coeffs`), C ∈ {1, 2, 4,
 //! 8, 12, 16, 32} (`--wavelengths`), control variates with C ∈ {4, 8, 12}
 //! and N ∈ {4, 8, 12}: each supported size is compiled once.
 
+use crate::coefficient_choice::{CoeffsChoice, UNRESOLVED_COEFFS, choose_for_scene};
 use crate::error::CliError;
 use crate::image_out::{
     Exposure, Tone, XyzImage, write_by_extension, write_coefficients_exr, write_spectral_exr,
@@ -199,9 +201,12 @@ pub struct RenderArgs {
     /// What a path carries.
     #[arg(long, value_enum, default_value_t = TransportKind::Fourier)]
     pub transport: TransportKind,
-    /// Fourier coefficients N (4, 8, 12, 16, 24, 32; cv: 4, 8, 12).
-    #[arg(long, default_value_t = 12)]
-    pub coeffs: usize,
+    /// Fourier coefficients N (4, 8, 12, 16, 24, 32; cv: 4, 8, 12), or
+    /// auto: the smallest N whose truncation keeps the colour of every
+    /// light × reflectance product of the scene within ΔE2000 0.44 (cv:
+    /// 12). Default: the scene's `[render] coeffs`, else auto.
+    #[arg(long, value_name = "N|auto", value_parser = CoeffsChoice::parse)]
+    pub coeffs: Option<CoeffsChoice>,
     /// Sampled wavelengths per path C (1, 2, 4, 8, 12, 16, 32; cv: 4, 8, 12).
     /// Default 4 for sampled, 8 for cv.
     #[arg(long)]
@@ -342,6 +347,18 @@ fn parse_passes(text: &str) -> Result<std::ops::Range<u32>, String> {
         return Err(format!("{text}: the range is empty (A must be below B)"));
     }
     Ok(start..end)
+}
+
+impl RenderArgs {
+    /// N as given (`--coeffs`, else the scene's, which [`render`] fills
+    /// in), or [`UNRESOLVED_COEFFS`] while it is `auto`: [`render`]
+    /// resolves `auto` from the scene before it builds the transport.
+    pub fn coeff_count(&self) -> usize {
+        match self.coeffs {
+            Some(CoeffsChoice::Fixed(n)) => n,
+            Some(CoeffsChoice::Auto) | None => UNRESOLVED_COEFFS,
+        }
+    }
 }
 
 /// The built-in scene that `--illuminant` lights.
@@ -591,7 +608,7 @@ pub fn predict_memory(
     let pixels = window.pixel_count();
     let per_pixel = |bytes: u64| pixels.saturating_mul(bytes);
     let xyz = per_pixel(size_of::<Xyz>() as u64);
-    let coefficients = args.coeffs as u64;
+    let coefficients = args.coeff_count() as u64;
     let spectral_buffer =
         args.transport == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
     let planes = if spectral_buffer {
@@ -779,7 +796,7 @@ impl TransportSpec {
     pub fn of(args: &RenderArgs) -> Self {
         match args.transport {
             TransportKind::Fourier => Self::Fourier {
-                coeffs: args.coeffs,
+                coeffs: args.coeff_count(),
                 buffer: args.buffer,
                 to_color: args.to_color,
             },
@@ -789,7 +806,7 @@ impl TransportSpec {
             },
             TransportKind::Cv => Self::Cv {
                 wavelengths: args.wavelengths.unwrap_or(8),
-                coeffs: args.coeffs,
+                coeffs: args.coeff_count(),
                 sampling: args.sampling,
                 alpha_per_pixel: args.cv_alpha_per_pixel,
             },
@@ -1553,6 +1570,8 @@ pub fn render(
         )));
     }
     let colour_observer = Arc::new(observer_choice.observer()?);
+    let resolved = resolve_coeffs(args, &defaults, &scene, &colour_observer, observer)?;
+    let args = &resolved;
     let identity = frame_identity(args, &settings, frame, &scene);
     let parts = plan_parts(args, &settings, identity)?;
     settings.spp = parts.spp;
@@ -1595,6 +1614,36 @@ pub fn render(
         range: scene.range(),
         partial: state.map(|state| PartialFilm::new(parts.identity, state, requested)),
         memory,
+    })
+}
+
+/// `args` with N settled: `--coeffs`, else the scene's `[render] coeffs`,
+/// else `auto`; `auto` on the Fourier transport is chosen from the scene's
+/// spectra (`coefficient_choice`) and the choice is reported to `notices`;
+/// control variates and sampled transports keep [`UNRESOLVED_COEFFS`].
+fn resolve_coeffs(
+    args: &RenderArgs,
+    defaults: &SceneDefaults,
+    scene: &Scene,
+    observer: &Observer,
+    notices: &dyn RenderObserver,
+) -> Result<RenderArgs, CliError> {
+    let choice = args
+        .coeffs
+        .or(defaults.coeffs)
+        .unwrap_or(CoeffsChoice::Auto);
+    let coeffs = match (choice, args.transport) {
+        (CoeffsChoice::Fixed(n), _) => n,
+        (CoeffsChoice::Auto, TransportKind::Fourier) => {
+            let chosen = choose_for_scene(scene, observer)?;
+            notices.notice(&RenderNotice::Note(chosen.describe()));
+            chosen.coeffs
+        }
+        (CoeffsChoice::Auto, TransportKind::Cv | TransportKind::Sampled) => UNRESOLVED_COEFFS,
+    };
+    Ok(RenderArgs {
+        coeffs: Some(CoeffsChoice::Fixed(coeffs)),
+        ..args.clone()
     })
 }
 

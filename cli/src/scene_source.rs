@@ -36,6 +36,8 @@ pub struct SceneDefaults {
     pub crop: Option<crate::scene_file::CropWindow>,
     /// Instances placed (kept as instances or flattened at build).
     pub instances: crate::scene_file::InstanceCount,
+    /// Fourier coefficients, a number or `auto`.
+    pub coeffs: Option<crate::coefficient_choice::CoeffsChoice>,
 }
 
 /// The builder, defaults and warnings of the scene named by `argument`.
@@ -84,6 +86,7 @@ pub fn resolve_scene(
         filter: loaded.render.filter,
         crop: loaded.render.crop,
         instances: loaded.instances,
+        coeffs: loaded.render.coeffs,
     };
     Ok((loaded.builder, defaults, loaded.warnings))
 }

@@ -241,6 +241,8 @@ pub struct RenderDefaults {
     pub filter: Option<FilterChoice>,
     /// The part of the film rendered (Mitsuba's crop window).
     pub crop: Option<CropWindow>,
+    /// Fourier coefficients, a number or `auto` (TOML scenes only).
+    pub coeffs: Option<crate::coefficient_choice::CoeffsChoice>,
 }
 
 /// A pixel reconstruction filter named by a scene file.

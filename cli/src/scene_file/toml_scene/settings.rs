@@ -2,6 +2,8 @@
 //! thing each.
 
 use super::Loader;
+use crate::coefficient_choice::{CoeffsChoice, SUPPORTED_COEFFS};
+use crate::coeffs::MAX_COEFFS;
 use crate::error::CliError;
 use crate::scene_file::construction::MapSettings;
 use crate::scene_file::toml_reader::Item;
@@ -27,6 +29,7 @@ impl Loader<'_> {
                 "seed",
                 "hide_emitters",
                 "film",
+                "coeffs",
                 "observer",
                 "sensor",
             ],
@@ -69,6 +72,21 @@ impl Loader<'_> {
                     let name = i.string(src)?;
                     FilmMode::from_name(name)
                         .ok_or_else(|| i.err(src, format!("film `{name}`: use sample or splat")))
+                })
+                .transpose()?,
+            coeffs: table
+                .get("coeffs")
+                .map(|i| match i.string(src) {
+                    Ok(name) => CoeffsChoice::parse(name).map_err(|e| i.err(src, e)),
+                    Err(_) => match i.integer(src, 1, MAX_COEFFS as i64)? as usize {
+                        n if SUPPORTED_COEFFS.contains(&n) => Ok(CoeffsChoice::Fixed(n)),
+                        n => Err(i.err(
+                            src,
+                            format!(
+                                "{n} coefficients: use \"auto\" or one of {SUPPORTED_COEFFS:?}"
+                            ),
+                        )),
+                    },
                 })
                 .transpose()?,
             ..RenderDefaults::default()
