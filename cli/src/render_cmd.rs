@@ -981,6 +981,9 @@ struct RenderTask<'a> {
     observer: &'a dyn RenderObserver,
     preflight: Preflight<'a>,
     job: PassJob<'a>,
+    /// Why `--coeffs auto` chose its N, told once the render is sure to
+    /// start (after every check that could refuse it).
+    coefficient_note: Option<String>,
 }
 
 impl TransportTask for RenderTask<'_> {
@@ -1001,6 +1004,9 @@ impl TransportTask for RenderTask<'_> {
             }
             + splat_apron_bytes(self.settings, film_pixel);
         let memory = (self.preflight)(pixel_bytes, size_of::<T>() as u64)?;
+        if let Some(note) = self.coefficient_note {
+            self.observer.notice(&RenderNotice::Note(note));
+        }
         let reporter = Reporter::new(self.settings.spp, self.quiet, self.observer);
         let result = render_passes(transport, self.scene, self.settings, &self.job, &mut |p| {
             reporter.update(p)
@@ -1570,7 +1576,7 @@ pub fn render(
         )));
     }
     let colour_observer = Arc::new(observer_choice.observer()?);
-    let resolved = resolve_coeffs(args, &defaults, &scene, &colour_observer, observer)?;
+    let (resolved, coefficient_note) = resolve_coeffs(args, &defaults, &scene, &colour_observer)?;
     let args = &resolved;
     let identity = frame_identity(args, &settings, frame, &scene);
     let parts = plan_parts(args, &settings, identity)?;
@@ -1602,6 +1608,7 @@ pub fn render(
             resume: parts.resume.as_ref().map(|part| &part.state),
             keep_state: output.keeps_state(),
         },
+        coefficient_note,
     };
     let basis = TransportBasis {
         range: scene.range(),
@@ -1619,32 +1626,33 @@ pub fn render(
 
 /// `args` with N settled: `--coeffs`, else the scene's `[render] coeffs`,
 /// else `auto`; `auto` on the Fourier transport is chosen from the scene's
-/// spectra (`coefficient_choice`) and the choice is reported to `notices`;
-/// control variates and sampled transports keep [`UNRESOLVED_COEFFS`].
+/// spectra (`coefficient_choice`), with the line that says why; control
+/// variates and sampled transports keep [`UNRESOLVED_COEFFS`].
 fn resolve_coeffs(
     args: &RenderArgs,
     defaults: &SceneDefaults,
     scene: &Scene,
     observer: &Observer,
-    notices: &dyn RenderObserver,
-) -> Result<RenderArgs, CliError> {
+) -> Result<(RenderArgs, Option<String>), CliError> {
     let choice = args
         .coeffs
         .or(defaults.coeffs)
         .unwrap_or(CoeffsChoice::Auto);
-    let coeffs = match (choice, args.transport) {
-        (CoeffsChoice::Fixed(n), _) => n,
+    let (coeffs, note) = match (choice, args.transport) {
+        (CoeffsChoice::Fixed(n), _) => (n, None),
         (CoeffsChoice::Auto, TransportKind::Fourier) => {
             let chosen = choose_for_scene(scene, observer)?;
-            notices.notice(&RenderNotice::Note(chosen.describe()));
-            chosen.coeffs
+            (chosen.coeffs, Some(chosen.describe()))
         }
-        (CoeffsChoice::Auto, TransportKind::Cv | TransportKind::Sampled) => UNRESOLVED_COEFFS,
+        (CoeffsChoice::Auto, TransportKind::Cv | TransportKind::Sampled) => {
+            (UNRESOLVED_COEFFS, None)
+        }
     };
-    Ok(RenderArgs {
+    let resolved = RenderArgs {
         coeffs: Some(CoeffsChoice::Fixed(coeffs)),
         ..args.clone()
-    })
+    };
+    Ok((resolved, note))
 }
 
 /// What the channels measure: `--observer` or `--sensor`, else the scene
