@@ -102,6 +102,8 @@ CONFIGS = {
     "fourier12-splat": (["--coeffs", "12", "--film", "splat"], ("cornell", "laser")),
     "fourier16-splat": (["--coeffs", "16", "--film", "splat"], ("laser",)),
     "fourier24-splat": (["--coeffs", "24", "--film", "splat"], ("laser",)),
+    # fspec's defaults since `--coeffs auto`: N chosen from the scene's spectra.
+    "auto-splat": (["--coeffs", "auto", "--film", "splat"], ("cornell", "laser")),
     "hero4-splat": (
         ["--transport", "sampled", "--wavelengths", "4", "--sampling", "hero",
          "--film", "splat"],
@@ -361,12 +363,12 @@ def run_fspec(fspec, scene_path, args, spp, seed, threads, image):
     return cpu_children() - start
 
 
-def calibrate(out, manifest, scenes, fspec, threads, force):
+def calibrate(out, manifest, scenes, fspec, threads, force, configs):
     cal = manifest.setdefault("calibration", {})
     tmp = out / "calibration.exr"
     for config, (args, on) in CONFIGS.items():
         for name in scenes:
-            if name not in on:
+            if name not in on or config not in configs:
                 continue
             key = f"{name}/{config}"
             if not force and key in cal:
@@ -443,7 +445,7 @@ def save(out, manifest, keys):
         for k in keys:
             if k not in manifest:
                 continue
-            if isinstance(manifest[k], list):
+            if isinstance(manifest[k], list) and all(isinstance(r, dict) for r in manifest[k]):
                 # Render rows: the disk's, each replaced by ours of the same
                 # scene, config, budget and seed (two processes may render
                 # different configurations at once).
@@ -488,7 +490,7 @@ def main():
     p.add_argument("--budgets", type=int, nargs="+", default=[64, 256, 1024])
     p.add_argument("--seeds", type=int, default=3)
     p.add_argument("--configs", nargs="+", default=list(CONFIGS), choices=list(CONFIGS),
-                   help="fspec configurations rendered (default: all)")
+                   help="fspec configurations calibrated and rendered (default: all)")
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--reference-spp", nargs="*", default=[], metavar="SCENE=SPP",
                    help="reference spp per scene (default cornell=8192 laser=16384)")
@@ -524,7 +526,7 @@ def main():
     if step("mitsuba"):
         budget_renders(a.out, manifest, a.scenes, a.budgets, a.seeds, a.threads, a.force)
     if step("calibrate"):
-        calibrate(a.out, manifest, a.scenes, a.fspec, a.threads, a.force)
+        calibrate(a.out, manifest, a.scenes, a.fspec, a.threads, a.force, a.configs)
     if step("fspec"):
         fspec_renders(a.out, manifest, a.scenes, a.budgets, a.seeds, a.fspec, a.threads, a.force,
                       a.configs)

@@ -1,6 +1,7 @@
 //! The library behind the `fspec` binary: argument handling, loaders and
 //! reports, kept here so integration tests and fuzz targets can call them.
 
+pub mod coefficient_choice;
 pub mod coeffs;
 pub mod error;
 pub mod experiment;

@@ -3,13 +3,15 @@
 //! planes, with a progress bar on a terminal.
 //!
 //! Defaults: the `cornell` scene, 512 × 512, 64 spp, max depth 8 (Mitsuba's
-//! Cornell box setting), Fourier transport with N = 12 coefficients and a
+//! Cornell box setting), Fourier transport with N chosen from the scene's
+//! spectra (`--coeffs auto`, [`crate::coefficient_choice`]) and a
 //! spectral buffer converted by the zeroth-coefficient route, Gaussian
 //! filter, outputs `render.png` and `render.exr` in the current folder.
 //! Supported sizes: N ∈ {4, 8, 12, 16, 24, 32} (`--coeffs`), C ∈ {1, 2, 4,
 //! 8, 12, 16, 32} (`--wavelengths`), control variates with C ∈ {4, 8, 12}
 //! and N ∈ {4, 8, 12}: each supported size is compiled once.
 
+use crate::coefficient_choice::{CoeffsChoice, UNRESOLVED_COEFFS, choose_for_scene};
 use crate::error::CliError;
 use crate::image_out::{
     Exposure, Tone, XyzImage, write_by_extension, write_coefficients_exr, write_spectral_exr,
@@ -205,9 +207,13 @@ pub struct RenderArgs {
     /// dielectric, sampled wavelengths after it.
     #[arg(long, value_enum)]
     pub transport: Option<TransportKind>,
-    /// Fourier coefficients N (4, 8, 12, 16, 24, 32; cv: 4, 8, 12; hybrid: 12).
-    #[arg(long, default_value_t = 12)]
-    pub coeffs: usize,
+    /// Fourier coefficients N (4, 8, 12, 16, 24, 32; cv: 4, 8, 12; hybrid:
+    /// 12), or auto: the smallest N whose truncation keeps the colour of
+    /// every light × reflectance product of the scene within ΔE2000 0.44
+    /// (cv and hybrid: 12). Default: the scene's `[render] coeffs`, else
+    /// auto.
+    #[arg(long, value_name = "N|auto", value_parser = CoeffsChoice::parse)]
+    pub coeffs: Option<CoeffsChoice>,
     /// Sampled wavelengths per path C (1, 2, 4, 8, 12, 16, 32; cv: 4, 8, 12;
     /// hybrid: 1, 4, 8, drawn where a path meets dispersion). Default 4 for
     /// sampled and hybrid, 8 for cv.
@@ -349,6 +355,18 @@ fn parse_passes(text: &str) -> Result<std::ops::Range<u32>, String> {
         return Err(format!("{text}: the range is empty (A must be below B)"));
     }
     Ok(start..end)
+}
+
+impl RenderArgs {
+    /// N as given (`--coeffs`, else the scene's, which [`render`] fills
+    /// in), or [`UNRESOLVED_COEFFS`] while it is `auto`: [`render`]
+    /// resolves `auto` from the scene before it builds the transport.
+    pub fn coeff_count(&self) -> usize {
+        match self.coeffs {
+            Some(CoeffsChoice::Fixed(n)) => n,
+            Some(CoeffsChoice::Auto) | None => UNRESOLVED_COEFFS,
+        }
+    }
 }
 
 /// The built-in scene that `--illuminant` lights.
@@ -598,7 +616,7 @@ pub fn predict_memory(
     let pixels = window.pixel_count();
     let per_pixel = |bytes: u64| pixels.saturating_mul(bytes);
     let xyz = per_pixel(size_of::<Xyz>() as u64);
-    let coefficients = args.coeffs as u64;
+    let coefficients = args.coeff_count() as u64;
     let spectral_buffer =
         args.transport_kind() == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
     let planes = if spectral_buffer {
@@ -799,7 +817,7 @@ impl TransportSpec {
     pub fn of(args: &RenderArgs) -> Self {
         match args.transport_kind() {
             TransportKind::Fourier => Self::Fourier {
-                coeffs: args.coeffs,
+                coeffs: args.coeff_count(),
                 buffer: args.buffer,
                 to_color: args.to_color,
             },
@@ -809,12 +827,12 @@ impl TransportSpec {
             },
             TransportKind::Cv => Self::Cv {
                 wavelengths: args.wavelengths.unwrap_or(8),
-                coeffs: args.coeffs,
+                coeffs: args.coeff_count(),
                 sampling: args.sampling,
                 alpha_per_pixel: args.cv_alpha_per_pixel,
             },
             TransportKind::Hybrid => Self::Hybrid {
-                coeffs: args.coeffs,
+                coeffs: args.coeff_count(),
                 wavelengths: args.wavelengths.unwrap_or(HYBRID_WAVELENGTHS),
                 sampling: args.sampling,
                 buffer: args.buffer,
@@ -1052,6 +1070,9 @@ struct RenderTask<'a> {
     observer: &'a dyn RenderObserver,
     preflight: Preflight<'a>,
     job: PassJob<'a>,
+    /// Why `--coeffs auto` chose its N, told once the render is sure to
+    /// start (after every check that could refuse it).
+    coefficient_note: Option<String>,
 }
 
 impl TransportTask for RenderTask<'_> {
@@ -1072,6 +1093,9 @@ impl TransportTask for RenderTask<'_> {
             }
             + splat_apron_bytes(self.settings, film_pixel);
         let memory = (self.preflight)(pixel_bytes, size_of::<T>() as u64)?;
+        if let Some(note) = self.coefficient_note {
+            self.observer.notice(&RenderNotice::Note(note));
+        }
         let reporter = Reporter::new(self.settings.spp, self.quiet, self.observer);
         let result = render_passes(transport, self.scene, self.settings, &self.job, &mut |p| {
             reporter.update(p)
@@ -1644,6 +1668,8 @@ pub fn render(
         )));
     }
     let colour_observer = Arc::new(observer_choice.observer()?);
+    let (resolved, coefficient_note) = resolve_coeffs(args, &defaults, &scene, &colour_observer)?;
+    let args = &resolved;
     let identity = frame_identity(args, &settings, frame, &scene);
     let parts = plan_parts(args, &settings, identity)?;
     settings.spp = parts.spp;
@@ -1674,6 +1700,7 @@ pub fn render(
             resume: parts.resume.as_ref().map(|part| &part.state),
             keep_state: output.keeps_state(),
         },
+        coefficient_note,
     };
     let basis = TransportBasis {
         range: scene.range(),
@@ -1687,6 +1714,41 @@ pub fn render(
         partial: state.map(|state| PartialFilm::new(parts.identity, state, requested)),
         memory,
     })
+}
+
+/// `args` with N settled: `--coeffs`, else the scene's `[render] coeffs`,
+/// else `auto`; `auto` on the Fourier transport is chosen from the scene's
+/// spectra (`coefficient_choice`), with the line that says why; control
+/// variates, sampled and hybrid transports keep [`UNRESOLVED_COEFFS`]
+/// (the hybrid is compiled for N = 12 only).
+fn resolve_coeffs(
+    args: &RenderArgs,
+    defaults: &SceneDefaults,
+    scene: &Scene,
+    observer: &Observer,
+) -> Result<(RenderArgs, Option<String>), CliError> {
+    let choice = args
+        .coeffs
+        .or(defaults.coeffs)
+        .unwrap_or(CoeffsChoice::Auto);
+    let (coeffs, note) = match (choice, args.transport_kind()) {
+        (CoeffsChoice::Fixed(n), _) => (n, None),
+        (CoeffsChoice::Auto, TransportKind::Fourier) => {
+            let chosen = choose_for_scene(scene, observer)?;
+            (chosen.coeffs, Some(chosen.describe()))
+        }
+        (
+            CoeffsChoice::Auto,
+            TransportKind::Cv | TransportKind::Sampled | TransportKind::Hybrid,
+        ) => {
+            (UNRESOLVED_COEFFS, None)
+        }
+    };
+    let resolved = RenderArgs {
+        coeffs: Some(CoeffsChoice::Fixed(coeffs)),
+        ..args.clone()
+    };
+    Ok((resolved, note))
 }
 
 /// What the channels measure: `--observer` or `--sensor`, else the scene

@@ -38,6 +38,8 @@ pub struct SceneDefaults {
     pub instances: crate::scene_file::InstanceCount,
     /// The transport's name (`[render] transport`).
     pub transport: Option<String>,
+    /// Fourier coefficients, a number or `auto`.
+    pub coeffs: Option<crate::coefficient_choice::CoeffsChoice>,
 }
 
 /// The builder, defaults and warnings of the scene named by `argument`.
@@ -87,6 +89,7 @@ pub fn resolve_scene(
         crop: loaded.render.crop,
         instances: loaded.instances,
         transport: loaded.render.transport.clone(),
+        coeffs: loaded.render.coeffs,
     };
     Ok((loaded.builder, defaults, loaded.warnings))
 }

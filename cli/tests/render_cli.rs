@@ -234,7 +234,7 @@ fn every_builtin_scene_renders_clean_in_every_transport() -> TestResult {
 #[test]
 fn spectral_and_coefficient_exr_follow_their_layouts() -> TestResult {
     let dir = test_dir("spectral")?;
-    let (stdout, _) = render_ok(
+    let (stdout, stderr) = render_ok(
         &dir,
         &[
             "lamps",
@@ -284,7 +284,15 @@ fn spectral_and_coefficient_exr_follow_their_layouts() -> TestResult {
             .parse::<usize>()
             .unwrap_or(usize::MAX)
     });
-    let expected: Vec<String> = (0..12).map(|j| format!("F{j}")).collect();
+    // N planes, N as `--coeffs auto` chose it and reported it.
+    let note = "coefficients: N = ";
+    let at = stderr.find(note).ok_or("no coefficient note")? + note.len();
+    let n: usize = stderr[at..]
+        .split(|c: char| !c.is_ascii_digit())
+        .next()
+        .ok_or("no N")?
+        .parse()?;
+    let expected: Vec<String> = (0..n).map(|j| format!("F{j}")).collect();
     assert_eq!(names, expected);
     // The zeroth coefficient is the mean radiance over the range: never
     // negative, and positive somewhere in a lit scene.

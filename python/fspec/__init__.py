@@ -567,7 +567,7 @@ def render(
     width: Optional[int] = None,
     height: Optional[int] = None,
     transport: str = "fourier",
-    coeffs: int = 12,
+    coeffs: Optional[Union[int, str]] = None,
     wavelengths: Optional[int] = None,
     sampling: str = "hero",
     to_color: str = "zeroth",
@@ -601,7 +601,9 @@ def render(
         scene: scene name or path.
         spp, width, height, max_depth (-1: unlimited), rr_depth, seed: as the
             command line.
-        transport: ``"fourier"`` (``coeffs`` in 4, 8, 12, 16, 24, 32),
+        transport: ``"fourier"`` (``coeffs`` in 4, 8, 12, 16, 24, 32, or
+            ``"auto"``, the default when not given: chosen from the scene's
+            spectra as ``fspec render --coeffs auto``),
             ``"sampled"`` (``wavelengths`` in 1, 2, 4, 8, 12, 16, 32),
             ``"cv"`` (control variates; both in 4, 8, 12) or ``"hybrid"``
             (Fourier until a path meets dispersion, sampled after it;

@@ -243,6 +243,8 @@ pub struct RenderDefaults {
     pub crop: Option<CropWindow>,
     /// What a path carries, one of [`TRANSPORT_NAMES`] (TOML scenes only).
     pub transport: Option<String>,
+    /// Fourier coefficients, a number or `auto` (TOML scenes only).
+    pub coeffs: Option<crate::coefficient_choice::CoeffsChoice>,
 }
 
 /// The transports a TOML scene's `[render] transport` may name: those of

@@ -248,6 +248,16 @@ impl LightSampler {
         self.others.len()
     }
 
+    /// The emission spectra of the point and directional lights (the
+    /// environment's spectrum is [`crate::scene::Scene::environment`]).
+    pub fn emission_spectra(&self) -> impl Iterator<Item = SpectrumId> + '_ {
+        self.others.iter().filter_map(|light| match light {
+            OtherLight::Point(p) => Some(p.intensity),
+            OtherLight::Directional(d) => Some(d.irradiance),
+            OtherLight::Environment => None,
+        })
+    }
+
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
         self.others.capacity() * size_of::<OtherLight>()

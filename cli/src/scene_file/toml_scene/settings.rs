@@ -2,6 +2,8 @@
 //! thing each.
 
 use super::Loader;
+use crate::coefficient_choice::{CoeffsChoice, SUPPORTED_COEFFS};
+use crate::coeffs::MAX_COEFFS;
 use crate::error::CliError;
 use crate::scene_file::construction::MapSettings;
 use crate::scene_file::toml_reader::Item;
@@ -28,6 +30,7 @@ impl Loader<'_> {
                 "hide_emitters",
                 "film",
                 "transport",
+                "coeffs",
                 "observer",
                 "sensor",
             ],
@@ -85,6 +88,21 @@ impl Loader<'_> {
                                 format!("transport `{name}`: use {}", TRANSPORT_NAMES.join(", ")),
                             )
                         })
+                })
+                .transpose()?,
+            coeffs: table
+                .get("coeffs")
+                .map(|i| match i.string(src) {
+                    Ok(name) => CoeffsChoice::parse(name).map_err(|e| i.err(src, e)),
+                    Err(_) => match i.integer(src, 1, MAX_COEFFS as i64)? as usize {
+                        n if SUPPORTED_COEFFS.contains(&n) => Ok(CoeffsChoice::Fixed(n)),
+                        n => Err(i.err(
+                            src,
+                            format!(
+                                "{n} coefficients: use \"auto\" or one of {SUPPORTED_COEFFS:?}"
+                            ),
+                        )),
+                    },
                 })
                 .transpose()?,
             ..RenderDefaults::default()
