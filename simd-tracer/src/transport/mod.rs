@@ -20,7 +20,7 @@
 
 use crate::film::Film;
 use crate::ids::SpectrumId;
-use crate::sampling::rng::Rng;
+use crate::sampling::sampler::UniformStream;
 use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum};
 use crate::simd::{LANES, LaneMask};
@@ -46,10 +46,13 @@ pub trait Transport: Sync {
     /// The film this transport's samples go to.
     fn film(&self) -> &Self::Film;
     /// Draws the wavelengths of a packet; `stream(lane)` makes a lane's
-    /// wavelength random stream on demand (hashing its key costs about as
+    /// wavelength numbers on demand (hashing its key costs about as
     /// much as the camera ray, so transports that draw no wavelengths,
     /// like Fourier, never make one).
-    fn sample_wavelengths(&self, stream: impl Fn(usize) -> Rng) -> Self::Wavelengths;
+    fn sample_wavelengths<R: UniformStream>(
+        &self,
+        stream: impl Fn(usize) -> R,
+    ) -> Self::Wavelengths;
     /// The hero wavelength of a lane (`None` where light is not sampled).
     fn hero_wavelength(&self, _wavelengths: &Self::Wavelengths, _lane: usize) -> Option<f32> {
         None
@@ -183,6 +186,7 @@ mod tests {
     };
     use super::*;
     use crate::film::{Buffer, FourierFilm};
+    use crate::sampling::rng::Rng;
     use crate::shading::material::SpectralRef;
     use spectral_core::FourierSpectrum;
     use spectral_core::SpectralRange;

@@ -9,6 +9,7 @@ use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults};
 use crate::sensor_file::{ObserverChoice, load_sensor_csv};
 use glam::{Mat3, Vec3};
 use simd_tracer::film::FilmMode;
+use simd_tracer::sampling::sampler::SamplerKind;
 use simd_tracer::scene::camera::{Camera, CameraError};
 use simd_tracer::spectra::environment::EnvironmentMap;
 
@@ -27,6 +28,7 @@ impl Loader<'_> {
                 "seed",
                 "hide_emitters",
                 "film",
+                "sampler",
                 "observer",
                 "sensor",
             ],
@@ -69,6 +71,15 @@ impl Loader<'_> {
                     let name = i.string(src)?;
                     FilmMode::from_name(name)
                         .ok_or_else(|| i.err(src, format!("film `{name}`: use sample or splat")))
+                })
+                .transpose()?,
+            sampler: table
+                .get("sampler")
+                .map(|i| {
+                    let name = i.string(src)?;
+                    SamplerKind::from_name(name).ok_or_else(|| {
+                        i.err(src, format!("sampler `{name}`: use independent or sobol"))
+                    })
                 })
                 .transpose()?,
             ..RenderDefaults::default()
