@@ -97,16 +97,28 @@ LASER_HALF_BASE_NM = 2.0
 #: The visible range of Mitsuba's spectral variants, nm (MI_CIE_MIN/MAX).
 CIE_RANGE_NM = (360.0, 830.0)
 #: fspec configurations: name -> (render arguments, scenes it runs on).
+#: `--sampler independent` where the configuration was measured before the
+#: Sobol sampler existed (and became the default).
 CONFIGS = {
-    "fourier12-sample": (["--coeffs", "12", "--film", "sample"], ("cornell", "laser")),
-    "fourier12-splat": (["--coeffs", "12", "--film", "splat"], ("cornell", "laser")),
-    "fourier16-splat": (["--coeffs", "16", "--film", "splat"], ("laser",)),
-    "fourier24-splat": (["--coeffs", "24", "--film", "splat"], ("laser",)),
-    # fspec's defaults since `--coeffs auto`: N chosen from the scene's spectra.
-    "auto-splat": (["--coeffs", "auto", "--film", "splat"], ("cornell", "laser")),
+    "fourier12-sample": (["--coeffs", "12", "--film", "sample", "--sampler", "independent"],
+                         ("cornell", "laser")),
+    "fourier12-splat": (["--coeffs", "12", "--film", "splat", "--sampler", "independent"],
+                        ("cornell", "laser")),
+    "fourier12-splat-sobol": (["--coeffs", "12", "--film", "splat", "--sampler", "sobol"],
+                              ("cornell", "laser")),
+    "fourier16-splat": (["--coeffs", "16", "--film", "splat", "--sampler", "independent"],
+                        ("laser",)),
+    "fourier24-splat": (["--coeffs", "24", "--film", "splat", "--sampler", "independent"],
+                        ("laser",)),
+    # fspec's --coeffs auto (N chosen from the scene's spectra), measured
+    # with the independent sampler; with sobol it is fspec's defaults.
+    "auto-splat": (["--coeffs", "auto", "--film", "splat", "--sampler", "independent"],
+                   ("cornell", "laser")),
+    "auto-splat-sobol": (["--coeffs", "auto", "--film", "splat", "--sampler", "sobol"],
+                         ("cornell", "laser")),
     "hero4-splat": (
         ["--transport", "sampled", "--wavelengths", "4", "--sampling", "hero",
-         "--film", "splat"],
+         "--film", "splat", "--sampler", "independent"],
         ("cornell",),
     ),
 }

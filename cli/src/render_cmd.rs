@@ -30,6 +30,7 @@ use simd_tracer::render::{
     FilmState, PassJob, PixelWindow, Progress, RenderResult, RenderSettings, TILE_SIZE,
     render_passes, resolve_state,
 };
+use simd_tracer::sampling::sampler::SamplerKind;
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::SceneOptions;
 use simd_tracer::transport::{
@@ -158,6 +159,24 @@ impl From<FilmKind> for FilmMode {
     }
 }
 
+/// Where a path's numbers come from (`simd_tracer::sampling::sampler`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SamplerChoice {
+    /// Independent PCG streams per pixel and pass.
+    Independent,
+    /// Owen-scrambled Sobol points, one sequence per pixel.
+    Sobol,
+}
+
+impl From<SamplerChoice> for SamplerKind {
+    fn from(choice: SamplerChoice) -> Self {
+        match choice {
+            SamplerChoice::Independent => Self::Independent,
+            SamplerChoice::Sobol => Self::Sobol,
+        }
+    }
+}
+
 /// 8-bit tone mapping.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -237,6 +256,12 @@ pub struct RenderArgs {
     /// `[render] film`, else splat (sample with --transport cv).
     #[arg(long, value_enum)]
     pub film: Option<FilmKind>,
+    /// Where path decisions' numbers come from: independent random
+    /// streams or Owen-scrambled Sobol points (stratified over a pixel's
+    /// passes). Default: the scene's `[render] sampler`, else sobol
+    /// (independent with --transport cv).
+    #[arg(long, value_enum)]
+    pub sampler: Option<SamplerChoice>,
     /// Seed of every random stream (same seed, same image).
     #[arg(long)]
     pub seed: Option<u64>,
@@ -476,7 +501,26 @@ pub fn settings_from(
             .map(FilmMode::from)
             .or(defaults.film)
             .unwrap_or(default_film(args.transport_kind())),
+        sampler: args
+            .sampler
+            .map(SamplerKind::from)
+            .or(defaults.sampler)
+            .unwrap_or(default_sampler(args.transport_kind())),
     })
+}
+
+/// The sampler when neither `--sampler` nor the scene names one: Sobol,
+/// the less colour error at equal CPU time (docs/results.md, "Sobol
+/// sampler"); control variates keep independent passes, because their
+/// running `α` is unbiased only when a pass is independent of the passes
+/// it was estimated from, which a pixel's scrambled Sobol points are not.
+pub fn default_sampler(transport: TransportKind) -> SamplerKind {
+    match transport {
+        TransportKind::Cv => SamplerKind::Independent,
+        TransportKind::Fourier | TransportKind::Sampled | TransportKind::Hybrid => {
+            SamplerKind::Sobol
+        }
+    }
 }
 
 /// The film when neither `--film` nor the scene names one: splatting, the
@@ -1740,9 +1784,7 @@ fn resolve_coeffs(
         (
             CoeffsChoice::Auto,
             TransportKind::Cv | TransportKind::Sampled | TransportKind::Hybrid,
-        ) => {
-            (UNRESOLVED_COEFFS, None)
-        }
+        ) => (UNRESOLVED_COEFFS, None),
     };
     let resolved = RenderArgs {
         coeffs: Some(CoeffsChoice::Fixed(coeffs)),

@@ -28,6 +28,8 @@ pub struct SceneDefaults {
     pub hide_emitters: Option<bool>,
     /// How samples reach pixels.
     pub film: Option<simd_tracer::film::FilmMode>,
+    /// Independent or Sobol numbers.
+    pub sampler: Option<simd_tracer::sampling::sampler::SamplerKind>,
     /// Depth from which Russian roulette may end paths.
     pub rr_depth: Option<u32>,
     /// Pixel filter.
@@ -84,6 +86,7 @@ pub fn resolve_scene(
         seed: loaded.render.seed,
         hide_emitters: loaded.render.hide_emitters,
         film: loaded.render.film,
+        sampler: loaded.render.sampler,
         rr_depth: loaded.render.rr_depth,
         filter: loaded.render.filter,
         crop: loaded.render.crop,

@@ -366,6 +366,7 @@ fn args(argv: &[&str]) -> TestResult<RenderArgs> {
 
 fn settings(width: u32, height: u32) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width,
         height,
         spp: 1,

@@ -53,6 +53,7 @@ fn reference() -> TestResult<Vec<f64>> {
 fn ours(scene: &Scene, seed: u64) -> TestResult<Vec<f64>> {
     let transport = FourierTransport::<12>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
     let settings = RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: SIZE as u32,
         height: SIZE as u32,
         spp: SPP,

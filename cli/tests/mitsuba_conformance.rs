@@ -360,6 +360,7 @@ fn reference(scene: &str) -> TestResult<Image> {
 /// samples and `seed`.
 fn settings(defaults: &RenderDefaults, seed: u64) -> TestResult<RenderSettings> {
     Ok(RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: defaults.width.unwrap_or(MITSUBA_FILM_PX.0),
         height: defaults.height.unwrap_or(MITSUBA_FILM_PX.1),
         spp: SPP,

@@ -45,6 +45,7 @@ fn render_xyz<T: Transport>(
     seed: u64,
 ) -> TestResult<Vec<Xyz>> {
     let settings = RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: SIZE.0,
         height: SIZE.1,
         spp,

@@ -97,6 +97,7 @@ material = "white"
 
 fn small_settings() -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: 16,
         height: 16,
         spp: 2,

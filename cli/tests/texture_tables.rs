@@ -118,6 +118,7 @@ fn assert_error(dir: &Path, text: &str, needle: &str, key: &str, contains: &str)
 
 fn small_render(scene: &Scene) -> TestResult<f64> {
     let settings = RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: 16,
         height: 16,
         spp: 2,

@@ -570,6 +570,7 @@ def render(
     coeffs: Optional[Union[int, str]] = None,
     wavelengths: Optional[int] = None,
     sampling: str = "hero",
+    sampler: Optional[str] = None,
     to_color: str = "zeroth",
     buffer: str = "spectral",
     max_depth: Optional[int] = None,
@@ -609,6 +610,8 @@ def render(
             (Fourier until a path meets dispersion, sampled after it;
             ``coeffs`` 12, ``wavelengths`` in 1, 4, 8).
         sampling: ``"uniform"``, ``"stratified"``, ``"hero"``, ``"visible"``.
+        sampler: ``"sobol"`` (the default, except with ``"cv"``) or
+            ``"independent"``.
         to_color: route from coefficients to colour (:func:`to_xyz`).
         buffer: ``"spectral"`` (coefficients per pixel, converted once) or
             ``"rgb"`` (every sample converted).
@@ -642,6 +645,7 @@ def render(
         ("coeffs", coeffs),
         ("wavelengths", wavelengths),
         ("sampling", sampling),
+        ("sampler", sampler),
         ("to-color", to_color),
         ("buffer", buffer),
         ("max-depth", max_depth),

@@ -133,6 +133,7 @@ fn an_empty_image_is_an_error() -> TestResult {
     let transport = FourierTransport::<4>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
     for (width, height, spp) in [(0, 4, 1), (4, 0, 1), (4, 4, 0)] {
         let settings = RenderSettings {
+            sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
             width,
             height,
             spp,

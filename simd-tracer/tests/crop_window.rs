@@ -30,6 +30,7 @@ const HEIGHT: u32 = 29;
 
 fn settings(window: Option<PixelWindow>) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: WIDTH,
         height: HEIGHT,
         spp: 3,

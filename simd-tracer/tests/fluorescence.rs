@@ -35,6 +35,7 @@ const BASE: f64 = 0.85;
 
 fn settings(spp: u32, seed: u64) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: 16,
         height: 16,
         spp,

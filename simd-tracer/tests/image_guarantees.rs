@@ -114,6 +114,7 @@ fn transports(range: SpectralRange) -> TestResult<Vec<(String, Renderer)>> {
 
 fn settings(side: u32, spp: u32) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: side,
         height: side,
         spp,

@@ -583,6 +583,7 @@ fn twin_scene(instancing: Instancing, nudge: f32) -> TestResult<Scene> {
 
 fn twin_image(scene: &Scene, seed: u64) -> TestResult<Vec<Xyz>> {
     let settings = RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: 64,
         height: 64,
         spp: 16,

@@ -32,6 +32,7 @@ const RANGE: SpectralRange = SpectralRange::VISIBLE;
 
 fn settings(size: u32, spp: u32, max_depth: u32, hide_emitters: bool) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: size,
         height: size,
         spp,

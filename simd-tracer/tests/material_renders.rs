@@ -35,6 +35,7 @@ type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
 fn settings(width: u32, height: u32, spp: u32, max_depth: u32) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width,
         height,
         spp,

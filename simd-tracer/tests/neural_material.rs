@@ -128,6 +128,7 @@ fn mirror_render(fresnel: AngularFunction) -> TestResult<Vec<f64>> {
     )?);
     let scene = b.build()?;
     let settings = RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: 24,
         height: 24,
         spp: 4,

@@ -12,6 +12,7 @@ use simd_tracer::integrator::{GroupState, IntegratorSettings, RayCounts, trace, 
 use simd_tracer::packet::{Ray, RayPacket};
 use simd_tracer::render::{RenderResult, RenderSettings, render};
 use simd_tracer::sampling::rng::{Purpose, Rng, RngPacket};
+use simd_tracer::sampling::sampler::PathSampler;
 use simd_tracer::scene::builtin::{SceneOptions, builtin_scene};
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::{Scene, SceneBuilder};
@@ -112,6 +113,7 @@ fn furnace(albedo: SpectrumSource, emission: SpectrumSource) -> TestResult<Scene
 
 fn settings(size: u32, spp: u32, max_depth: u32) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: size,
         height: size,
         spp,
@@ -416,7 +418,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
         let wavelength_rngs: [Rng; LANES] = core::array::from_fn(|lane| {
             Rng::for_sample(3, packet_index * 8 + lane as u64, 0, Purpose::Wavelengths)
         });
-        let mut rngs = RngPacket::new(seeds);
+        let mut rngs = PathSampler::Independent(RngPacket::new(seeds));
         let mut counts = Default::default();
         let f = trace(
             &PathContext {
@@ -429,7 +431,7 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
             &mut (),
             &mut counts,
         );
-        let mut rngs = RngPacket::new(seeds);
+        let mut rngs = PathSampler::Independent(RngPacket::new(seeds));
         let mut w = sampled.sample_wavelengths(|lane| wavelength_rngs[lane]);
         let s = trace(
             &PathContext {
@@ -600,9 +602,11 @@ fn group_matches_single<T: Transport>(
         let stream = |p: usize, lane: usize, purpose| {
             Rng::for_sample(7, group * 32 + (p * LANES + lane) as u64, 0, purpose)
         };
-        let rngs = || -> [RngPacket; 4] {
+        let rngs = || -> [PathSampler; 4] {
             core::array::from_fn(|p| {
-                RngPacket::new(core::array::from_fn(|lane| stream(p, lane, Purpose::Path)))
+                PathSampler::Independent(RngPacket::new(core::array::from_fn(|lane| {
+                    stream(p, lane, Purpose::Path)
+                })))
             })
         };
         let wavelengths = || -> [T::Wavelengths; 4] {

@@ -36,6 +36,7 @@ const CONDUCTOR_K: f64 = 7.0;
 
 fn settings(size: u32) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: size,
         height: size,
         spp: 8,

@@ -39,6 +39,7 @@ fn transport() -> TestResult<FourierTransport<8>> {
 
 fn settings(size: u32, spp: u32, seed: u64, film: FilmMode, filter: Filter) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: size,
         height: size,
         spp,

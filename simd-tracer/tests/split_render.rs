@@ -34,6 +34,7 @@ const PASSES: u32 = 9;
 
 fn settings(spp: u32, window: Option<PixelWindow>, film: FilmMode) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: WIDTH,
         height: HEIGHT,
         spp,

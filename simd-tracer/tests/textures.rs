@@ -111,6 +111,7 @@ fn checker_scene(color0: &SceneSpectrum, color1: &SceneSpectrum) -> TestResult<S
 
 fn settings(spp: u32) -> RenderSettings {
     RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: SIZE,
         height: SIZE,
         spp,

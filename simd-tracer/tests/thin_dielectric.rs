@@ -185,6 +185,7 @@ fn a_pane_in_front_of_a_lamp_passes_t_prime() -> TestResult {
     };
     let (with_pane, lamp_only) = (scene(true)?, scene(false)?);
     let settings = RenderSettings {
+        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
         width: 32,
         height: 32,
         spp: 64,

@@ -29,6 +29,7 @@ use simd_tracer::film::filter::Filter;
 use simd_tracer::film::{Buffer, FilmMode};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderResult, RenderSettings, render};
+use simd_tracer::sampling::sampler::SamplerKind;
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::{SceneOptions, builtin_scene};
 use simd_tracer::transport::{FourierTransport, SampledTransport, Transport};
@@ -172,6 +173,8 @@ pub fn settings(size: u32, spp: u32, seed: u64, threads: Option<usize>) -> Rende
         time_limit: None,
         window: None,
         film: FilmMode::Sample,
+        // The experiments' recorded figures were measured with it.
+        sampler: SamplerKind::Independent,
     }
 }
 

@@ -235,6 +235,8 @@ pub struct RenderDefaults {
     /// How samples reach pixels (TOML scenes only: Mitsuba's files keep
     /// the default).
     pub film: Option<simd_tracer::film::FilmMode>,
+    /// Independent or Sobol numbers (TOML scenes only).
+    pub sampler: Option<simd_tracer::sampling::sampler::SamplerKind>,
     /// Depth from which Russian roulette may end paths.
     pub rr_depth: Option<u32>,
     /// Pixel reconstruction filter.

@@ -9,7 +9,7 @@ use super::{PathContext, RayCounts};
 use crate::ids::SpectrumId;
 use crate::packet::PacketHit;
 use crate::packet::RayPacket;
-use crate::sampling::rng::RngPacket;
+use crate::sampling::sampler::PathSampler;
 use crate::simd::{LANES, LaneMask};
 use crate::transport::Transport;
 use wide::f32x8;
@@ -59,7 +59,7 @@ impl<S: Copy, const G: usize> GroupState<S, G> {
 pub fn trace<T: Transport>(
     context: &PathContext<'_, T>,
     camera_rays: &RayPacket,
-    rngs: &mut RngPacket,
+    rngs: &mut PathSampler,
     wavelengths: &mut T::Wavelengths,
     counts: &mut RayCounts,
 ) -> T::Spectra {
@@ -88,7 +88,7 @@ pub fn trace_group<T: Transport, const G: usize>(
     context: &PathContext<'_, T>,
     state: &mut GroupState<T::Spectra, G>,
     camera_rays: &[RayPacket; G],
-    rngs: &mut [RngPacket; G],
+    rngs: &mut [PathSampler; G],
     wavelengths: &mut [T::Wavelengths; G],
     counts: &mut RayCounts,
 ) -> [T::Spectra; G] {
@@ -145,7 +145,13 @@ pub fn trace_group<T: Transport, const G: usize>(
             if !shadows[p].active.is_empty() {
                 paths[p].add_light_sample(transport, scene, &wavelengths[p], &nee[p], blocked[p]);
             }
-            paths[p].settle_fluorescence(transport, scene, &mut wavelengths[p], &mut rngs[p]);
+            paths[p].settle_fluorescence(
+                transport,
+                scene,
+                &mut wavelengths[p],
+                &mut rngs[p],
+                depth,
+            );
         }
         depth = depth.saturating_add(1);
     }

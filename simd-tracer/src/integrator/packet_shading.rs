@@ -5,7 +5,7 @@
 use super::RAY_EPSILON;
 use crate::ids::SpectrumId;
 use crate::packet::PacketHit;
-use crate::sampling::rng::RngPacket;
+use crate::sampling::sampler::PathSampler;
 use crate::scene::Scene;
 use crate::shading::material::{
     Bsdf, BsdfEvalPacket, BsdfSamplePacket, Fluorescence, LambertSamplePacket, LaneSpectrum,
@@ -17,13 +17,14 @@ use crate::transport::Transport;
 use glam::Vec2;
 use wide::f32x8;
 
-/// Per-lane uniform numbers from the lanes' streams (0 in idle lanes).
-/// Every stream is advanced: a lane outside `active` has ended its path
-/// for good (a packet's active set only shrinks), so its stream is never
-/// read again, and drawing in all 8 lanes spares a branch per lane.
+/// Per-lane uniform numbers of `dimension` (`sampling::sampler`'s
+/// allocation) from the lanes' sampler (0 in idle lanes). Every lane
+/// draws: a lane outside `active` has ended its path for good (a packet's
+/// active set only shrinks), so its numbers are never read again, and
+/// drawing in all 8 lanes spares a branch per lane.
 #[inline(always)]
-pub(super) fn uniforms(rngs: &mut RngPacket, active: LaneMask) -> f32x8 {
-    active.to_simd().select(rngs.next_f32x8(), f32x8::ZERO)
+pub(super) fn uniforms(rngs: &mut PathSampler, dimension: u32, active: LaneMask) -> f32x8 {
+    active.to_simd().select(rngs.draw(dimension), f32x8::ZERO)
 }
 
 /// Ray origins moved off the surface along `n`, relative to the

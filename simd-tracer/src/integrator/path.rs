@@ -10,7 +10,7 @@ use super::{PathContext, RR_MAX_SURVIVAL, SHADOW_EPSILON};
 use crate::ids::SpectrumId;
 use crate::packet::PacketHit;
 use crate::packet::RayPacket;
-use crate::sampling::rng::RngPacket;
+use crate::sampling::sampler::{BounceDimensions, PathSampler};
 use crate::scene::Scene;
 use crate::shading::light_sampler::LightEmission;
 use crate::shading::material::{Fluorescence, LaneSpectrum, SampleUniforms, SpectralRef};
@@ -161,7 +161,7 @@ pub(super) struct BounceLanes<'a, S, W> {
     pub(super) rays: &'a mut RayPacket,
     pub(super) shadow: &'a mut RayPacket,
     pub(super) nee: &'a mut NeeSample<S>,
-    pub(super) rngs: &'a mut RngPacket,
+    pub(super) rngs: &'a mut PathSampler,
     pub(super) wavelengths: &'a mut W,
 }
 
@@ -393,8 +393,12 @@ impl<S: Copy> PathState<S> {
         // packet. A lane samples the emissive triangles with probability
         // `P_tri` (1 without other lights), else a point, directional or
         // environment light (`shading::light_sampler`).
-        let mut u_light = uniforms(rngs, active).to_array();
-        let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
+        let dimensions = BounceDimensions::of(depth);
+        let mut u_light = uniforms(rngs, dimensions.light_select, active).to_array();
+        let (u, v) = (
+            uniforms(rngs, dimensions.light_point, active),
+            uniforms(rngs, dimensions.light_point + 1, active),
+        );
         let sampler = scene.light_sampler();
         let mut others = LaneMask::NONE;
         if sampler.has_others() {
@@ -488,8 +492,11 @@ impl<S: Copy> PathState<S> {
         };
 
         // BSDF sampling for the continuation.
-        let (u, v) = (uniforms(rngs, active), uniforms(rngs, active));
-        let u_lobe = uniforms(rngs, active).to_array();
+        let (u, v) = (
+            uniforms(rngs, dimensions.bsdf_direction, active),
+            uniforms(rngs, dimensions.bsdf_direction + 1, active),
+        );
+        let u_lobe = uniforms(rngs, dimensions.bsdf_lobe, active).to_array();
         let uniforms = SampleUniforms {
             lobe: &u_lobe,
             u,
@@ -530,7 +537,7 @@ impl<S: Copy> PathState<S> {
         // Russian roulette, from the next segment on.
         if depth.saturating_add(1) > settings.rr_depth {
             let mean = self.roulette_proxy(transport, wavelengths).to_array();
-            let u_survive = rngs.next_f32x8().to_array();
+            let u_survive = rngs.draw(dimensions.roulette).to_array();
             let mut survival = [1.0f32; LANES];
             for lane in active.iter() {
                 let q = mean[lane].min(RR_MAX_SURVIVAL);
@@ -573,13 +580,15 @@ impl<S: Copy> PathState<S> {
     /// Settles the fluorescent events of this bounce (after its light
     /// sample, which belongs to the camera side): closes the lanes'
     /// gathered radiance, forms their camera-side spectrum, and moves
-    /// them to the excited side ([`FluorescenceState`]).
+    /// them to the excited side ([`FluorescenceState`]). `depth` is the
+    /// bounce's, whose fluorescence dimension draws the re-emission.
     pub(super) fn settle_fluorescence<T: Transport<Spectra = S>>(
         &mut self,
         transport: &T,
         scene: &Scene,
         wavelengths: &mut T::Wavelengths,
-        rngs: &mut RngPacket,
+        rngs: &mut PathSampler,
+        depth: u32,
     ) {
         let event = self.fluorescence.event;
         if event.lanes.is_empty() {
@@ -602,7 +611,7 @@ impl<S: Copy> PathState<S> {
         self.fluorescence.camera = transport.add(&self.fluorescence.camera, &seen);
         self.fluorescence.pending =
             transport.select(event.lanes, &pending, &self.fluorescence.pending);
-        let u = uniforms(rngs, event.lanes);
+        let u = uniforms(rngs, BounceDimensions::of(depth).fluorescence, event.lanes);
         let excited = transport.fluoresce(scene, wavelengths, &event, u);
         self.throughput = transport.select(event.lanes, &excited, &self.throughput);
         self.fluorescence.shifted = shifted.or(event.lanes);

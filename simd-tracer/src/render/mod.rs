@@ -88,7 +88,7 @@ use crate::integrator::{
     GROUP, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
 };
 use crate::packet::RayPacket;
-use crate::sampling::rng::{Purpose, Rng, RngPacket, SampleKey};
+use crate::sampling::sampler::{PIXEL_X, PIXEL_Y, PassKeys, PathSampler, SamplerKind};
 use crate::scene::Scene;
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
@@ -128,6 +128,8 @@ pub struct RenderSettings {
     pub window: Option<PixelWindow>,
     /// Importance-sample the filter or splat (module docs).
     pub film: FilmMode,
+    /// Independent or Sobol numbers (`sampling::sampler`).
+    pub sampler: SamplerKind,
 }
 
 /// A rectangle of the film, pixels: columns `x .. x + width`, rows
@@ -251,6 +253,7 @@ impl Default for RenderSettings {
             time_limit: None,
             window: None,
             film: FilmMode::Sample,
+            sampler: SamplerKind::default(),
         }
     }
 }
@@ -402,10 +405,10 @@ fn camera_packet<P>(
     settings: &RenderSettings,
     tile: &Tile<P>,
     lanes: &[Option<(u32, u32)>; LANES],
-    path_rngs: &mut RngPacket,
+    path_rngs: &mut PathSampler,
 ) -> (RayPacket, [f32x8; 2]) {
     // Drawn in every lane; lanes without a pixel are never read again.
-    let (u, v) = (path_rngs.next_f32x8(), path_rngs.next_f32x8());
+    let (u, v) = (path_rngs.draw(PIXEL_X), path_rngs.draw(PIXEL_Y));
     let mut pixel_x = [0.0f32; LANES];
     let mut pixel_y = [0.0f32; LANES];
     let mut active = LaneMask::NONE;
@@ -489,8 +492,7 @@ fn render_tile<T: Transport>(
     let pixel_index =
         |(lx, ly): (u32, u32)| u64::from(y0 + ly) * u64::from(settings.width) + u64::from(x0 + lx);
     let window = settings.film_window();
-    let path_key = SampleKey::new(settings.seed, u64::from(pass), Purpose::Path);
-    let wavelength_key = SampleKey::new(settings.seed, u64::from(pass), Purpose::Wavelengths);
+    let keys = PassKeys::new(settings.sampler, settings.seed, pass);
     let splat = Splat::new(settings, tile);
     if splat.is_some() {
         let film = transport.film();
@@ -521,15 +523,15 @@ fn render_tile<T: Transport>(
         let pixels = |lanes: &[Option<(u32, u32)>; LANES]| -> [u64; LANES] {
             core::array::from_fn(|lane| lanes[lane].map_or(u64::MAX - lane as u64, pixel_index))
         };
-        let mut path_rngs: [RngPacket; GROUP] =
-            core::array::from_fn(|g| RngPacket::for_pixels(&pixels(&lanes[g]), path_key));
+        let mut path_rngs: [PathSampler; GROUP] =
+            core::array::from_fn(|g| keys.path_sampler(&pixels(&lanes[g])));
         let cameras: [(RayPacket, [f32x8; 2]); GROUP] = core::array::from_fn(|g| {
             camera_packet(scene, settings, tile, &lanes[g], &mut path_rngs[g])
         });
         let camera_rays: [RayPacket; GROUP] = core::array::from_fn(|g| cameras[g].0);
         let mut wavelengths: [T::Wavelengths; GROUP] = core::array::from_fn(|g| {
             let pixels = pixels(&lanes[g]);
-            transport.sample_wavelengths(|lane| Rng::for_pixel(pixels[lane], wavelength_key))
+            transport.sample_wavelengths(|lane| keys.wavelength_stream(pixels[lane]))
         });
         let context = PathContext {
             transport,

@@ -2,3 +2,5 @@
 
 pub mod distribution;
 pub mod rng;
+pub mod sampler;
+pub mod sobol;

@@ -73,13 +73,13 @@ fn rxs_m_xs_x8(state: u32x8) -> u32x8 {
 
 /// `pcg_hash` (Jarzynski and Olano 2020): a bijection of 32-bit words.
 #[inline(always)]
-fn hash32(x: u32) -> u32 {
+pub(super) fn hash32(x: u32) -> u32 {
     rxs_m_xs(x.wrapping_mul(PCG_MULTIPLIER).wrapping_add(HASH_INCREMENT))
 }
 
 /// [`hash32`] on 8 lanes.
 #[inline(always)]
-fn hash32_x8(x: u32x8) -> u32x8 {
+pub(super) fn hash32_x8(x: u32x8) -> u32x8 {
     rxs_m_xs_x8(x * u32x8::splat(PCG_MULTIPLIER) + u32x8::splat(HASH_INCREMENT))
 }
 
@@ -203,17 +203,25 @@ impl RngPacket {
     pub fn next_f32x8(&mut self) -> f32x8 {
         let old = self.state;
         self.state = old * u32x8::splat(PCG_MULTIPLIER) + self.increment;
-        let top: i32x8 = cast(rxs_m_xs_x8(old) >> 8_u32);
-        f32x8::from_i32x8(top) * f32x8::splat(UNIT_F32_SCALE)
+        unit_f32x8(rxs_m_xs_x8(old))
     }
 }
 
 /// `2⁻²⁴`: 24 random bits to `[0, 1)`.
 const UNIT_F32_SCALE: f32 = 1.0 / (1u32 << 24) as f32;
 
+/// The top 24 of 32 random bits as a uniform `f32` in `[0, 1)`, exactly
+/// `k 2⁻²⁴`.
 #[inline(always)]
-fn to_unit_f32(bits: u32) -> f32 {
+pub(super) fn to_unit_f32(bits: u32) -> f32 {
     (bits >> 8) as f32 * UNIT_F32_SCALE
+}
+
+/// [`to_unit_f32`] on 8 lanes.
+#[inline(always)]
+pub(super) fn unit_f32x8(bits: u32x8) -> f32x8 {
+    let top: i32x8 = cast(bits >> 8_u32);
+    f32x8::from_i32x8(top) * f32x8::splat(UNIT_F32_SCALE)
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@ use super::sampled::{
     PacketWavelengths, SampledTransport, fluoresce_sampled, gather_sampled, sampled_lane,
 };
 use crate::film::{AlphaMode, Buffer, ControlVariateFilm, CvSample};
-use crate::sampling::rng::Rng;
+use crate::sampling::sampler::UniformStream;
 use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum};
 use crate::simd::{LANES, LaneMask};
@@ -76,7 +76,10 @@ impl<const C: usize, const N: usize> Transport for ControlVariateTransport<C, N>
         &self.film
     }
 
-    fn sample_wavelengths(&self, stream: impl Fn(usize) -> Rng) -> Self::Wavelengths {
+    fn sample_wavelengths<R: UniformStream>(
+        &self,
+        stream: impl Fn(usize) -> R,
+    ) -> Self::Wavelengths {
         self.sampled.sample_wavelengths(stream)
     }
 

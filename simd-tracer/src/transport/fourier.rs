@@ -4,7 +4,7 @@
 use super::{Transport, excited_ids, id_spectra};
 use crate::film::{Buffer, FourierFilm, FourierSample, all_finite};
 use crate::ids::SpectrumId;
-use crate::sampling::rng::Rng;
+use crate::sampling::sampler::UniformStream;
 use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum, SpectralRef};
 use crate::simd::{LANES, LaneMask};
@@ -202,7 +202,7 @@ impl<const N: usize> Transport for FourierTransport<N> {
         &self.film
     }
 
-    fn sample_wavelengths(&self, _stream: impl Fn(usize) -> Rng) {}
+    fn sample_wavelengths<R: UniformStream>(&self, _stream: impl Fn(usize) -> R) {}
 
     fn one(&self) -> Self::Spectra {
         FourierSpectrum::constant(f32x8::splat(1.0))

@@ -76,7 +76,7 @@ use super::sampled::{
 use super::{FilmSample, SplitLanes, Transport, id_spectra};
 use crate::film::{Buffer, FourierSample, HybridFilm, HybridSample, all_finite};
 use crate::ids::SpectrumId;
-use crate::sampling::rng::{Rng, RngPacket};
+use crate::sampling::sampler::{PathSampler, UniformStream, wavelength_dimension};
 use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum};
 use crate::simd::{LANES, LaneMask};
@@ -222,7 +222,10 @@ impl<const N: usize, const C: usize> Transport for HybridTransport<N, C> {
     }
 
     /// Nothing is drawn: a lane draws its wavelengths at its split.
-    fn sample_wavelengths(&self, _stream: impl Fn(usize) -> Rng) -> Self::Wavelengths {
+    fn sample_wavelengths<R: UniformStream>(
+        &self,
+        _stream: impl Fn(usize) -> R,
+    ) -> Self::Wavelengths {
         HybridWavelengths {
             sampled: self.idle,
             split: LaneMask::NONE,
@@ -353,13 +356,14 @@ impl<const N: usize, const C: usize> Transport for HybridTransport<N, C> {
         throughput: &mut Self::Spectra,
         wavelengths: &mut Self::Wavelengths,
         lanes: SplitLanes,
-        rngs: &mut RngPacket,
+        rngs: &mut PathSampler,
     ) {
         let new = lanes.lanes.and_not(wavelengths.split);
         if new.is_empty() {
             return;
         }
-        let u: [[f32; LANES]; C] = core::array::from_fn(|_| rngs.next_f32x8().to_array());
+        let u: [[f32; LANES]; C] =
+            core::array::from_fn(|i| rngs.draw(wavelength_dimension(i as u32)).to_array());
         for lane in new.iter() {
             let drawn = SampledWavelengths::<C>::sample(
                 self.sampled.strategy,

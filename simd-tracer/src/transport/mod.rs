@@ -24,7 +24,7 @@
 
 use crate::film::Film;
 use crate::ids::SpectrumId;
-use crate::sampling::rng::{Rng, RngPacket};
+use crate::sampling::sampler::{PathSampler, UniformStream};
 use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum};
 use crate::simd::{LANES, LaneMask};
@@ -69,21 +69,25 @@ pub trait Transport: Sync {
     /// constant, so the other transports' bounces never look for it.
     const SPLITS_AT_DISPERSION: bool = false;
     /// Moves the lanes of `lanes` that still carry a series to sampled
-    /// wavelengths drawn from `rngs`, their throughput to the series'
+    /// wavelengths drawn from `rngs` (the wavelength dimensions,
+    /// `sampling::sampler`), their throughput to the series'
     /// values there (`hybrid.rs`); nothing for the other transports.
     fn split(
         &self,
         _throughput: &mut Self::Spectra,
         _wavelengths: &mut Self::Wavelengths,
         _lanes: SplitLanes,
-        _rngs: &mut RngPacket,
+        _rngs: &mut PathSampler,
     ) {
     }
     /// Draws the wavelengths of a packet; `stream(lane)` makes a lane's
-    /// wavelength random stream on demand (hashing its key costs about as
+    /// wavelength numbers on demand (hashing its key costs about as
     /// much as the camera ray, so transports that draw no wavelengths,
     /// like Fourier, never make one).
-    fn sample_wavelengths(&self, stream: impl Fn(usize) -> Rng) -> Self::Wavelengths;
+    fn sample_wavelengths<R: UniformStream>(
+        &self,
+        stream: impl Fn(usize) -> R,
+    ) -> Self::Wavelengths;
     /// The hero wavelength of a lane (`None` where light is not sampled).
     fn hero_wavelength(&self, _wavelengths: &Self::Wavelengths, _lane: usize) -> Option<f32> {
         None
@@ -217,6 +221,7 @@ mod tests {
     };
     use super::*;
     use crate::film::{Buffer, FourierFilm};
+    use crate::sampling::rng::Rng;
     use crate::shading::material::SpectralRef;
     use spectral_core::FourierSpectrum;
     use spectral_core::SpectralRange;

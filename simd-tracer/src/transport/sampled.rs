@@ -4,7 +4,7 @@
 use super::Transport;
 use super::fourier::reference_value;
 use crate::film::XyzFilm;
-use crate::sampling::rng::Rng;
+use crate::sampling::sampler::UniformStream;
 use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum, SpectralRef};
 use crate::simd::{LANES, LaneMask};
@@ -232,7 +232,10 @@ impl<const C: usize> Transport for SampledTransport<C> {
         &XyzFilm
     }
 
-    fn sample_wavelengths(&self, stream: impl Fn(usize) -> Rng) -> Self::Wavelengths {
+    fn sample_wavelengths<R: UniformStream>(
+        &self,
+        stream: impl Fn(usize) -> R,
+    ) -> Self::Wavelengths {
         let lanes = core::array::from_fn(|lane| {
             let mut rng = stream(lane);
             let u: [f32; C] = core::array::from_fn(|_| rng.next_f32());

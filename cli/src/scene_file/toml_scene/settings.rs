@@ -11,6 +11,7 @@ use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults, TRANSPORT_NAMES};
 use crate::sensor_file::{ObserverChoice, load_sensor_csv};
 use glam::{Mat3, Vec3};
 use simd_tracer::film::FilmMode;
+use simd_tracer::sampling::sampler::SamplerKind;
 use simd_tracer::scene::camera::{Camera, CameraError};
 use simd_tracer::spectra::environment::EnvironmentMap;
 
@@ -31,6 +32,7 @@ impl Loader<'_> {
                 "film",
                 "transport",
                 "coeffs",
+                "sampler",
                 "observer",
                 "sensor",
             ],
@@ -103,6 +105,15 @@ impl Loader<'_> {
                             ),
                         )),
                     },
+                })
+                .transpose()?,
+            sampler: table
+                .get("sampler")
+                .map(|i| {
+                    let name = i.string(src)?;
+                    SamplerKind::from_name(name).ok_or_else(|| {
+                        i.err(src, format!("sampler `{name}`: use independent or sobol"))
+                    })
                 })
                 .transpose()?,
             ..RenderDefaults::default()
