@@ -596,7 +596,6 @@ fn set_lane(hit: &mut PacketHit, lane: usize, found: &InstanceHit) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::WIDE_WIDTH;
     use super::*;
 
     fn cube() -> Vec<[Vec3; 3]> {
@@ -749,10 +748,8 @@ mod tests {
         let side = 12;
         let (bvh, triangles) = field(side);
         bvh.validate(&[&triangles]).unwrap();
-        // N nodes of at most 8 children hold N − 1 nodes and L leaves:
-        // N ≥ (L − 1) / 7.
-        let leaves = side * side;
-        assert!(bvh.top_wide.node_count() >= (leaves - 1).div_ceil(WIDE_WIDTH - 1));
+        // More binary leaves than one node's 8 children: several levels.
+        assert!(bvh.top_wide.node_count() > 1);
         let mut state = 7u32;
         let mut unit = || {
             state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
