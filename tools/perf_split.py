@@ -42,6 +42,8 @@ PARTS = [
         [
             "simd-tracer/src/integrator/",
             "simd-tracer/src/shading/",
+            # The environment map's light-sampling tables (not random numbers).
+            "simd-tracer/src/sampling/distribution.rs",
             "simd-tracer/src/spectra/",
             "simd-tracer/src/simd/",
             "simd-tracer/src/packet.rs",

@@ -24,8 +24,10 @@
 //!   runs the mesh's packet traversal with the lanes' current `t_max`;
 //! * incoherent rays ([`InstanceBvh::intersect_lanes`],
 //!   [`InstanceBvh::occluded_lanes`], bounces and shadows): one ray at a
-//!   time through obvhs' top-level traversal and each mesh's 8-wide tree,
-//!   as the soup's large trees answer them;
+//!   time through the top level collapsed to an 8-wide tree
+//!   ([`super::top_level`]: 8 instance boxes per slab test, nearest first,
+//!   early exit for shadows) and each mesh's 8-wide tree, as the soup's
+//!   large trees answer them;
 //! * the oracle ([`InstanceBvh::intersect`], [`InstanceBvh::occluded`]):
 //!   obvhs' per-ray traversal at both levels with the scalar triangle test.
 //!
@@ -37,6 +39,7 @@
 
 use super::build::tree_depth;
 use super::packet_traversal::{PacketRays, traverse_nodes};
+use super::top_level::TopLevel;
 use super::{Bvh, InlineStack, NodeStack, WideStack};
 use crate::packet::{PacketHit, Ray, RayPacket};
 use crate::simd::LaneMask;
@@ -104,6 +107,8 @@ pub struct InstanceBvh {
     /// The top-level tree: leaves index `top.primitive_indices`, which
     /// index `placed`.
     top: Bvh2,
+    /// `top` collapsed to 8 children per node, for single rays.
+    top_wide: TopLevel,
 }
 
 /// `m · (x, y, z) (+ m3 if `point`)`, one fixed order of operations for
@@ -216,6 +221,7 @@ impl InstanceBvh {
             meshes,
             placed,
             object_to_world: instances.iter().map(|i| i.object_to_world).collect(),
+            top_wide: TopLevel::build(&top),
             top,
         })
     }
@@ -268,6 +274,7 @@ impl InstanceBvh {
             + self.meshes.iter().map(Bvh::memory_bytes).sum::<usize>()
             + self.instance_memory_bytes()
             + top
+            + self.top_wide.memory_bytes()
     }
 
     /// Bytes held per instance (its record and world map), without the
@@ -281,7 +288,8 @@ impl InstanceBvh {
     /// ([`Bvh::validate`]); every instance's mesh exists and its record is
     /// the inverse of its world map; every top-level node bounds its
     /// children, every leaf its instances' world boxes (`world_box` of
-    /// the mesh's triangles), and every instance sits in exactly one leaf.
+    /// the mesh's triangles), and every instance sits in exactly one leaf;
+    /// the 8-wide top level likewise (`TopLevel::validate`).
     pub fn validate(&self, mesh_triangles: &[&[[Vec3; 3]]]) -> Result<(), String> {
         if mesh_triangles.len() != self.meshes.len() {
             return Err(format!(
@@ -379,7 +387,13 @@ impl InstanceBvh {
         if tree_depth(nodes) >= self.top.max_depth {
             return Err("the top-level tree is deeper than its traversal stack".to_owned());
         }
-        Ok(())
+        self.top_wide.validate(&self.top, |slot| {
+            let (instance, placed) = self.at_slot(slot)?;
+            world_box(
+                mesh_triangles.get(placed.mesh as usize)?,
+                self.object_to_world.get(instance as usize)?,
+            )
+        })
     }
 
     /// `ray` in the object coordinates of `placed` (same `t`).
@@ -399,15 +413,9 @@ impl InstanceBvh {
         Some((instance, self.placed.get(instance as usize)?))
     }
 
-    /// Per-ray closest hit through both levels, nearer than `ray.t_max`,
-    /// with `hit_in_mesh` the mesh's query (its tree, `ray` in object
-    /// coordinates).
-    #[inline(always)]
-    fn intersect_with(
-        &self,
-        ray: &Ray,
-        mut hit_in_mesh: impl FnMut(&Bvh, &Ray) -> Option<super::Hit>,
-    ) -> Option<InstanceHit> {
+    /// Scalar closest hit (the oracle: obvhs' traversal at both levels and
+    /// the scalar triangle test), nearer than `ray.t_max`.
+    pub fn intersect(&self, ray: &Ray) -> Option<InstanceHit> {
         let mut best = None;
         let mut hit = RayHit::none();
         self.top
@@ -419,7 +427,7 @@ impl InstanceBvh {
                     return f32::INFINITY;
                 };
                 let local = Self::object_ray(placed, ray, current.tmax);
-                match hit_in_mesh(mesh, &local) {
+                match mesh.intersect(&local) {
                     Some(h) => {
                         best = Some(InstanceHit {
                             t: h.t,
@@ -436,30 +444,52 @@ impl InstanceBvh {
         best
     }
 
-    /// Scalar closest hit (the oracle: obvhs' traversal at both levels and
-    /// the scalar triangle test), nearer than `ray.t_max`.
-    pub fn intersect(&self, ray: &Ray) -> Option<InstanceHit> {
-        self.intersect_with(ray, Bvh::intersect)
+    /// Closest hit of one ray through the 8-wide top level and the meshes'
+    /// 8-wide trees (`top` and `mesh` are their scratch stacks).
+    pub fn intersect_wide(
+        &self,
+        ray: &Ray,
+        top: &mut WideStack,
+        mesh: &mut WideStack,
+    ) -> Option<InstanceHit> {
+        let mut best = None;
+        self.top_wide.intersect(ray, top, |slot, t_max| {
+            let (instance, placed) = self.at_slot(slot)?;
+            let tree = self.meshes.get(placed.mesh as usize)?;
+            let h = tree.intersect_wide(&Self::object_ray(placed, ray, t_max), mesh)?;
+            best = Some(InstanceHit {
+                t: h.t,
+                u: h.u,
+                v: h.v,
+                triangle: h.triangle,
+                instance,
+            });
+            Some(h.t)
+        });
+        best
     }
 
-    /// Closest hit of one ray through the meshes' 8-wide trees.
-    pub fn intersect_wide(&self, ray: &Ray, stack: &mut WideStack) -> Option<InstanceHit> {
-        self.intersect_with(ray, |mesh, local| mesh.intersect_wide(local, stack))
+    /// Occlusion of one ray through the 8-wide top level and the meshes'
+    /// 8-wide trees (`top` and `mesh` are their scratch stacks).
+    pub fn occluded_wide(&self, ray: &Ray, top: &mut WideStack, mesh: &mut WideStack) -> bool {
+        self.top_wide.occluded(ray, top, |slot| {
+            self.at_slot(slot).is_some_and(|(_, placed)| {
+                self.meshes.get(placed.mesh as usize).is_some_and(|tree| {
+                    tree.occluded_wide(&Self::object_ray(placed, ray, ray.t_max), mesh)
+                })
+            })
+        })
     }
 
-    /// Scalar occlusion for `t ∈ (0, ray.t_max)` (the oracle).
+    /// Scalar occlusion for `t ∈ (0, ray.t_max)` (the oracle: obvhs'
+    /// traversal at both levels and the scalar triangle test).
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.occluded_with(ray, |mesh, local| mesh.occluded(local))
-    }
-
-    #[inline(always)]
-    fn occluded_with(&self, ray: &Ray, mut blocked: impl FnMut(&Bvh, &Ray) -> bool) -> bool {
         !self
             .top
             .ray_traverse_miss(Bvh::obvhs_ray(ray), |current, slot| {
                 let found = self.at_slot(slot).is_some_and(|(_, placed)| {
                     self.meshes.get(placed.mesh as usize).is_some_and(|mesh| {
-                        blocked(mesh, &Self::object_ray(placed, ray, current.tmax))
+                        mesh.occluded(&Self::object_ray(placed, ray, current.tmax))
                     })
                 });
                 // Any positive distance below `tmax` ends the traversal.
@@ -468,33 +498,31 @@ impl InstanceBvh {
     }
 
     /// Continues `hit` (the soup's hits of `packet`, [`PacketHit`]
-    /// convention) with the instances, one ray at a time through the
-    /// meshes' 8-wide trees: lanes with a nearer instance hit take it.
+    /// convention) with the instances, one ray at a time through the 8-wide
+    /// top level and the meshes' 8-wide trees: lanes with a nearer instance
+    /// hit take it.
     pub fn intersect_lanes(&self, packet: &RayPacket, hit: &mut PacketHit) {
-        let mut stack = WideStack::new();
+        let (mut top, mut mesh) = (WideStack::new(), WideStack::new());
         let t = hit.t.to_array();
         for lane in packet.active.iter() {
             let ray = Ray {
                 t_max: t[lane],
                 ..packet.ray(lane)
             };
-            if let Some(found) = self.intersect_wide(&ray, &mut stack) {
+            if let Some(found) = self.intersect_wide(&ray, &mut top, &mut mesh) {
                 set_lane(hit, lane, &found);
             }
         }
     }
 
     /// The lanes of `packet.active` blocked by an instance, one ray at a
-    /// time through the meshes' 8-wide trees.
+    /// time through the 8-wide top level and the meshes' 8-wide trees.
     pub fn occluded_lanes(&self, packet: &RayPacket) -> LaneMask {
-        let mut stack = WideStack::new();
+        let (mut top, mut mesh) = (WideStack::new(), WideStack::new());
         packet
             .active
             .iter()
-            .filter(|&lane| {
-                let ray = packet.ray(lane);
-                self.occluded_with(&ray, |mesh, local| mesh.occluded_wide(local, &mut stack))
-            })
+            .filter(|&lane| self.occluded_wide(&packet.ray(lane), &mut top, &mut mesh))
             .fold(LaneMask::NONE, LaneMask::with)
     }
 
@@ -661,6 +689,18 @@ mod tests {
         broken.top.primitive_indices.swap(0, 1);
         broken.top.primitive_indices[1] = broken.top.primitive_indices[0];
         assert!(broken.validate(&lists).is_err());
+        // The 8-wide top level: a leaf box that no longer bounds its
+        // instance, a leaf dropped (its instance in no leaf), a stale
+        // collapse (built from another tree).
+        let mut broken = bvh.clone();
+        broken.top_wide.shrink_a_leaf_box();
+        assert!(broken.validate(&lists).unwrap_err().contains("bound"));
+        let mut broken = bvh.clone();
+        broken.top_wide.drop_a_leaf();
+        assert!(broken.validate(&lists).unwrap_err().contains("no leaf"));
+        let mut broken = bvh.clone();
+        broken.top_wide = TopLevel::default();
+        assert!(broken.validate(&lists).is_err());
         // Refused at build: a singular map and a missing mesh.
         let singular = InstanceInput {
             mesh: 0,
@@ -676,6 +716,85 @@ mod tests {
         assert!(
             InstanceBvh::build(vec![Bvh::build(&triangles)], &[&triangles], &[missing]).is_err()
         );
+    }
+
+    /// A field of `side × side` cubes, scaled, rotated and some
+    /// overlapping, with a top level several 8-wide nodes deep.
+    fn field(side: usize) -> (InstanceBvh, Vec<[Vec3; 3]>) {
+        let triangles = cube();
+        let instances: Vec<InstanceInput> = (0..side * side)
+            .map(|k| {
+                let (i, j) = ((k % side) as f32, (k / side) as f32);
+                InstanceInput {
+                    mesh: 0,
+                    object_to_world: Affine3A::from_scale_rotation_translation(
+                        Vec3::new(0.4 + 0.05 * i, 0.3 + 0.04 * j, 0.5),
+                        glam::Quat::from_rotation_y(0.37 * k as f32)
+                            * glam::Quat::from_rotation_x(0.21 * k as f32),
+                        Vec3::new(1.6 * i, 0.2 * ((3 * k) % 5) as f32, -1.6 * j),
+                    ),
+                }
+            })
+            .collect();
+        let bvh = InstanceBvh::build(vec![Bvh::build(&triangles)], &[&triangles], &instances);
+        (bvh.unwrap_or_else(|e| panic!("{e}")), triangles)
+    }
+
+    /// A field of 144 instances: the 8-wide top level has several levels,
+    /// validates, and the single-ray queries through it give the oracle's
+    /// hits bit for bit (same instance and triangle) and its occlusion.
+    #[test]
+    fn wide_top_level_equals_the_oracle_on_a_field() {
+        let side = 12;
+        let (bvh, triangles) = field(side);
+        bvh.validate(&[&triangles]).unwrap();
+        // More binary leaves than one node's 8 children: several levels.
+        assert!(bvh.top_wide.node_count() > 1);
+        let mut state = 7u32;
+        let mut unit = || {
+            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            (state >> 8) as f32 / (1 << 24) as f32
+        };
+        let extent = 1.6 * side as f32;
+        let (mut hits, mut blocked, mut rays) = (0, 0, 0);
+        let (mut top, mut mesh) = (WideStack::new(), WideStack::new());
+        for _ in 0..4000 {
+            // From above the field at a slant, or along it at grazing
+            // heights, towards a random point of it.
+            let target = Vec3::new(extent * unit(), 0.8 * unit() - 0.2, -extent * unit());
+            let origin = if unit() < 0.5 {
+                Vec3::new(extent * unit(), 6.0, -extent * unit())
+            } else {
+                Vec3::new(-2.0, 1.0 * unit(), -extent * unit())
+            };
+            let ray = Ray {
+                origin,
+                direction: target - origin,
+                t_max: if unit() < 0.3 { 0.7 } else { f32::INFINITY },
+            };
+            let oracle = bvh.intersect(&ray);
+            let wide = bvh.intersect_wide(&ray, &mut top, &mut mesh);
+            let key = |h: Option<InstanceHit>| {
+                h.map(|h| {
+                    (
+                        h.t.to_bits(),
+                        h.u.to_bits(),
+                        h.v.to_bits(),
+                        h.triangle,
+                        h.instance,
+                    )
+                })
+            };
+            assert_eq!(key(wide), key(oracle), "{ray:?}");
+            let occluded = bvh.occluded_wide(&ray, &mut top, &mut mesh);
+            assert_eq!(occluded, bvh.occluded(&ray), "{ray:?}");
+            assert_eq!(occluded, oracle.is_some());
+            hits += usize::from(oracle.is_some());
+            blocked += usize::from(occluded);
+            rays += 1;
+        }
+        assert!(hits > rays / 5 && hits < rays, "{hits} of {rays}");
+        assert!(blocked > rays / 5, "{blocked} of {rays}");
     }
 
     /// Every query path gives the scalar oracle's hits: the same mapped

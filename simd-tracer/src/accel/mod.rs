@@ -170,6 +170,7 @@ mod flat;
 pub use flat::TriangleSubset;
 mod instances;
 pub use instances::{BOUNDS_PAD, InstanceBvh, InstanceHit, InstanceInput};
+mod top_level;
 mod wide_tree;
 use wide_tree::WideBvh;
 pub use wide_tree::{WIDTH as WIDE_WIDTH, WideStack};

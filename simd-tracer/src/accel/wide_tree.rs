@@ -65,7 +65,7 @@ pub const WIDTH: usize = 8;
 /// A node: the boxes of up to [`WIDTH`] children in structure-of-arrays
 /// form and what each child is.
 #[derive(Debug, Clone, Copy)]
-struct WideNode {
+pub(super) struct WideNode {
     /// Box minima, per axis, child in lane.
     min: [f32x8; 3],
     /// Box maxima, per axis, child in lane.
@@ -73,12 +73,50 @@ struct WideNode {
     /// Child `k` is an inner node (`count[k] == 0`: `index[k]` is a node)
     /// or a leaf (`index[k]` is its first lane, block × [`WIDTH`] + lane in
     /// the block, and `count[k]` its number of triangles, in consecutive
-    /// lanes).
-    index: [u32; WIDTH],
+    /// lanes; in the instances' top level, [`super::top_level`], its first
+    /// top-level slot and its number of slots).
+    pub(super) index: [u32; WIDTH],
     /// See `index`.
-    count: [u32; WIDTH],
+    pub(super) count: [u32; WIDTH],
     /// Bit `k`: child `k` exists.
-    used: u8,
+    pub(super) used: u8,
+}
+
+impl WideNode {
+    /// A node without children.
+    const EMPTY: Self = Self {
+        min: [f32x8::ZERO; 3],
+        max: [f32x8::ZERO; 3],
+        index: [0; WIDTH],
+        count: [0; WIDTH],
+        used: 0,
+    };
+
+    /// The box of child `k`: minimum and maximum corner.
+    pub(super) fn child_box(&self, k: usize) -> (Vec3, Vec3) {
+        let lane = |v: [f32x8; 3]| Vec3::from(v.map(|axis| axis.to_array()[k % WIDTH]));
+        (lane(self.min), lane(self.max))
+    }
+
+    /// Sets the box of child `k`.
+    fn set_child_box(&mut self, k: usize, min: Vec3, max: Vec3) {
+        for axis in 0..3 {
+            let mut lo = self.min[axis].to_array();
+            let mut hi = self.max[axis].to_array();
+            lo[k] = min[axis];
+            hi[k] = max[axis];
+            self.min[axis] = f32x8::new(lo);
+            self.max[axis] = f32x8::new(hi);
+        }
+    }
+
+    /// Moves child `k`'s box maximum onto its minimum (a corruption for
+    /// validation tests).
+    #[cfg(test)]
+    pub(super) fn collapse_child_box(&mut self, k: usize) {
+        let (min, _) = self.child_box(k);
+        self.set_child_box(k, min, min);
+    }
 }
 
 /// Up to [`WIDTH`] prepared triangles, field by field, triangle in lane.
@@ -152,7 +190,7 @@ impl TriangleBlock {
 
 /// One ray splatted across the SIMD width, with the same derived values as
 /// the scalar test.
-struct SplatRay {
+pub(super) struct SplatRay {
     origin: [f32x8; 3],
     direction: [f32x8; 3],
     inv_direction: [f32x8; 3],
@@ -161,7 +199,7 @@ struct SplatRay {
 }
 
 impl SplatRay {
-    fn new(ray: &Ray) -> Self {
+    pub(super) fn new(ray: &Ray) -> Self {
         let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
         Self {
             origin: o.map(f32x8::splat),
@@ -175,7 +213,7 @@ impl SplatRay {
     /// Slab test of a node's children: entry distances and the bit mask of
     /// used children whose box the ray enters before `t_max`.
     #[inline(always)]
-    fn children(&self, node: &WideNode, t_max: f32) -> (f32x8, u32) {
+    pub(super) fn children(&self, node: &WideNode, t_max: f32) -> (f32x8, u32) {
         let mut entry = f32x8::NEG_INFINITY;
         let mut exit = f32x8::INFINITY;
         for axis in 0..3 {
@@ -221,11 +259,11 @@ impl SplatRay {
 
 /// A stack entry: child index (a node, or a leaf's first lane), triangle
 /// count (0: inner node), entry distance.
-type Entry = (u32, u32, f32);
+pub(super) type Entry = (u32, u32, f32);
 
 /// A reusable traversal stack for 8-wide tree queries (one per packet of
 /// queries saves re-initialising it per ray).
-pub struct WideStack(InlineStack<Entry>);
+pub struct WideStack(pub(super) InlineStack<Entry>);
 
 impl WideStack {
     /// An empty stack.
@@ -304,6 +342,62 @@ fn half_area(node: &Bvh2Node) -> f32 {
     extent.x * extent.y + extent.y * extent.z + extent.z * extent.x
 }
 
+/// Collapses the binary tree `nodes2` into 8-wide nodes (module docs,
+/// "Construction"): a node's children are its binary children, the one of
+/// largest surface area among those that `opens` replaced by its own two
+/// until there are [`WIDTH`] or none opens; an unopened child is a leaf,
+/// whose (index, count) `leaf` gives (count > 0), called in the order of
+/// the nodes' creation. Node 0 is the root; empty for an empty tree.
+pub(super) fn collapse(
+    nodes2: &[Bvh2Node],
+    opens: impl Fn(usize) -> bool,
+    mut leaf: impl FnMut(usize) -> (u32, u32),
+) -> Vec<WideNode> {
+    if nodes2.is_empty() {
+        return Vec::new();
+    }
+    let children_of = |index: usize| {
+        let left = nodes2[index].first_index as usize;
+        [left, left + 1].into_iter().filter(|&c| c < nodes2.len())
+    };
+    let mut nodes = vec![WideNode::EMPTY];
+    let mut work = vec![(0usize, 0usize)];
+    while let Some((wide_index, root2)) = work.pop() {
+        let mut children: Vec<usize> = if opens(root2) {
+            children_of(root2).collect()
+        } else {
+            vec![root2]
+        };
+        while children.len() < WIDTH {
+            let Some(k) = (0..children.len())
+                .filter(|&k| opens(children[k]))
+                .max_by(|&a, &b| {
+                    half_area(&nodes2[children[a]]).total_cmp(&half_area(&nodes2[children[b]]))
+                })
+            else {
+                break;
+            };
+            let opened = children.swap_remove(k);
+            children.extend(children_of(opened));
+        }
+        let mut node = WideNode::EMPTY;
+        for (k, &child) in children.iter().enumerate() {
+            let aabb = nodes2[child].aabb();
+            node.set_child_box(k, Vec3::from(aabb.min), Vec3::from(aabb.max));
+            node.used |= 1 << k;
+            if opens(child) {
+                node.index[k] = super::index_u32(nodes.len());
+                work.push((nodes.len(), child));
+                nodes.push(WideNode::EMPTY);
+            } else {
+                (node.index[k], node.count[k]) = leaf(child);
+            }
+        }
+        nodes[wide_index] = node;
+    }
+    nodes
+}
+
 impl WideBvh {
     /// Collapses `bvh2` (whose leaves index `prepared`) into a wide tree.
     pub(super) fn build(bvh2: &Bvh2, prepared: &[PreparedTriangle]) -> Self {
@@ -332,67 +426,22 @@ impl WideBvh {
                 count.get(left).copied().unwrap_or(0) + count.get(left + 1).copied().unwrap_or(0)
             };
         }
-        let opens = |index: usize| !nodes2[index].is_leaf() && count[index] > WIDTH;
-        let children_of = |index: usize| {
-            let left = nodes2[index].first_index as usize;
-            [left, left + 1].into_iter().filter(|&c| c < nodes2.len())
-        };
-
-        let mut wide = Self::default();
-        let empty = WideNode {
-            min: [f32x8::ZERO; 3],
-            max: [f32x8::ZERO; 3],
-            index: [0; WIDTH],
-            count: [0; WIDTH],
-            used: 0,
-        };
-        wide.nodes.push(empty);
         let mut staged = StagedBlocks::default();
-        let mut work = vec![(0usize, 0usize)];
-        while let Some((wide_index, root2)) = work.pop() {
-            let mut children: Vec<usize> = if opens(root2) {
-                children_of(root2).collect()
-            } else {
-                vec![root2]
-            };
-            while children.len() < WIDTH {
-                let Some(k) =
-                    (0..children.len())
-                        .filter(|&k| opens(children[k]))
-                        .max_by(|&a, &b| {
-                            half_area(&nodes2[children[a]])
-                                .total_cmp(&half_area(&nodes2[children[b]]))
-                        })
-                else {
-                    break;
-                };
-                let opened = children.swap_remove(k);
-                children.extend(children_of(opened));
-            }
-            let mut node = empty;
-            for (k, &child) in children.iter().enumerate() {
-                let aabb = nodes2[child].aabb();
-                for axis in 0..3 {
-                    let mut min = node.min[axis].to_array();
-                    let mut max = node.max[axis].to_array();
-                    min[k] = aabb.min[axis];
-                    max[k] = aabb.max[axis];
-                    node.min[axis] = f32x8::new(min);
-                    node.max[axis] = f32x8::new(max);
-                }
-                node.used |= 1 << k;
-                if opens(child) {
-                    node.index[k] = super::index_u32(wide.nodes.len());
-                    work.push((wide.nodes.len(), child));
-                    wide.nodes.push(empty);
-                } else {
-                    let slots = Self::leaf_slots(nodes2, child);
-                    node.index[k] = super::index_u32(staged.place(&slots));
-                    node.count[k] = super::index_u32(slots.len());
-                }
-            }
-            wide.nodes[wide_index] = node;
-        }
+        let nodes = collapse(
+            nodes2,
+            |index| !nodes2[index].is_leaf() && count[index] > WIDTH,
+            |index| {
+                let slots = Self::leaf_slots(nodes2, index);
+                (
+                    super::index_u32(staged.place(&slots)),
+                    super::index_u32(slots.len()),
+                )
+            },
+        );
+        let mut wide = Self {
+            nodes,
+            blocks: Vec::new(),
+        };
         wide.blocks = staged
             .blocks
             .iter()
@@ -542,7 +591,7 @@ impl WideBvh {
     /// Tests a node's children; returns the nearest hit child and pushes the
     /// others, farthest first.
     #[inline(always)]
-    fn visit_children(
+    pub(super) fn visit_children(
         node: &WideNode,
         ray: &SplatRay,
         t_max: f32,
