@@ -11,6 +11,8 @@
 //! * [`XyzFilm`]: the sampled transports' XYZ estimates, averaged.
 //! * [`ControlVariateFilm`]: per pixel and XYZ channel a control variate,
 //!   `α` pooled over all pixels ([`AlphaMode::Shared`]) or per pixel.
+//! * [`BinnedFilm<C>`]: sampled radiance per wavelength bin with its
+//!   standard error (a pixel's spectrum in the viewer).
 //!
 //! **Film modes** ([`FilmMode`]). With [`FilmMode::Sample`] (the default)
 //! the pixel filter is importance-sampled: each sample lands in its own
@@ -36,10 +38,12 @@
 
 pub mod filter;
 
+mod binned;
 mod control_variate;
 mod fourier;
 mod xyz;
 
+pub use binned::{BinnedEstimate, BinnedFilm, BinnedPixel, BinnedSample, SpectralBins};
 pub use control_variate::{AlphaMode, ControlVariateFilm, CvPixel, CvSample};
 pub use fourier::{FourierFilm, FourierPixel, FourierSample};
 pub use xyz::{XyzFilm, XyzPixel};

@@ -17,6 +17,8 @@
 //!   earlier passes only — pooled over all pixels ([`AlphaMode::Shared`](crate::film::AlphaMode::Shared),
 //!   the default: a single pixel's tens of samples give a noisy `α`) or per
 //!   pixel ([`AlphaMode::PerPixel`](crate::film::AlphaMode::PerPixel)).
+//! * [`BinnedSampledTransport<C>`]: the sampled transport whose film bins
+//!   radiance by wavelength (one pixel's spectrum, for the viewer).
 
 use crate::film::Film;
 use crate::ids::SpectrumId;
@@ -32,6 +34,8 @@ mod sampled;
 pub use sampled::{PacketWavelengths, SampledTransport};
 mod control_variate;
 pub use control_variate::ControlVariateTransport;
+mod binned;
+pub use binned::BinnedSampledTransport;
 /// A spectral representation of light paths (module docs).
 pub trait Transport: Sync {
     /// Per-packet wavelengths (unit for Fourier).
