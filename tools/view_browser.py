@@ -439,7 +439,7 @@ def docs_screenshot(fspec, out):
     try:
         process, url = start_view(fspec, "lamps", "--width", "256", "--height", "256",
                                   "--max-passes", "64")
-        driver.set_window_size(760, 700)
+        driver.set_window_size(760, 900)
         driver.get(url)
         wait_for(driver, 0, 64)
         from selenium.webdriver.common.action_chains import ActionChains

@@ -139,8 +139,8 @@ async function start() {
     $("split-labels").hidden = !frame.split;
     if (frame.split) {
       const half = (h) => `${describeTransport(h.transport)} · ${h.passes} spp · ${h.seconds.toFixed(2)} s`;
-      $("split-left").textContent = "◧ " + half(frame.split.left);
-      $("split-right").textContent = half(frame.split.right) + " ◨";
+      $("split-left").textContent = "◧ left: " + half(frame.split.left);
+      $("split-right").textContent = "◨ right: " + half(frame.split.right);
     }
     const seconds = frame.elapsed_ms / 1000;
     const rate = frame.passes / Math.max(seconds, 1e-9);
