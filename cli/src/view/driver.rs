@@ -13,7 +13,7 @@
 //! by whoever sends them. The driver also stops when the last page closes
 //! (no event stream left) and starts again from pass 0 when one opens.
 //!
-//! **Split view at equal time** ([`render_split`]). The left half of the
+//! **Split view at equal time** (`render_split`). The left half of the
 //! image is rendered with the settings' transport, the right half with
 //! the split transport, each as a crop window of the same film (so each
 //! half's pixels are that transport's full render's). The halves take

@@ -91,8 +91,8 @@ pub struct BinnedSample<const C: usize> {
     pub weight: [f32; C],
 }
 
-/// The film of [`BinnedFilm`]: bins, and the number of wavelengths per
-/// path its samples carry.
+/// Radiance per wavelength bin (module docs): its bins, and `C`, the
+/// wavelengths per path of its samples.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BinnedFilm<const C: usize> {
     bins: SpectralBins,
