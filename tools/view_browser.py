@@ -8,16 +8,22 @@
         orbits the camera, and checks each screenshot: not black, different
         from the one before, and (while the page's settings have a
         `fspec render` equivalent) equal to a file render of the same
-        settings within the noise of that render. Prints SKIP and exits 0
-        where no browser or Selenium exists.
+        settings within the noise of that render; toggles the split view
+        (Fourier | sampled at equal time): not black, each half's passes
+        shown, and the halves' noise in another proportion than in a
+        one-transport image (below). Prints SKIP and exits 0 where no
+        browser or Selenium exists.
 
     tools/view_browser.py measure FSPEC [--side 512] [--scene cornell]
-        Plain HTTP, no browser: time from opening the page's event stream to
-        the first full frame, time from a camera change to the new
-        generation's first frame, and passes per second.
+        Plain HTTP, no browser: time (wall and CPU of the server process)
+        from opening the page's event stream to the first full frame, time
+        from a camera change to the new generation's first frame, passes
+        per second, the time of a click's spectrum, and each half's passes
+        and seconds after SPLIT_MEASURE_S of the split view.
 
     tools/view_browser.py screenshot FSPEC PNG
-        A small screenshot of the page on the lamps scene (for the README).
+        A small screenshot of the page on the lamps scene in split view
+        with a pixel's spectrum (for the README).
 
 Why Python: Selenium's Python binding is the reference one, Debian ships
 the driver, and the test needs nothing compiled; the PNG decoding below is
@@ -28,6 +34,15 @@ render's noise, `d_noise` (mean absolute difference of the 8-bit values);
 the screenshot must be within `d_noise / 2` of the seed-0 render, the same
 settings bit for bit. The negative control checks that the seed-1 render,
 as different as noise makes it, fails that tolerance.
+
+The split view's noise: the chroma roughness of a half (mean absolute
+difference of R−G and B−G between horizontal neighbours) measures its
+colour noise plus its content's edges. In a one-transport image the right
+half's roughness over the left's is fixed by the content and that
+transport's noise; the split image's ratio, Fourier left and sampled
+right, must exceed the Fourier image's by SPLIT_NOISE_RATIO: the sampled
+half carries the wavelength sampling's colour noise. The negative control:
+the one-transport sampled image must not pass that test.
 """
 
 import http.client
@@ -46,8 +61,13 @@ DEADLINE_S = 180
 # The test's image: small, so that a debug build renders it in seconds.
 TEST_SIDE = 96
 TEST_PASSES = 8
+# How long `measure` lets the split view run, seconds.
+SPLIT_MEASURE_S = 10
 # Mean 8-bit value below which a screenshot counts as black.
 BLACK_MEAN = 2.0
+# How much more the split view's right/left chroma roughness must be than a
+# one-transport image's (module docs).
+SPLIT_NOISE_RATIO = 1.3
 
 
 def decode_png(data):
@@ -191,6 +211,42 @@ def screenshot(driver, out_dir, name):
     return rgb(png)
 
 
+def chroma_roughness(width, height, data, columns):
+    """Mean |Δ(R−G)| + |Δ(B−G)| between horizontal neighbours in `columns`."""
+    total, count = 0, 0
+    for y in range(height):
+        row = y * width * 3
+        for x in columns[:-1]:
+            a, b = row + 3 * x, row + 3 * (x + 1)
+            total += abs((data[a] - data[a + 1]) - (data[b] - data[b + 1]))
+            total += abs((data[a + 2] - data[a + 1]) - (data[b + 2] - data[b + 1]))
+            count += 1
+    return total / max(count, 1)
+
+
+def halves_ratio(width, height, data):
+    """Right half's chroma roughness over the left half's."""
+    half = width // 2
+    left = chroma_roughness(width, height, data, list(range(0, half)))
+    right = chroma_roughness(width, height, data, list(range(half, width)))
+    return right / max(left, 1e-9)
+
+
+def wait_for_complete(driver, generation):
+    """Waits until the image shows the last frame of `generation`."""
+    start = time.time()
+    while time.time() - start < DEADLINE_S:
+        shown = driver.execute_script(
+            "const v = document.getElementById('view');"
+            "return [Number(v.dataset.generation), v.dataset.complete, v.complete];"
+        )
+        if shown[0] == generation and shown[1] == "true" and shown[2]:
+            time.sleep(0.3)
+            return
+        time.sleep(0.1)
+    raise TimeoutError(f"generation {generation} never completed")
+
+
 def check(condition, message):
     if not condition:
         raise AssertionError(message)
@@ -224,6 +280,26 @@ def test(fspec, out_dir):
         check(mean_abs_difference(sampled, fourier) > 0, "the transport change changed the image")
         compare_with_file(fspec, driver, sampled, out_dir, "sampled")
 
+        # Split view, at the same camera and passes limit.
+        driver.find_element(By.ID, "split").click()
+        wait_for_complete(driver, 2)
+        _, _, split = screenshot(driver, out_dir, "split.png")
+        check(sum(split) / len(split) > BLACK_MEAN, "the split image is not black")
+        labels = [driver.find_element(By.ID, i).text for i in ("split-left", "split-right")]
+        check("Fourier" in labels[0] and "spp" in labels[0] and "sampled" in labels[1]
+              and "spp" in labels[1], f"each half's passes are shown: {labels}")
+        split_ratio = halves_ratio(TEST_SIDE, TEST_SIDE, split)
+        fourier_ratio = halves_ratio(TEST_SIDE, TEST_SIDE, fourier)
+        sampled_ratio = halves_ratio(TEST_SIDE, TEST_SIDE, sampled)
+        check(split_ratio > SPLIT_NOISE_RATIO * fourier_ratio,
+              f"the halves differ in noise: right/left roughness {split_ratio:.2f} split, "
+              f"{fourier_ratio:.2f} Fourier alone")
+        check(sampled_ratio <= SPLIT_NOISE_RATIO * fourier_ratio,
+              f"negative control: sampled alone ({sampled_ratio:.2f}) does not pass")
+        driver.find_element(By.ID, "split").click()
+        wait_for(driver, 3, TEST_PASSES)
+        _, _, unsplit = screenshot(driver, out_dir, "unsplit.png")
+
         view = driver.find_element(By.ID, "view")
         ActionChains(driver).move_to_element(view).click_and_hold().move_by_offset(30, 10) \
             .pause(0.2).move_by_offset(30, 10).release().perform()
@@ -239,7 +315,7 @@ def test(fspec, out_dir):
         wait_for(driver, generation, TEST_PASSES)
         _, _, orbited = screenshot(driver, out_dir, "orbited.png")
         check(sum(orbited) / len(orbited) > BLACK_MEAN, "the orbited image is not black")
-        moved = mean_abs_difference(orbited, sampled)
+        moved = mean_abs_difference(orbited, unsplit)
         check(moved > 1.0, f"orbiting changed the image (mean difference {moved:.2f})")
         command = driver.find_element(By.ID, "command").text
         check(command == "", "a moved camera has no fspec render equivalent")
@@ -296,15 +372,24 @@ def post(host, port, body):
     return reply
 
 
+def cpu_seconds(pid):
+    """User + system CPU seconds of a process so far (/proc/PID/stat)."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def measure(fspec, side, scene, passes):
     process, url = start_view(fspec, scene, "--width", str(side), "--height", str(side),
                               "--max-passes", str(passes))
     try:
         host, port = url.split("//")[1].strip("/").split(":")
+        cpu_before = cpu_seconds(process.pid)
         opened = time.perf_counter()
         events = Events(host, int(port))
         first = events.frame()
         first_s = time.perf_counter() - opened
+        first_cpu = cpu_seconds(process.pid) - cpu_before
         frame = first
         while frame["passes"] < passes:
             frame = events.frame()
@@ -318,9 +403,31 @@ def measure(fspec, side, scene, passes):
         while frame["generation"] != generation:
             frame = events.frame()
         restart_s = time.perf_counter() - sent
-        print(f"{scene} {side}×{side}: first full frame {first_s * 1e3:.0f} ms after opening the page "
-              f"({first['passes']} pass, scene built on open); {rate:.2f} passes/s over {passes} passes; "
+        # A click: the pixel at the centre traced both ways.
+        clicked = time.perf_counter()
+        cpu_clicked = cpu_seconds(process.pid)
+        connection = http.client.HTTPConnection(host, int(port), timeout=DEADLINE_S)
+        connection.request("GET", f"/api/spectrum?x={side // 2}&y={side // 2}")
+        spectrum = json.loads(connection.getresponse().read())
+        connection.close()
+        probe_s = time.perf_counter() - clicked
+        probe_cpu = cpu_seconds(process.pid) - cpu_clicked
+        # The split view: each half's passes and time after a while.
+        generation = post(host, int(port), {
+            "split": {"kind": "sampled", "wavelengths": 4, "sampling": "hero"},
+            "max_passes": 1 << 20})["generation"]
+        started = time.perf_counter()
+        while frame["generation"] != generation or time.perf_counter() - started < SPLIT_MEASURE_S:
+            frame = events.frame()
+        left, right = frame["split"]["left"], frame["split"]["right"]
+        print(f"{scene} {side}×{side}: first full frame {first_s * 1e3:.0f} ms, {first_cpu:.2f} CPU-s "
+              f"after opening the page ({first['passes']} pass, scene built on open); "
+              f"{rate:.2f} passes/s over {passes} passes; "
               f"camera change to the new first frame {restart_s * 1e3:.0f} ms; "
+              f"spectrum of the centre pixel {probe_s * 1e3:.0f} ms, {probe_cpu:.2f} CPU-s "
+              f"({spectrum.get('fourier_paths')} + {spectrum.get('sampled', {}).get('paths')} paths); "
+              f"split view after {SPLIT_MEASURE_S} s: Fourier {left['passes']} passes in "
+              f"{left['seconds']:.2f} s, sampled {right['passes']} passes in {right['seconds']:.2f} s; "
               f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     finally:
         stop_view(process)
@@ -332,16 +439,23 @@ def docs_screenshot(fspec, out):
     try:
         process, url = start_view(fspec, "lamps", "--width", "256", "--height", "256",
                                   "--max-passes", "64")
-        driver.set_window_size(760, 700)
+        driver.set_window_size(760, 900)
         driver.get(url)
         wait_for(driver, 0, 64)
         from selenium.webdriver.common.action_chains import ActionChains
         from selenium.webdriver.common.by import By
 
-        # A click on the image plots that pixel's spectrum.
+        # The split view, Fourier | sampled at equal time, to its end.
+        driver.find_element(By.ID, "split").click()
+        wait_for_complete(driver, 1)
+        # A click on the image plots that pixel's spectrum both ways.
         view = driver.find_element(By.ID, "view")
         ActionChains(driver).move_to_element_with_offset(view, -40, 60).click().perform()
-        time.sleep(1.0)
+        start = time.time()
+        while "paths" not in driver.find_element(By.ID, "spectrum-caption").text:
+            if time.time() - start > DEADLINE_S:
+                raise TimeoutError("no spectrum")
+            time.sleep(0.2)
         driver.save_screenshot(out)
     finally:
         driver.quit()

@@ -921,7 +921,8 @@ pub trait TransportTask {
     fn run<T: Transport>(self, transport: &T) -> Result<Self::Output, CliError>;
 }
 
-fn strategy(sampling: Sampling) -> WavelengthStrategy {
+/// The wavelength strategy of `--sampling`.
+pub fn strategy(sampling: Sampling) -> WavelengthStrategy {
     match sampling {
         Sampling::Uniform => WavelengthStrategy::Uniform,
         Sampling::Stratified => WavelengthStrategy::Stratified,

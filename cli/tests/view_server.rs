@@ -414,18 +414,292 @@ fn spectra_and_downloads_of_the_current_image() -> TestResult {
         let (status, exr) = request(address, "GET", &format!("/api/save?format={format}"), "")?;
         assert_eq!((status, &exr[..4]), (200, &exr_magic[..]), "{format}");
     }
-    // A sampled film keeps no coefficients: a clear refusal.
-    let body = r#"{"transport": {"kind": "sampled", "wavelengths": 4, "sampling": "hero"}}"#;
+    check_sampled_estimate(&spectrum)?;
+    // A sampled film keeps no coefficients: the pixel is traced both ways
+    // all the same (the Fourier side with the default 12 coefficients).
+    let body = r#"{"transport": {"kind": "sampled", "wavelengths": 4, "sampling": "visible"}}"#;
     assert_eq!(json(address, "POST", "/api/settings", body)?.0, 200);
     events.frame_of(1)?;
-    let (status, reply) = json(address, "GET", "/api/spectrum?x=8&y=4", "")?;
-    assert_eq!(status, 409, "{reply}");
-    assert!(
-        reply["error"]
-            .as_str()
-            .ok_or("error")?
-            .contains("coefficients")
+    let (status, spectrum) = json(address, "GET", "/api/spectrum?x=8&y=4", "")?;
+    assert_eq!(status, 200, "{spectrum}");
+    assert_eq!(
+        spectrum["coefficients"]
+            .as_array()
+            .ok_or("coefficients")?
+            .len(),
+        12
     );
+    assert_eq!(spectrum["sampled"]["sampling"], "visible");
+    check_sampled_estimate(&spectrum)?;
+    // Bad pixels: outside the image either way, negative, not a number.
+    for path in [
+        "/api/spectrum?x=16&y=0",
+        "/api/spectrum?x=0&y=16",
+        "/api/spectrum?x=-1&y=0",
+        "/api/spectrum?x=1.5&y=0",
+        "/api/spectrum?x=1",
+    ] {
+        let (status, reply) = json(address, "GET", path, "")?;
+        assert_eq!(status, 400, "{path}: {reply}");
+        assert!(reply["error"].is_string(), "{path}: {reply}");
+    }
+    server.stop()?;
+    Ok(())
+}
+
+/// Fewest paths a probe of the 16-pixel Cornell box is expected to trace
+/// within its time limit (2 s), for the loose check below: a debug build
+/// under a load of 8 on 2 cores traced 2319.
+const MIN_PROBE_PATHS: f64 = 256.0;
+
+/// The sampled half of a spectrum reply: 47 bins of 10 nm over 360–830
+/// nm, finite and non-negative, with standard errors, and a Fourier curve
+/// of the same order of magnitude: the means over the range agree within
+/// 20 % (a loose check: the unit test in simd-tracer compares them bin by
+/// bin within noise).
+fn check_sampled_estimate(spectrum: &serde_json::Value) -> TestResult {
+    let sampled = &spectrum["sampled"];
+    let values = |v: &serde_json::Value| -> TestResult<Vec<f64>> {
+        v.as_array()
+            .ok_or("array")?
+            .iter()
+            .map(|x| x.as_f64().ok_or_else(|| "number".into()))
+            .collect()
+    };
+    let centres = values(&sampled["bin_centre_nm"])?;
+    let radiance = values(&sampled["radiance"])?;
+    let errors = values(&sampled["std_error"])?;
+    assert_eq!(centres.len(), 47);
+    assert_eq!((centres[0], centres[46]), (365.0, 825.0));
+    assert_eq!(sampled["bin_width_nm"], 10.0);
+    assert_eq!((radiance.len(), errors.len()), (47, 47));
+    assert!(
+        radiance
+            .iter()
+            .chain(&errors)
+            .all(|v| v.is_finite() && *v >= 0.0)
+    );
+    assert!(errors.iter().any(|&e| e > 0.0), "noise is measured");
+    // Each probe stops at 4096 paths or its time limit (2 s), whichever
+    // comes first: a debug build on a loaded machine gets a few hundred
+    // at least.
+    for paths in [
+        sampled["paths"].as_f64().ok_or("paths")?,
+        spectrum["fourier_paths"].as_f64().ok_or("paths")?,
+    ] {
+        assert!((MIN_PROBE_PATHS..=4096.0).contains(&paths), "{paths} paths");
+    }
+    let curve = values(&spectrum["radiance"])?;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (sampled_mean, fourier_mean) = (mean(&radiance), mean(&curve));
+    assert!(fourier_mean > 0.0, "a lit pixel");
+    assert!(
+        (sampled_mean / fourier_mean - 1.0).abs() < 0.2,
+        "sampled {sampled_mean}, Fourier {fourier_mean}"
+    );
+    Ok(())
+}
+
+/// Split view: accepted with a sampled right half and refused with control
+/// variates or a one-pixel-wide image; the halves' times stay within one
+/// turn of each other at every frame; the finished frame's halves are the
+/// file renders of each transport at each half's passes, pixel for pixel;
+/// no `fspec render` line stands for the split image.
+#[test]
+fn split_view_renders_both_halves_at_equal_time() -> TestResult {
+    let server = ViewServer::start(&args("cornell", 24, 1_000_000))?;
+    let address = server.address();
+    let sampled = r#"{"kind": "sampled", "wavelengths": 4, "sampling": "hero"}"#;
+    let cv = r#"{"kind": "cv", "wavelengths": 4, "coeffs": 8, "sampling": "hero", "alpha_per_pixel": false}"#;
+    for (body, expected) in [
+        (format!(r#"{{"split": {cv}}}"#), "cv"),
+        (
+            format!(r#"{{"split": {sampled}, "transport": {cv}}}"#),
+            "cv",
+        ),
+        (format!(r#"{{"split": {sampled}, "width": 1}}"#), "halves"),
+        (r#"{"observer": "nosuchobserver"}"#.to_string(), "observer"),
+    ] {
+        let (status, reply) = json(address, "POST", "/api/settings", &body)?;
+        assert_eq!(status, 400, "{body}: {reply}");
+        let message = reply["error"].as_str().ok_or("error")?;
+        assert!(message.contains(expected), "{body}: {message}");
+    }
+    let mut events = Events::open(address)?;
+    let (status, reply) = json(
+        address,
+        "POST",
+        "/api/settings",
+        &format!(r#"{{"split": {sampled}}}"#),
+    )?;
+    assert_eq!(
+        (status, reply["change"].as_str()),
+        (200, Some("render")),
+        "{reply}"
+    );
+    let generation = reply["generation"].as_u64().ok_or("generation")?;
+    // Frames for a while: each turn adds to one half's time; the two stay
+    // within the longest turn of each other.
+    let seconds = |frame: &serde_json::Value, half: &str| -> TestResult<f64> {
+        Ok(frame["split"][half]["seconds"].as_f64().ok_or("seconds")?)
+    };
+    let mut previous = (0.0, 0.0);
+    let mut longest_turn: f64 = 0.0;
+    let mut frames = 0;
+    let start = Instant::now();
+    while frames < 12 || start.elapsed() < Duration::from_secs(3) {
+        let frame = events.frame_of(generation)?;
+        assert!(frame["render_command"].is_null(), "{frame}");
+        assert_eq!(frame["split"]["left"]["transport"]["kind"], "fourier");
+        assert_eq!(frame["split"]["right"]["transport"]["kind"], "sampled");
+        let now = (seconds(&frame, "left")?, seconds(&frame, "right")?);
+        longest_turn = longest_turn.max(now.0 - previous.0).max(now.1 - previous.1);
+        assert!(
+            (now.0 - now.1).abs() <= longest_turn + 1e-9,
+            "left {} s, right {} s, longest turn {longest_turn} s",
+            now.0,
+            now.1
+        );
+        previous = now;
+        frames += 1;
+    }
+    assert!(previous.0 > 0.0 && previous.1 > 0.0, "both halves rendered");
+    // A short split render to its end: each half against its file render.
+    const PASSES: u32 = 6;
+    let (status, reply) = json(
+        address,
+        "POST",
+        "/api/settings",
+        &format!(r#"{{"max_passes": {PASSES}}}"#),
+    )?;
+    assert_eq!(status, 200, "{reply}");
+    let generation = reply["generation"].as_u64().ok_or("generation")?;
+    let mut frame = events.frame_of(generation)?;
+    while frame["split"]["done"] != true {
+        frame = events.frame_of(generation)?;
+    }
+    let (width, height, viewed) = pixels_of(&frame)?;
+    assert_eq!((width, height), (24, 24));
+    assert!(viewed.iter().any(|&v| v > 0), "not black");
+    let (left, right) = (&frame["split"]["left"], &frame["split"]["right"]);
+    let left_passes = left["passes"].as_u64().ok_or("passes")?;
+    let right_passes = right["passes"].as_u64().ok_or("passes")?;
+    assert!(left_passes == u64::from(PASSES) || right_passes == u64::from(PASSES));
+    // The rule's end: a half short of its passes has had at least the
+    // other's time.
+    if left_passes < u64::from(PASSES) {
+        assert!(
+            seconds(&frame, "left")? >= seconds(&frame, "right")?,
+            "{frame}"
+        );
+    }
+    if right_passes < u64::from(PASSES) {
+        assert!(
+            seconds(&frame, "right")? >= seconds(&frame, "left")?,
+            "{frame}"
+        );
+    }
+    server.stop()?;
+    let dir = common::test_dir("view", "split")?;
+    let render = |transport: &[&str], spp: u64, name: &str| -> TestResult<Vec<u8>> {
+        let out = dir.join(name);
+        let spp = spp.to_string();
+        let mut line = vec![
+            "render", "cornell", "--width", "24", "--height", "24", "--spp", &spp,
+        ];
+        line.extend_from_slice(transport);
+        let out_arg = out.display().to_string();
+        line.extend(["--quiet", "--out", &out_arg]);
+        let status = assert_cmd::Command::cargo_bin("fspec")?
+            .args(&line)
+            .output()?;
+        assert!(
+            status.status.success(),
+            "{}",
+            String::from_utf8_lossy(&status.stderr)
+        );
+        Ok(decode_png(&std::fs::read(&out)?)?.2)
+    };
+    let fourier = render(
+        &["--transport", "fourier", "--coeffs", "12"],
+        left_passes,
+        "fourier.png",
+    )?;
+    let sampled = render(
+        &[
+            "--transport",
+            "sampled",
+            "--wavelengths",
+            "4",
+            "--sampling",
+            "hero",
+        ],
+        right_passes,
+        "sampled.png",
+    )?;
+    let row_bytes = 24 * 3;
+    let half_bytes = 12 * 3;
+    for row in 0..24 {
+        let at = row * row_bytes;
+        assert_eq!(
+            viewed[at..at + half_bytes],
+            fourier[at..at + half_bytes],
+            "left half, row {row}"
+        );
+        assert_eq!(
+            viewed[at + half_bytes..at + row_bytes],
+            sampled[at + half_bytes..at + row_bytes],
+            "right half, row {row}"
+        );
+    }
+    // The halves are not one transport's image: the right half of the
+    // Fourier render differs from the viewed right half.
+    assert_ne!(
+        (0..24)
+            .flat_map(|row| viewed[row * row_bytes + half_bytes..(row + 1) * row_bytes].to_vec())
+            .collect::<Vec<_>>(),
+        (0..24)
+            .flat_map(|row| fourier[row * row_bytes + half_bytes..(row + 1) * row_bytes].to_vec())
+            .collect::<Vec<_>>()
+    );
+    Ok(())
+}
+
+/// The observer setting reaches the render line and changes the colours.
+#[test]
+fn the_observer_setting_changes_the_image_and_its_render_line() -> TestResult {
+    let server = ViewServer::start(&args("cornell", 16, 2))?;
+    let address = server.address();
+    let (_, state) = json(address, "GET", "/api/state", "")?;
+    assert!(
+        state["observers"]
+            .as_array()
+            .ok_or("observers")?
+            .contains(&"cie1964-10".into())
+    );
+    let mut events = Events::open(address)?;
+    let mut first = events.frame_of(0)?;
+    while first["passes"] != 2 {
+        first = events.frame_of(0)?;
+    }
+    let (status, reply) = json(
+        address,
+        "POST",
+        "/api/settings",
+        r#"{"observer": "cie1964-10"}"#,
+    )?;
+    assert_eq!(
+        (status, reply["change"].as_str()),
+        (200, Some("render")),
+        "{reply}"
+    );
+    let mut frame = events.frame_of(1)?;
+    while frame["passes"] != 2 {
+        frame = events.frame_of(1)?;
+    }
+    let command = frame["render_command"].as_str().ok_or("render command")?;
+    assert!(command.contains("--observer cie1964-10"), "{command}");
+    assert_ne!(pixels_of(&first)?.2, pixels_of(&frame)?.2, "other colours");
     server.stop()?;
     Ok(())
 }

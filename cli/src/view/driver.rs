@@ -12,20 +12,39 @@
 //! channel (the latest replaces the one before, nothing queues), encoded
 //! by whoever sends them. The driver also stops when the last page closes
 //! (no event stream left) and starts again from pass 0 when one opens.
+//!
+//! **Split view at equal time** (`render_split`). The left half of the
+//! image is rendered with the settings' transport, the right half with
+//! the split transport, each as a crop window of the same film (so each
+//! half's pixels are that transport's full render's). The halves take
+//! turns of at most [`SPLIT_SLICE`], each resuming its own film state
+//! (`PassJob::resume`), and each is charged the wall time of its whole
+//! turn (pool start, film state, resolve included). The rule: the half
+//! with less time so far renders next, so at every frame the two times
+//! differ by at most one turn; when one half has its `max_passes`, the
+//! other renders on until its time is at least as long (or it has its
+//! passes too), then the render stops. The page shows each half's passes
+//! and seconds. Control variates are refused in a split view: their film
+//! weights each pass by `α` from all earlier passes and cannot resume.
 
 use crate::error::CliError;
-use crate::render_cmd::{self, TransportSpec, TransportTask};
+use crate::render_cmd::{self, TransportBasis, TransportSpec, TransportTask};
 use crate::scene_file::MitsubaOptions;
 use crate::scene_source::{SceneDefaults, resolve_scene};
+use crate::sensor_file::ObserverChoice;
+use crate::view::probe::ProbeScene;
 use crate::view::settings::{ViewSettings, illuminant_source};
-use simd_tracer::render::{Observer, PartialImage, PassJob, Progress, ResolvePartial};
+use simd_tracer::render::{
+    FilmState, Observer, PartialImage, PassJob, PixelWindow, Progress, RenderResult,
+    RenderSettings, ResolvePartial,
+};
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::SceneOptions;
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::transport::Transport;
 use spectral_core::SpectralRange;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError, RwLock};
 use std::time::{Duration, Instant};
 use tokio::sync::watch;
 
@@ -45,6 +64,10 @@ pub const VIEW_FRAME_INTERVAL: Duration = Duration::from_millis(250);
 /// the interval between frames grows to this many times the last
 /// resolve's duration when that exceeds [`VIEW_FRAME_INTERVAL`].
 const RESOLVE_SHARE_INVERSE: u32 = 4;
+
+/// Longest turn of one half of a split view (module docs): a frame comes
+/// after every turn, so turns last as long as the interval between frames.
+pub const SPLIT_SLICE: Duration = VIEW_FRAME_INTERVAL;
 
 /// The camera a frame was rendered with, for the page to move it from.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -85,6 +108,32 @@ pub struct Frame {
     pub camera: CameraView,
     /// The PNG, base64, made once by the first stream that sends it.
     pub encoded: OnceLock<Result<String, String>>,
+    /// Each half's passes and time in a split view.
+    pub split: Option<SplitProgress>,
+    /// The scene and settings it was rendered with, for a pixel's spectrum.
+    pub probe: Arc<ProbeScene>,
+}
+
+/// One half of a split view as the page sees it.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct HalfProgress {
+    /// Its transport.
+    pub transport: TransportSpec,
+    /// Passes (samples per pixel) so far.
+    pub passes: u32,
+    /// Wall time charged to it so far, seconds.
+    pub seconds: f64,
+}
+
+/// Both halves of a split view.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SplitProgress {
+    /// The settings' transport.
+    pub left: HalfProgress,
+    /// The split transport.
+    pub right: HalfProgress,
+    /// Whether the render has stopped (module docs' rule).
+    pub done: bool,
 }
 
 impl Frame {
@@ -104,6 +153,8 @@ impl Frame {
             },
             camera: self.camera,
             encoded: OnceLock::new(),
+            split: self.split,
+            probe: Arc::clone(&self.probe),
         }
     }
 }
@@ -188,7 +239,9 @@ impl Shared {
 /// The scene of some settings, built once per scene and illuminant.
 struct BuiltScene {
     key: (String, Option<String>),
-    scene: Scene,
+    /// Shared with the frames' probes, which read it beside the render;
+    /// only setting the camera between renders writes it.
+    scene: Arc<RwLock<Scene>>,
     defaults: SceneDefaults,
     camera: Camera,
     centre: glam::Vec3,
@@ -229,7 +282,7 @@ fn build_scene(
     };
     Ok(BuiltScene {
         key: (name.to_string(), illuminant.map(String::from)),
-        scene,
+        scene: Arc::new(RwLock::new(scene)),
         defaults,
         camera,
         centre,
@@ -281,6 +334,19 @@ pub fn run(shared: &Shared) {
     }
 }
 
+/// The observer of `settings`: the page's choice, else the scene's (as
+/// `fspec render` chooses), else CIE 1931 2°.
+fn observer_of(
+    settings: &ViewSettings,
+    defaults: &SceneDefaults,
+) -> Result<spectral_core::observer::Observer, CliError> {
+    let choice = match &settings.observer {
+        Some(name) => ObserverChoice::standard(name)?,
+        None => defaults.observer.clone().unwrap_or_default(),
+    };
+    choice.observer()
+}
+
 /// Renders one generation; `Ok(true)` when it took all its passes.
 fn render_generation(
     shared: &Shared,
@@ -304,7 +370,11 @@ fn render_generation(
         Some(spec) => spec.camera()?,
         None => built.camera,
     };
-    built.scene.set_camera(camera);
+    built
+        .scene
+        .write()
+        .unwrap_or_else(PoisonError::into_inner)
+        .set_camera(camera);
     let args = settings.parse_render_args()?;
     let mut render_settings = render_cmd::settings_from(&args, &built.defaults)?;
     // The whole film (a scene's crop window is for files), the driver's
@@ -323,43 +393,104 @@ fn render_generation(
         world_up: built.camera.axes().up.into(),
         pivot_distance: (built.centre - axes.position).length().max(f32::EPSILON),
     };
-    let task = ViewTask {
+    let observer = Arc::new(observer_of(settings, &built.defaults)?);
+    let scene = built.scene.read().unwrap_or_else(PoisonError::into_inner);
+    let context = FrameContext {
         shared,
-        scene: &built.scene,
-        settings: &render_settings,
         view: settings,
         camera: view,
         generation,
+        range: scene.range(),
+        probe: Arc::new(ProbeScene {
+            scene: Arc::clone(&built.scene),
+            camera,
+            settings: render_settings.clone(),
+            transport: settings.transport,
+            observer: Arc::clone(&observer),
+        }),
     };
-    // The viewer shows CIE 1931 2° colour (its settings have no observer).
-    let observer = Arc::new(spectral_core::observer::Observer::default());
-    let basis = render_cmd::TransportBasis {
-        range: built.scene.range(),
+    let basis = TransportBasis {
+        range: scene.range(),
         observer: &observer,
     };
-    render_cmd::with_transport(&settings.transport, basis, task)
+    match settings.split {
+        None => render_cmd::with_transport(
+            &settings.transport,
+            basis,
+            ViewTask {
+                context: &context,
+                scene: &scene,
+                settings: &render_settings,
+            },
+        ),
+        Some(right) => render_split(&context, &scene, &render_settings, right, basis),
+    }
+}
+
+/// What every frame of a generation shares.
+struct FrameContext<'a> {
+    shared: &'a Shared,
+    view: &'a ViewSettings,
+    camera: CameraView,
+    generation: u64,
+    range: SpectralRange,
+    probe: Arc<ProbeScene>,
+}
+
+/// A frame's progress and pixels.
+struct FrameImage {
+    passes: u32,
+    passes_total: u32,
+    elapsed: Duration,
+    image: PartialImage,
+    split: Option<SplitProgress>,
+}
+
+impl FrameContext<'_> {
+    /// Replaces the latest frame, with exposure and tone as of now (they
+    /// change without a restart).
+    fn publish(&self, frame: FrameImage) {
+        let display = self.shared.job().settings.clone();
+        let frame = Frame {
+            generation: self.generation,
+            passes: frame.passes,
+            passes_total: frame.passes_total,
+            elapsed: frame.elapsed,
+            image: Arc::new(frame.image),
+            range: self.range,
+            settings: ViewSettings {
+                exposure_stops: display.exposure_stops,
+                tone: display.tone,
+                ..self.view.clone()
+            },
+            camera: self.camera,
+            encoded: OnceLock::new(),
+            split: frame.split,
+            probe: Arc::clone(&self.probe),
+        };
+        self.shared
+            .updates
+            .send_replace(Update::Frame(Arc::new(frame)));
+    }
 }
 
 /// The render of one generation with the transport's concrete type.
 struct ViewTask<'a> {
-    shared: &'a Shared,
+    context: &'a FrameContext<'a>,
     scene: &'a Scene,
-    settings: &'a simd_tracer::render::RenderSettings,
-    view: &'a ViewSettings,
-    camera: CameraView,
-    generation: u64,
+    settings: &'a RenderSettings,
 }
 
 impl TransportTask for ViewTask<'_> {
     type Output = bool;
 
     fn run<T: Transport>(self, transport: &T) -> Result<bool, CliError> {
-        let shared = self.shared;
-        let range = self.scene.range();
+        let context = self.context;
+        let shared = context.shared;
         let mut published_last = false;
         let mut last_frame: Option<(Instant, Duration)> = None;
         let mut after_batch = |progress: &Progress, resolve: ResolvePartial| {
-            if shared.should_stop(self.generation) {
+            if shared.should_stop(context.generation) {
                 return false;
             }
             let last_pass = progress.passes_done == progress.passes_total;
@@ -373,24 +504,13 @@ impl TransportTask for ViewTask<'_> {
             let resolving = Instant::now();
             let image = resolve();
             last_frame = Some((resolving, resolving.elapsed()));
-            // Exposure and tone as of now (they change without a restart).
-            let display = shared.job().settings.clone();
-            let frame = Frame {
-                generation: self.generation,
+            context.publish(FrameImage {
                 passes: progress.passes_done,
                 passes_total: progress.passes_total,
                 elapsed: progress.elapsed,
-                image: Arc::new(image),
-                range,
-                settings: ViewSettings {
-                    exposure_stops: display.exposure_stops,
-                    tone: display.tone,
-                    ..self.view.clone()
-                },
-                camera: self.camera,
-                encoded: OnceLock::new(),
-            };
-            shared.updates.send_replace(Update::Frame(Arc::new(frame)));
+                image,
+                split: None,
+            });
             true
         };
         let observer = Observer {
@@ -408,5 +528,214 @@ impl TransportTask for ViewTask<'_> {
         // Finished only if the page saw the last pass (not stopped just
         // before publishing it).
         Ok(published_last)
+    }
+}
+
+/// One half of a split view while it renders.
+#[derive(Debug)]
+struct Half {
+    transport: TransportSpec,
+    window: PixelWindow,
+    /// Its film after its last turn.
+    state: Option<FilmState>,
+    passes: u32,
+    /// Wall time of its turns.
+    spent: Duration,
+}
+
+impl Half {
+    fn progress(&self) -> HalfProgress {
+        HalfProgress {
+            transport: self.transport,
+            passes: self.passes,
+            seconds: self.spent.as_secs_f64(),
+        }
+    }
+}
+
+/// The equal-time rule (module docs): the half to render next and how
+/// long its turn may be, or `None` when the split render is done.
+fn next_turn(halves: &[Half; 2], max_passes: u32) -> Option<(usize, Duration)> {
+    let finished = |h: &Half| h.passes >= max_passes;
+    let [left, right] = halves;
+    match (finished(left), finished(right)) {
+        (true, true) => None,
+        (false, false) => Some((usize::from(right.spent < left.spent), SPLIT_SLICE)),
+        (true, false) => {
+            (right.spent < left.spent).then(|| (1, (left.spent - right.spent).min(SPLIT_SLICE)))
+        }
+        (false, true) => {
+            (left.spent < right.spent).then(|| (0, (right.spent - left.spent).min(SPLIT_SLICE)))
+        }
+    }
+}
+
+/// Renders a split view (module docs); `Ok(true)` when it finished.
+fn render_split(
+    context: &FrameContext,
+    scene: &Scene,
+    settings: &RenderSettings,
+    right: TransportSpec,
+    basis: TransportBasis,
+) -> Result<bool, CliError> {
+    let (width, height) = (settings.width, settings.height);
+    let left_width = width / 2;
+    let half = |transport, x, width| Half {
+        transport,
+        window: PixelWindow {
+            x,
+            y: 0,
+            width,
+            height,
+        },
+        state: None,
+        passes: 0,
+        spent: Duration::ZERO,
+    };
+    let mut halves = [
+        half(context.view.transport, 0, left_width),
+        half(right, left_width, width - left_width),
+    ];
+    let mut xyz = vec![spectral_core::color::Xyz::default(); (width * height) as usize];
+    while let Some((next, budget)) = next_turn(&halves, settings.spp) {
+        if context.shared.should_stop(context.generation) {
+            return Ok(false);
+        }
+        let half = &mut halves[next];
+        let windowed = RenderSettings {
+            window: Some(half.window),
+            ..settings.clone()
+        };
+        let started = Instant::now();
+        let (result, state) = render_cmd::with_transport(
+            &half.transport,
+            basis,
+            TurnTask {
+                shared: context.shared,
+                generation: context.generation,
+                scene,
+                settings: &windowed,
+                resume: half.state.as_ref(),
+                budget,
+            },
+        )?;
+        half.spent += started.elapsed();
+        half.passes = state.passes.end;
+        half.state = Some(state);
+        let window = half.window;
+        for (row, pixels) in result.xyz.chunks_exact(window.width as usize).enumerate() {
+            let start = (window.y as usize + row) * width as usize + window.x as usize;
+            xyz[start..start + pixels.len()].copy_from_slice(pixels);
+        }
+        let done = next_turn(&halves, settings.spp).is_none();
+        let [left, right] = &halves;
+        context.publish(FrameImage {
+            passes: left.passes.max(right.passes),
+            passes_total: settings.spp,
+            elapsed: left.spent + right.spent,
+            image: PartialImage {
+                width,
+                height,
+                xyz: xyz.clone(),
+                coefficients: None,
+            },
+            split: Some(SplitProgress {
+                left: left.progress(),
+                right: right.progress(),
+                done,
+            }),
+        });
+    }
+    Ok(true)
+}
+
+/// One turn of a split view's half: its window's passes from its saved
+/// film on, until `budget` has passed (after at least one batch).
+struct TurnTask<'a> {
+    shared: &'a Shared,
+    generation: u64,
+    scene: &'a Scene,
+    settings: &'a RenderSettings,
+    resume: Option<&'a FilmState>,
+    budget: Duration,
+}
+
+impl TransportTask for TurnTask<'_> {
+    type Output = (RenderResult, FilmState);
+
+    fn run<T: Transport>(self, transport: &T) -> Result<Self::Output, CliError> {
+        let mut after_batch = |progress: &Progress, _: ResolvePartial| {
+            !self.shared.should_stop(self.generation) && progress.elapsed < self.budget
+        };
+        let observer = Observer {
+            batch_target: VIEW_BATCH_TARGET,
+            after_batch: &mut after_batch,
+        };
+        let job = PassJob {
+            first_pass: 0,
+            resume: self.resume,
+            keep_state: true,
+        };
+        let (result, state) = simd_tracer::render::render_observed(
+            transport,
+            self.scene,
+            self.settings,
+            &job,
+            observer,
+        )
+        .map_err(|e| CliError::input(e.to_string()))?;
+        let state = state.ok_or_else(|| CliError::input("the split view's film kept no state"))?;
+        Ok((result, state))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render_cmd::Sampling;
+
+    fn half(passes: u32, spent_ms: u64) -> Half {
+        Half {
+            transport: TransportSpec::Sampled {
+                wavelengths: 4,
+                sampling: Sampling::Hero,
+            },
+            window: PixelWindow::full(1, 1),
+            state: None,
+            passes,
+            spent: Duration::from_millis(spent_ms),
+        }
+    }
+
+    #[test]
+    fn the_half_with_less_time_goes_next_until_both_had_equal_time() {
+        let ms = Duration::from_millis;
+        // Both running: the one behind, the left on a tie.
+        assert_eq!(
+            next_turn(&[half(0, 0), half(0, 0)], 8),
+            Some((0, SPLIT_SLICE))
+        );
+        assert_eq!(
+            next_turn(&[half(3, 300), half(9, 250)], 16),
+            Some((1, SPLIT_SLICE))
+        );
+        assert_eq!(
+            next_turn(&[half(3, 200), half(9, 250)], 16),
+            Some((0, SPLIT_SLICE))
+        );
+        // The left has its passes: the right catches up, no longer than
+        // the gap.
+        assert_eq!(
+            next_turn(&[half(8, 300), half(2, 250)], 8),
+            Some((1, ms(50)))
+        );
+        assert_eq!(
+            next_turn(&[half(8, 900), half(2, 250)], 8),
+            Some((1, SPLIT_SLICE))
+        );
+        // ... and then the render stops.
+        assert_eq!(next_turn(&[half(8, 300), half(4, 310)], 8), None);
+        assert_eq!(next_turn(&[half(5, 400), half(8, 300)], 8), None);
+        assert_eq!(next_turn(&[half(8, 100), half(8, 900)], 8), None);
     }
 }

@@ -4,10 +4,12 @@
 //! serves one page, embedded in the binary, that shows the render as it
 //! refines pass after pass and restarts it on any change: camera (orbit,
 //! pan, zoom with the mouse), transport and its sizes, conversion route,
-//! illuminant of the scene's lights, image size; exposure and tone map
+//! illuminant of the scene's lights, observer, image size, split view
+//! (Fourier | sampled at equal time, [`driver`]); exposure and tone map
 //! re-display the current image without a restart. A click shows the
-//! pixel's spectrum (its Fourier coefficients evaluated over the range);
-//! the image downloads as PNG, EXR or spectral EXR.
+//! pixel's spectrum, traced again both ways ([`probe`]): the Fourier curve
+//! and the sampled estimate per wavelength bin; the image downloads as
+//! PNG, EXR or spectral EXR.
 //!
 //! Why this shape:
 //!
@@ -35,6 +37,7 @@
 //!   with only HTTP/1, JSON and query features.
 
 pub mod driver;
+pub mod probe;
 pub mod server;
 pub mod settings;
 
@@ -140,6 +143,8 @@ impl ViewServer {
             illuminant: None,
             camera: None,
             max_passes: args.max_passes,
+            split: None,
+            observer: None,
         };
         let memory_limit_bytes = render_cmd::memory_limit_bytes();
         settings.validate(&scenes, memory_limit_bytes)?;
@@ -177,6 +182,7 @@ impl ViewServer {
             scenes,
             memory_limit_bytes,
             stopping: stopping.clone(),
+            probing: AtomicBool::new(false),
         });
         let runtime = tokio::runtime::Builder::new_multi_thread()
             .worker_threads(SERVER_THREADS)

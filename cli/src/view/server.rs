@@ -6,7 +6,7 @@
 //! | `GET /api/state` | settings, scene and illuminant lists, the equivalent `fspec render` line, open pages, the latest frame's passes |
 //! | `POST /api/settings` | a JSON [`SettingsPatch`]: 200 with the generation, or 400 and one error line |
 //! | `GET /api/events` | server-sent events: `frame` (PNG in base64 and its pass count), `error` |
-//! | `GET /api/spectrum?x=&y=` | a pixel's spectrum from its coefficients (360–830 nm) |
+//! | `GET /api/spectrum?x=&y=` | a pixel's spectrum, traced again both ways ([`probe`](crate::view::probe)): the Fourier curve (360–830 nm) and the sampled estimate per 10 nm bin with its standard error; 429 while another is traced |
 //! | `GET /api/save?format=png\|exr\|spectral` | the current image as a download |
 //!
 //! Every reply to a bad request is a JSON `{"error": "…"}` with a 4xx
@@ -18,7 +18,7 @@ use crate::error::CliError;
 use crate::image_out::{Exposure, XyzImage, png_bytes, write_exr, write_spectral_exr};
 use crate::render_cmd::spectral_planes;
 use crate::view::driver::{Frame, Shared, Update};
-use crate::view::settings::{Change, SettingsPatch, illuminant_names};
+use crate::view::settings::{Change, SettingsPatch, illuminant_names, observer_names};
 use axum::Router;
 use axum::body::Bytes;
 use axum::extract::rejection::QueryRejection;
@@ -34,7 +34,7 @@ use serde_json::json;
 use std::convert::Infallible;
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use tokio::sync::watch;
 
 /// The page.
@@ -62,6 +62,9 @@ pub struct App {
     pub memory_limit_bytes: u64,
     /// Becomes `true` when the server stops.
     pub stopping: watch::Receiver<bool>,
+    /// A pixel's spectrum is being traced (one at a time: each costs up
+    /// to twice `probe::PROBE_TIME_LIMIT` of a core).
+    pub probing: AtomicBool,
 }
 
 /// The routes of the viewer.
@@ -117,15 +120,16 @@ async fn state(State(app): State<Arc<App>>) -> Response {
         "viewers": app.shared.viewers.load(Ordering::SeqCst),
         "scenes": app.scenes,
         "illuminants": illuminant_names(),
+        "observers": observer_names(),
         "render_command": render_command(&settings),
     }))
     .into_response()
 }
 
 /// The `fspec render` line of `settings`, when one renders the same image
-/// (the page's camera and a relit scene have no flag).
+/// (the page's camera, a relit scene and a split view have no flag).
 fn render_command(settings: &crate::view::settings::ViewSettings) -> Option<String> {
-    (settings.camera.is_none() && settings.illuminant.is_none())
+    (settings.camera.is_none() && settings.illuminant.is_none() && settings.split.is_none())
         .then(|| format!("fspec render {}", settings.render_args().join(" ")))
 }
 
@@ -275,6 +279,7 @@ fn frame_json(frame: &Frame, png: &str) -> serde_json::Value {
         "camera": frame.camera,
         "coefficients": frame.image.coefficients.as_ref().map(|(n, _)| *n),
         "render_command": render_command(&frame.settings),
+        "split": frame.split,
         "png": png,
     })
 }
@@ -298,6 +303,15 @@ fn no_frame() -> Response {
 struct Pixel {
     x: u32,
     y: u32,
+}
+
+/// Clears [`App::probing`] when a probe ends, however it ends.
+struct ProbeTurn<'a>(&'a AtomicBool);
+
+impl Drop for ProbeTurn<'_> {
+    fn drop(&mut self) {
+        self.0.store(false, Ordering::SeqCst);
+    }
 }
 
 /// `GET /api/spectrum?x=&y=`.
@@ -324,28 +338,58 @@ async fn spectrum(
             ),
         );
     }
-    let index = (y * image.width + x) as usize;
-    let xyz = image.xyz[index];
-    let Some((n, coefficients)) = &image.coefficients else {
+    if !frame.probe.is_current() {
         return error(
             StatusCode::CONFLICT,
-            "this transport keeps no coefficients per pixel: choose Fourier with a spectral buffer to see spectra",
+            "the camera has moved since this image: click the new one",
         );
+    }
+    if app.probing.swap(true, Ordering::SeqCst) {
+        return error(
+            StatusCode::TOO_MANY_REQUESTS,
+            "another pixel's spectrum is being traced: try again in a moment",
+        );
+    }
+    let traced = {
+        let app = Arc::clone(&app);
+        let frame = Arc::clone(&frame);
+        tokio::task::spawn_blocking(move || {
+            let _turn = ProbeTurn(&app.probing);
+            frame.probe.trace(x, y)
+        })
+        .await
     };
+    let traced = match traced {
+        Ok(Ok(traced)) => traced,
+        Ok(Err(e)) => return error(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
+        Err(e) => return error(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
+    };
+    let xyz = image.xyz[(y * image.width + x) as usize];
     let range = frame.range;
     let steps = (range.width_nm() / SPECTRUM_STEP_NM).round() as usize;
     let wavelengths: Vec<f64> = (0..=steps)
         .map(|i| range.min_nm() + i as f64 * SPECTRUM_STEP_NM)
         .collect();
-    let pixel = &coefficients[index * n..(index + 1) * n];
-    let radiance = spectral_planes(&range, *n, pixel, &wavelengths);
+    let n = traced.coefficients.len();
+    let radiance = spectral_planes(&range, n, &traced.coefficients, &wavelengths);
+    let bins = traced.bins;
     axum::Json(json!({
         "x": x,
         "y": y,
         "passes": frame.passes,
         "lambda_nm": wavelengths,
         "radiance": radiance,
-        "coefficients": pixel,
+        "coefficients": traced.coefficients,
+        "fourier_paths": traced.fourier_paths,
+        "sampled": {
+            "bin_centre_nm": (0..bins.count()).map(|b| bins.centre_nm(b)).collect::<Vec<_>>(),
+            "bin_width_nm": bins.width_nm(),
+            "radiance": traced.sampled.radiance,
+            "std_error": traced.sampled.std_error,
+            "paths": traced.sampled.paths,
+            "wavelengths_per_path": crate::view::probe::PROBE_WAVELENGTHS,
+            "sampling": traced.sampling,
+        },
         "xyz": [xyz.x, xyz.y, xyz.z],
     }))
     .into_response()

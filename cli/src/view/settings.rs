@@ -14,6 +14,7 @@ use crate::error::CliError;
 use crate::render_cmd::{
     self, BufferKind, RenderArgs, Sampling, ToColor, ToneKind, TransportSpec, TransportTask,
 };
+use crate::sensor_file::ObserverChoice;
 use clap::ValueEnum;
 use serde::{Deserialize, Serialize};
 use simd_tracer::scene::builtin::SCENES;
@@ -55,6 +56,14 @@ pub fn illuminant_names() -> Vec<String> {
     );
     names.extend(["blackbody-2700", "blackbody-4000", "blackbody-6500"].map(String::from));
     names
+}
+
+/// The standard observers the page offers (`--observer`'s names).
+pub fn observer_names() -> Vec<&'static str> {
+    spectral_core::observer::StandardObserver::ALL
+        .iter()
+        .map(|o| o.name())
+        .collect()
 }
 
 /// A built-in illuminant by name (never a file: the page must not make the
@@ -120,6 +129,13 @@ pub struct ViewSettings {
     pub camera: Option<CameraSpec>,
     /// Passes after which the render stops.
     pub max_passes: u32,
+    /// Split view: the right half rendered with this transport, the left
+    /// half with [`ViewSettings::transport`], at equal time
+    /// (`driver::render_split`); `None`: the whole image with one.
+    pub split: Option<TransportSpec>,
+    /// A CIE standard observer by name (`--observer`); `None`: the
+    /// scene's, else CIE 1931 2°.
+    pub observer: Option<String>,
 }
 
 /// A change sent by the page: every field optional, unknown ones refused.
@@ -147,6 +163,13 @@ pub struct SettingsPatch {
     pub reset_camera: Option<bool>,
     /// See [`ViewSettings::max_passes`].
     pub max_passes: Option<u32>,
+    /// See [`ViewSettings::split`]: turns the split view on (or changes
+    /// its right half's transport).
+    pub split: Option<TransportSpec>,
+    /// Back to one transport for the whole image.
+    pub split_off: Option<bool>,
+    /// A standard observer's name, or `"scene"` for the scene's own.
+    pub observer: Option<String>,
 }
 
 /// The scenes the page may choose: the built-ins and the command line's.
@@ -267,6 +290,9 @@ impl ViewSettings {
                 name(&|| to_color.to_possible_value()),
             ]),
         }
+        if let Some(observer) = &self.observer {
+            args.extend(["--observer".into(), observer.clone()]);
+        }
         args.extend([
             "--exposure".into(),
             self.exposure_stops.to_string(),
@@ -328,14 +354,24 @@ impl ViewSettings {
         if let Some(camera) = &self.camera {
             camera.camera()?;
         }
+        if let Some(name) = &self.observer {
+            ObserverChoice::standard(name)?;
+        }
         let observer = std::sync::Arc::new(spectral_core::observer::Observer::default());
         let basis = render_cmd::TransportBasis {
             range: SpectralRange::VISIBLE,
             observer: &observer,
         };
-        let film_pixel_bytes = render_cmd::with_transport(&self.transport, basis, FilmPixelBytes)?;
+        let mut film_pixel_bytes =
+            render_cmd::with_transport(&self.transport, basis, FilmPixelBytes)?;
+        if let Some(right) = &self.split {
+            self.validate_split(right)?;
+            film_pixel_bytes += render_cmd::with_transport(right, basis, FilmPixelBytes)?;
+        }
         // The film, the resolved frame beside it (XYZ and coefficients) and
-        // the frame being encoded: three film-sized buffers at most.
+        // the frame being encoded: three film-sized buffers at most (in a
+        // split view each half's film and its saved state, counted as two
+        // whole films).
         let film_copies = 3;
         let bytes = u64::from(self.width) * u64::from(self.height) * film_pixel_bytes * film_copies;
         if bytes > memory_limit_bytes {
@@ -348,6 +384,27 @@ impl ViewSettings {
             )));
         }
         self.parse_render_args().map(|_| ())
+    }
+
+    /// The split view's conditions: both transports' passes can be paused
+    /// and resumed (their films are sums; control variates weight each
+    /// pass by `α` from all earlier ones, so a half cannot stop and go on),
+    /// and the image has two halves.
+    fn validate_split(&self, right: &TransportSpec) -> Result<(), CliError> {
+        for (side, spec) in [("left", &self.transport), ("right", right)] {
+            if matches!(spec, TransportSpec::Cv { .. }) {
+                return Err(CliError::input(format!(
+                    "split view: the {side} half's transport is cv, whose passes cannot be paused and resumed (use fourier or sampled)"
+                )));
+            }
+        }
+        if self.width < 2 {
+            return Err(CliError::input(format!(
+                "split view: width {} has no two halves",
+                self.width
+            )));
+        }
+        Ok(())
     }
 
     /// These settings with `patch` applied and checked (module docs), and
@@ -381,6 +438,15 @@ impl ViewSettings {
             next.camera = patch.camera;
         }
         next.max_passes = patch.max_passes.unwrap_or(next.max_passes);
+        if patch.split_off == Some(true) {
+            next.split = None;
+        }
+        if patch.split.is_some() {
+            next.split = patch.split;
+        }
+        if let Some(name) = &patch.observer {
+            next.observer = (name != "scene").then(|| name.to_ascii_lowercase());
+        }
         next.validate(scenes, memory_limit_bytes)?;
         let display_only = Self {
             exposure_stops: self.exposure_stops,
@@ -422,6 +488,8 @@ mod tests {
             illuminant: None,
             camera: None,
             max_passes: 16,
+            split: None,
+            observer: None,
         }
     }
 
@@ -541,6 +609,82 @@ mod tests {
             ..SettingsPatch::default()
         };
         assert!(s.apply(&large, &scenes(), LIMIT).is_err());
+        Ok(())
+    }
+
+    #[test]
+    fn a_split_view_needs_two_pausable_transports_and_two_halves() -> Result<(), CliError> {
+        let sampled = TransportSpec::Sampled {
+            wavelengths: 4,
+            sampling: Sampling::Hero,
+        };
+        let cv = TransportSpec::Cv {
+            wavelengths: 4,
+            coeffs: 8,
+            sampling: Sampling::Hero,
+            alpha_per_pixel: false,
+        };
+        let on = SettingsPatch {
+            split: Some(sampled),
+            ..SettingsPatch::default()
+        };
+        let (split, change) = settings().apply(&on, &scenes(), LIMIT)?;
+        assert_eq!((split.split, change), (Some(sampled), Change::Render));
+        let off = SettingsPatch {
+            split_off: Some(true),
+            ..SettingsPatch::default()
+        };
+        assert_eq!(split.apply(&off, &scenes(), LIMIT)?.0.split, None);
+        for refused in [
+            SettingsPatch {
+                split: Some(cv),
+                ..SettingsPatch::default()
+            },
+            SettingsPatch {
+                transport: Some(cv),
+                ..on.clone()
+            },
+            SettingsPatch {
+                width: Some(1),
+                ..on.clone()
+            },
+        ] {
+            assert!(
+                settings().apply(&refused, &scenes(), LIMIT).is_err(),
+                "{refused:?}"
+            );
+        }
+        // Control variates without a split view stay allowed.
+        let cv_alone = SettingsPatch {
+            transport: Some(cv),
+            ..SettingsPatch::default()
+        };
+        assert!(settings().apply(&cv_alone, &scenes(), LIMIT).is_ok());
+        Ok(())
+    }
+
+    #[test]
+    fn the_observer_is_a_standard_one_and_reaches_the_render_line() -> Result<(), CliError> {
+        let patch = SettingsPatch {
+            observer: Some("CIE1964-10".into()),
+            ..SettingsPatch::default()
+        };
+        let (next, change) = settings().apply(&patch, &scenes(), LIMIT)?;
+        assert_eq!(change, Change::Render);
+        assert_eq!(
+            next.parse_render_args()?.observer.as_deref(),
+            Some("cie1964-10")
+        );
+        let back = SettingsPatch {
+            observer: Some("scene".into()),
+            ..SettingsPatch::default()
+        };
+        assert_eq!(next.apply(&back, &scenes(), LIMIT)?.0.observer, None);
+        let bad = SettingsPatch {
+            observer: Some("/etc/passwd".into()),
+            ..SettingsPatch::default()
+        };
+        assert!(settings().apply(&bad, &scenes(), LIMIT).is_err());
         Ok(())
     }
 

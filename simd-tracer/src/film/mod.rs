@@ -13,6 +13,8 @@
 //!   paths the hybrid transport sampled after dispersion.
 //! * [`ControlVariateFilm`]: per pixel and XYZ channel a control variate,
 //!   `α` pooled over all pixels ([`AlphaMode::Shared`]) or per pixel.
+//! * [`BinnedFilm<C>`]: sampled radiance per wavelength bin with its
+//!   standard error (a pixel's spectrum in the viewer).
 //!
 //! **Film modes** ([`FilmMode`]). With [`FilmMode::Sample`] (the default)
 //! the pixel filter is importance-sampled: each sample lands in its own
@@ -38,11 +40,13 @@
 
 pub mod filter;
 
+mod binned;
 mod control_variate;
 mod fourier;
 mod hybrid;
 mod xyz;
 
+pub use binned::{BinnedEstimate, BinnedFilm, BinnedPixel, BinnedSample, SpectralBins};
 pub use control_variate::{AlphaMode, ControlVariateFilm, CvPixel, CvSample};
 pub use fourier::{FourierFilm, FourierPixel, FourierSample};
 pub use hybrid::{HybridFilm, HybridPixel, HybridSample};

@@ -21,6 +21,8 @@
 //!   surface whose directions depend on wavelength, `C` sampled wavelengths
 //!   from there on; the film adds both parts (`hybrid.rs`: the estimator
 //!   and why it is unbiased).
+//! * [`BinnedSampledTransport<C>`]: the sampled transport whose film bins
+//!   radiance by wavelength (one pixel's spectrum, for the viewer).
 
 use crate::film::Film;
 use crate::ids::SpectrumId;
@@ -50,6 +52,8 @@ pub struct SplitLanes {
     pub past_event: LaneMask,
 }
 
+mod binned;
+pub use binned::BinnedSampledTransport;
 /// A spectral representation of light paths (module docs).
 pub trait Transport: Sync {
     /// Per-packet wavelengths (unit for Fourier).

@@ -35,6 +35,19 @@ function sendCamera(camera) {
   });
 }
 
+// Split view: the left half Fourier from the N, buffer and route controls,
+// the right half sampled from the C and sampling controls.
+function fourierOfControls() {
+  return { kind: "fourier", coeffs: Number($("coeffs").value), buffer: $("buffer").value, to_color: $("to_color").value };
+}
+function sampledOfControls() {
+  return { kind: "sampled", wavelengths: Number($("wavelengths").value), sampling: $("sampling").value };
+}
+function transportPatch() {
+  if ($("split").checked) return { transport: fourierOfControls(), split: sampledOfControls() };
+  return { transport: transportOfControls() };
+}
+
 function transportOfControls() {
   const kind = $("transport").value;
   const n = Number($("coeffs").value), c = Number($("wavelengths").value);
@@ -45,10 +58,22 @@ function transportOfControls() {
   return { kind, wavelengths: c, coeffs: n, sampling, alpha_per_pixel: false };
 }
 
+function describeTransport(t) {
+  if (t.kind === "fourier") return `Fourier N=${t.coeffs}`;
+  if (t.kind === "sampled") return `sampled C=${t.wavelengths} ${t.sampling}`;
+  return `cv C=${t.wavelengths} N=${t.coeffs}`;
+}
+
 function setControls(s) {
   settings = s;
   $("scene").value = s.scene;
   const t = s.transport;
+  $("split").checked = !!s.split;
+  $("transport").disabled = !!s.split;
+  if (s.split) {
+    $("wavelengths").value = String(s.split.wavelengths);
+    $("sampling").value = s.split.sampling;
+  }
   $("transport").value = t.kind;
   if (t.coeffs) $("coeffs").value = String(t.coeffs);
   if (t.wavelengths) $("wavelengths").value = String(t.wavelengths);
@@ -59,6 +84,7 @@ function setControls(s) {
   $("exposure-value").textContent = String(s.exposure_stops);
   $("tone").value = s.tone;
   $("illuminant").value = s.illuminant || "scene";
+  $("observer").value = s.observer || "scene";
   $("max-passes").value = String(s.max_passes);
   if (![...$("size").options].some((o) => o.value === String(s.width) && s.width === s.height)) {
     const o = document.createElement("option");
@@ -80,6 +106,7 @@ async function start() {
   const state = await (await fetch("/api/state")).json();
   fill($("scene"), state.scenes);
   fill($("illuminant"), ["scene"].concat(state.illuminants));
+  fill($("observer"), ["scene"].concat(state.observers));
   setControls(state.settings);
   const onChange = (id, patch) => $(id).addEventListener("change", () => post(patch()).catch(() => {}));
   onChange("scene", () => ({ scene: $("scene").value }));
@@ -88,8 +115,10 @@ async function start() {
     return { width: w, height: h || w };
   });
   for (const id of ["transport", "coeffs", "wavelengths", "sampling", "buffer", "to_color"]) {
-    onChange(id, () => ({ transport: transportOfControls() }));
+    onChange(id, transportPatch);
   }
+  onChange("split", () => ($("split").checked ? transportPatch() : { split_off: true }));
+  onChange("observer", () => ({ observer: $("observer").value }));
   $("exposure").addEventListener("input", () => {
     $("exposure-value").textContent = $("exposure").value;
     post({ exposure_stops: Number($("exposure").value) }).catch(() => {});
@@ -107,6 +136,13 @@ async function start() {
     latest = frame;
     view.dataset.generation = String(frame.generation);
     view.dataset.passes = String(frame.passes);
+    view.dataset.complete = String(frame.split ? frame.split.done : frame.passes === frame.passes_total);
+    $("split-labels").hidden = !frame.split;
+    if (frame.split) {
+      const half = (h) => `${describeTransport(h.transport)} · ${h.passes} spp · ${h.seconds.toFixed(2)} s`;
+      $("split-left").textContent = "◧ left: " + half(frame.split.left);
+      $("split-right").textContent = "◨ right: " + half(frame.split.right);
+    }
     const seconds = frame.elapsed_ms / 1000;
     const rate = frame.passes / Math.max(seconds, 1e-9);
     $("status").textContent =
@@ -191,25 +227,37 @@ async function showSpectrum(e) {
   const r = view.getBoundingClientRect();
   const x = Math.floor(((e.clientX - r.left) / r.width) * latest.width);
   const y = Math.floor(((e.clientY - r.top) / r.height) * latest.height);
+  $("spectrum-caption").textContent = `tracing pixel (${x}, ${y}) both ways…`;
   const reply = await fetch(`/api/spectrum?x=${x}&y=${y}`);
   const body = await reply.json();
   if (!reply.ok) { $("spectrum-caption").textContent = body.error; $("spectrum").innerHTML = ""; return; }
   plot(body);
 }
 
+// The Fourier curve as a line, the sampled estimate as a dot per bin with
+// a bar of ±1 standard error.
 function plot(s) {
   const W = 320, H = 180, L = 30, B = 20, T = 8, R = 8;
   const lo = s.lambda_nm[0], hi = s.lambda_nm[s.lambda_nm.length - 1];
-  const top = Math.max(...s.radiance, 1e-12);
+  const b = s.sampled;
+  const upper = b.radiance.map((v, i) => v + b.std_error[i]);
+  const top = Math.max(...s.radiance, ...upper, 1e-12);
   const px = (l) => L + ((l - lo) / (hi - lo)) * (W - L - R);
-  const py = (v) => H - B - (v / top) * (H - B - T);
+  const py = (v) => H - B - (Math.max(v, 0) / top) * (H - B - T);
   const d = s.lambda_nm.map((l, i) => `${i ? "L" : "M"}${px(l).toFixed(1)},${py(s.radiance[i]).toFixed(1)}`).join("");
   let svg = `<line x1="${L}" y1="${H - B}" x2="${W - R}" y2="${H - B}"/><line x1="${L}" y1="${T}" x2="${L}" y2="${H - B}"/>`;
   for (let l = 400; l <= hi; l += 100) svg += `<text x="${px(l) - 10}" y="${H - 6}">${l}</text>`;
   svg += `<text x="2" y="${T + 8}">${top.toPrecision(2)}</text><path d="${d}"/>`;
+  b.bin_centre_nm.forEach((l, i) => {
+    const x = px(l).toFixed(1), v = b.radiance[i], e = b.std_error[i];
+    svg += `<line class="bar" x1="${x}" x2="${x}" y1="${py(v - e).toFixed(1)}" y2="${py(v + e).toFixed(1)}"/>`;
+    svg += `<circle cx="${x}" cy="${py(v).toFixed(1)}" r="1.6"/>`;
+  });
   $("spectrum").innerHTML = svg;
   $("spectrum-caption").textContent =
-    `pixel (${s.x}, ${s.y}), ${s.passes} passes: radiance from ${s.coefficients.length} coefficients, ${lo}–${hi} nm`;
+    `pixel (${s.x}, ${s.y}): line, Fourier N=${s.coefficients.length} (${s.fourier_paths} paths); ` +
+    `dots, sampled C=${b.wavelengths_per_path} ${b.sampling} per ${b.bin_width_nm.toFixed(0)} nm bin ` +
+    `±1 s.e. (${b.paths} paths); ${lo}–${hi} nm`;
 }
 
 start().catch((e) => showError(String(e)));
