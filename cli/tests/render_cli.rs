@@ -146,6 +146,7 @@ fn scenes_lists_every_builtin_with_a_description() -> TestResult {
         "materials",
         "colorchecker",
         "fluorescence",
+        "prism",
     ] {
         let line = text
             .lines()
@@ -156,7 +157,7 @@ fn scenes_lists_every_builtin_with_a_description() -> TestResult {
             "no description: {line}"
         );
     }
-    assert_eq!(builtin_names()?.len(), 6);
+    assert_eq!(builtin_names()?.len(), 7);
     Ok(())
 }
 
