@@ -66,8 +66,12 @@ SPLIT_MEASURE_S = 10
 # Mean 8-bit value below which a screenshot counts as black.
 BLACK_MEAN = 2.0
 # How much more the split view's right/left chroma roughness must be than a
-# one-transport image's (module docs).
-SPLIT_NOISE_RATIO = 1.3
+# one-transport image's (module docs). Measured with the default Sobol
+# sampler at TEST_SIDE and TEST_PASSES: the split image 2.48x the Fourier
+# image's ratio, the sampled image alone 1.32x (Sobol lowers the sampled
+# half's noise; with independent numbers they were 5.2x and 1.2x). The
+# bound is their geometric mean, so each side is 1.37x away from it.
+SPLIT_NOISE_RATIO = 1.8
 
 
 def decode_png(data):
