@@ -13,15 +13,13 @@ use simd_tracer::film::{Buffer, FilmMode};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderResult, RenderSettings, render};
 use simd_tracer::sampling::sampler::SamplerKind;
-use simd_tracer::scene::builtin::prism::SF11;
+use simd_tracer::scene::builtin::prism::add_sf11_glass;
 use simd_tracer::scene::builtin::{SceneOptions, builtin_scene};
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::shapes::add_quad_uv;
 use simd_tracer::scene::{Scene, SceneBuilder};
-use simd_tracer::shading::material::{Bsdf, Material};
-use simd_tracer::shading::microfacet::Microfacet;
+use simd_tracer::shading::material::Material;
 use simd_tracer::spectra::SpectrumSource;
-use simd_tracer::spectra::angular::AngularFunction;
 use simd_tracer::transport::{
     FourierTransport, HybridSettings, HybridTransport, SampledTransport, Transport,
 };
@@ -145,29 +143,7 @@ fn wedge_scene(light_albedo: f64) -> TestResult<Scene> {
             m,
         );
     }
-    let outside = b.add_angular(
-        "SF11 out",
-        AngularFunction::Dielectric {
-            ior: SF11,
-            from_inside: false,
-        },
-    )?;
-    let inside = b.add_angular(
-        "SF11 in",
-        AngularFunction::Dielectric {
-            ior: SF11,
-            from_inside: true,
-        },
-    )?;
-    let glass = b.add_material(Material::new(
-        "SF11",
-        Bsdf::Dielectric {
-            outside,
-            inside,
-            ior: SF11,
-            microfacet: Microfacet::ggx(0.0),
-        },
-    ));
+    let glass = add_sf11_glass(&mut b)?;
     // Cross-section in x–z: the front face at z = 0.6, the back face
     // slanted by the apex angle.
     let (half, front) = (0.6f32, 0.6f32);

@@ -118,7 +118,10 @@ fn side(b: &mut SceneBuilder, a: Vec2, c: Vec2, y: [f32; 2], material: MaterialI
     );
 }
 
-fn add_prism(b: &mut SceneBuilder) -> Result<[Vec2; 3], SceneError> {
+/// The prism's glass: a smooth SF11 dielectric (its Fresnel tables seen
+/// from either side), added to `b`. Public so tests build their own
+/// dispersive shapes from the same glass.
+pub fn add_sf11_glass(b: &mut SceneBuilder) -> Result<MaterialId, SceneError> {
     let outside = b.add_angular(
         "SF11 out",
         AngularFunction::Dielectric {
@@ -133,7 +136,7 @@ fn add_prism(b: &mut SceneBuilder) -> Result<[Vec2; 3], SceneError> {
             from_inside: true,
         },
     )?;
-    let glass = b.add_material(Material::new(
+    Ok(b.add_material(Material::new(
         "SF11",
         Bsdf::Dielectric {
             outside,
@@ -141,7 +144,11 @@ fn add_prism(b: &mut SceneBuilder) -> Result<[Vec2; 3], SceneError> {
             ior: SF11,
             microfacet: Microfacet::ggx(0.0),
         },
-    ));
+    )))
+}
+
+fn add_prism(b: &mut SceneBuilder) -> Result<[Vec2; 3], SceneError> {
+    let glass = add_sf11_glass(b)?;
     // `(p1 − p0) × (p2 − p0)` of the corners points along `−y`: the walls
     // run from corner `i + 1` to `i` and the top cap is reversed, so every
     // normal points out of the glass, which is how a dielectric tells
