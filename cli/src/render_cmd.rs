@@ -886,6 +886,49 @@ impl TransportSpec {
     }
 }
 
+impl TransportSpec {
+    /// The transport that renders this one on `scene`, and the line that
+    /// says so when it is another. Where no material disperses no hybrid
+    /// path ever splits, and the hybrid transport's image is the Fourier
+    /// transport's bit for bit (`simd-tracer/tests/hybrid.rs`), but every
+    /// value still carries the `C` sampled values beside the coefficients
+    /// (14 % more time on the Cornell box, `docs/performance.md`): such a
+    /// render runs as the Fourier transport with the hybrid's `N`, buffer
+    /// and route. Not for partial films (`splitting`): their identity and
+    /// pixel state record the transport, so every part of a hybrid frame
+    /// stays hybrid, and only compiled hybrid sizes are replaced (others
+    /// are refused by [`with_transport`] as before).
+    fn for_scene(self, scene: &Scene, splitting: bool) -> (Self, Option<String>) {
+        match self {
+            Self::Hybrid {
+                coeffs,
+                wavelengths,
+                buffer,
+                to_color,
+                ..
+            } if !splitting
+                && HYBRID_SIZES.contains(&(coeffs, wavelengths))
+                && !scene.materials().iter().any(|m| m.bsdf.disperses()) =>
+            {
+                (
+                    Self::Fourier {
+                        coeffs,
+                        buffer,
+                        to_color,
+                    },
+                    Some(format!(
+                        "hybrid: no material of the scene disperses, so no path leaves its Fourier coefficients: rendered by the Fourier transport (N = {coeffs}), the same image without the sampled part's cost"
+                    )),
+                )
+            }
+            spec => (spec, None),
+        }
+    }
+}
+
+/// The `(N, C)` the hybrid transport is compiled for ([`with_transport`]).
+const HYBRID_SIZES: [(usize, usize); 3] = [(12, 1), (12, 4), (12, 8)];
+
 /// Wavelengths drawn where a hybrid path meets dispersion when
 /// `--wavelengths` is not given: 4, measured against 1 and 8 on the
 /// `prism` scene (docs/results.md, "Hybrid transport").
@@ -1751,7 +1794,11 @@ pub fn render(
         range: scene.range(),
         observer: &colour_observer,
     };
-    let (result, state, memory) = with_transport(&TransportSpec::of(args), basis, task)?;
+    let (spec, dispatch_note) = TransportSpec::of(args).for_scene(&scene, splitting);
+    if let Some(note) = dispatch_note {
+        observer.notice(&RenderNotice::Note(note));
+    }
+    let (result, state, memory) = with_transport(&spec, basis, task)?;
     let requested = [parts.job_first_pass, parts.job_first_pass + parts.spp];
     Ok(RenderedFrame {
         result,

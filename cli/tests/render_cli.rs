@@ -322,6 +322,37 @@ fn same_seed_gives_identical_files_with_one_and_two_threads() -> TestResult {
     Ok(())
 }
 
+/// `--transport hybrid` on a scene where no material disperses runs as
+/// the Fourier transport with the hybrid's N (a line says so) and writes
+/// the Fourier image byte for byte. Negative controls: on `prism` (SF11
+/// glass) and for a partial film (whose identity records the transport) it
+/// stays hybrid, and no line is printed.
+#[test]
+fn hybrid_without_dispersion_renders_as_fourier() -> TestResult {
+    let dir = test_dir("hybrid-dispatch")?;
+    let note = "no material of the scene disperses";
+    let render = |scene: &str, transport: &[&str], out: &str| -> TestResult<String> {
+        let mut args = vec![
+            scene, "--width", "16", "--height", "16", "--spp", "2", "--seed", "3", "--out", out,
+        ];
+        args.extend_from_slice(transport);
+        Ok(render_ok(&dir, &args)?.1)
+    };
+    let fourier = render("cornell", &["--coeffs", "12"], "fourier.exr")?;
+    assert!(!fourier.contains(note), "{fourier}");
+    let hybrid = render("cornell", &["--transport", "hybrid"], "hybrid.exr")?;
+    assert!(hybrid.contains(note), "{hybrid}");
+    assert_eq!(
+        fs::read(dir.join("fourier.exr"))?,
+        fs::read(dir.join("hybrid.exr"))?
+    );
+    let prism = render("prism", &["--transport", "hybrid"], "prism.exr")?;
+    assert!(!prism.contains(note), "{prism}");
+    let part = render("cornell", &["--transport", "hybrid"], "part.fspart")?;
+    assert!(!part.contains(note), "{part}");
+    Ok(())
+}
+
 /// `--crop X,Y,W,H` writes W × H images whose pixels are the full
 /// render's at the same seed, float for float; a window outside the film
 /// and a malformed one are refused.
