@@ -19,11 +19,19 @@ both renderers, so both render the very same file):
   each line's XYZ is integrated the same way (0.01 nm steps) and the three
   weights solve the 3 x 3 system. Both renderers then see the light as the
   same colour (the `check` step measures it in both).
+* `colorchecker`, `lamps`, `laser-room`: fspec's built-in scenes
+  `colorchecker`, `lamps` and `laser` (the room lit by three laser lines;
+  renamed here, `laser` is the box above), written by
+  `tools/mitsuba_builtin_scenes.py` (its docstring: the exact
+  correspondence, and the one deviation, the coated spheres) at the same
+  film, filter and depth, with their meshes in OUT/scenes/meshes-SCENE/.
+  Only fspec's default configuration (`auto-splat-sobol`) runs on them.
 
 Steps (all by default; `--only STEP` for one; results accumulate in
 OUT/manifest.json, images are cached and reused unless `--force`):
 
-* `scenes`: writes the two XML files.
+* `scenes`: writes the two XML files (and those of the built-in scenes
+  named in `--scenes`).
 * `reference`: Mitsuba, variant `llvm_ad_spectral`, at `--reference-spp`
   (per scene) in passes of `PASS_SPP` with seeds `REFERENCE_SEED + pass`;
   writes OUT/reference-SCENE.exr (their mean) and the means of the even
@@ -49,6 +57,16 @@ OUT/manifest.json, images are cached and reused unless `--force`):
 * `check`: the light's mean colour (the pixels that see it) in the
   references of both scenes, Mitsuba and fspec: the laser light must be
   the box light's colour.
+* `builtin-check` (not run by default): for each built-in scene in
+  `--scenes`, fspec renders the built-in itself (`fspec render NAME` at
+  the XML's film, filter and depth) and the XML, `BUILTIN_CHECK_SEEDS`
+  seeds of `BUILTIN_CHECK_SPP` each, default configuration; per block of
+  `BLOCK_PX` x `BLOCK_PX` pixels the difference of their seed means in
+  units of its standard error (from the seed-to-seed spread; the XML at
+  other seeds than the built-in), the largest block difference at the same
+  seeds (the same paths where the scenes agree), and the image-mean colour
+  of the XML renders against Mitsuba's reference.
+  Written to OUT/builtin-check.json.
 
 Both renderers run with `--threads` threads (default 1: CPU seconds of one
 thread are the least disturbed by a loaded machine; Dr.Jit's
@@ -78,6 +96,8 @@ import subprocess
 import sys
 
 import numpy as np
+
+import mitsuba_builtin_scenes
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 VARIANT = "llvm_ad_spectral"
@@ -115,7 +135,7 @@ CONFIGS = {
     "auto-splat": (["--coeffs", "auto", "--film", "splat", "--sampler", "independent"],
                    ("cornell", "laser")),
     "auto-splat-sobol": (["--coeffs", "auto", "--film", "splat", "--sampler", "sobol"],
-                         ("cornell", "laser")),
+                         ("cornell", "laser", "colorchecker", "lamps", "laser-room")),
     "hero4-splat": (
         ["--transport", "sampled", "--wavelengths", "4", "--sampling", "hero",
          "--film", "splat", "--sampler", "independent"],
@@ -127,8 +147,26 @@ CALIBRATION_SPP = (16, 256)
 #: Repeats of each calibration render (the minimum is kept).
 CALIBRATION_REPEATS = 2
 #: Default reference spp per scene: the laser box converges slowly in
-#: Mitsuba (its wavelengths are not drawn from the light's spectrum).
-REFERENCE_SPP = {"cornell": 8192, "laser": 16384}
+#: Mitsuba (its wavelengths are not drawn from the light's spectrum), and so
+#: does the laser room (the same kind of light; at 32768 spp its reference
+#: noise, 0.38 ΔE2000, is still a tenth of Mitsuba's 256-spp error). The
+#: other built-ins: 16384 spp, about 1 CPU minute for the colorchecker's
+#: 1024-spp passes of 4 CPU s, 7 for the lamps' of 25 CPU s.
+REFERENCE_SPP = {"cornell": 8192, "laser": 16384, "colorchecker": 16384, "lamps": 16384,
+                 "laser-room": 32768}
+#: The built-in scenes: name here -> name of fspec's built-in scene.
+BUILTIN_SCENES = {"colorchecker": "colorchecker", "lamps": "lamps", "laser-room": "laser"}
+#: `builtin-check`: seeds and spp of each render (fspec's default
+#: configuration), and the side of the compared blocks, pixels.
+BUILTIN_CHECK_SEEDS = 5
+BUILTIN_CHECK_SPP = 256
+BLOCK_PX = 16
+#: `builtin-check`: the block differences counted, in standard errors.
+CHECK_SIGMAS = (3, 5)
+#: `builtin-check`: floors of a standard error and of a block's value when
+#: dividing by them (black blocks: the colorchecker's backdrop).
+CHECK_TINY = 1e-12
+CHECK_BLACK = 1e-3
 
 SCENE_TEMPLATE = """<?xml version="1.0" encoding="utf-8"?>
 <!-- {title}
@@ -269,6 +307,17 @@ def write_scenes(out, threads):
     return {"scenes": paths, "light_xyz": list(map(float, xyz)),
             "laser_peaks": list(map(float, weights)),
             "laser_centres_nm": list(LASER_CENTRES_NM)}
+
+
+def write_builtin_scenes(out, names):
+    """The XML files of the built-in scenes among `names`."""
+    paths = {}
+    for name in names:
+        if name in BUILTIN_SCENES:
+            path = mitsuba_builtin_scenes.write_scene(BUILTIN_SCENES[name], out / "scenes",
+                                                      SIZE_PX, MAX_DEPTH, stem=name)
+            paths[name] = str(path.relative_to(out))
+    return {"scenes": paths} if paths else {}
 
 
 def write_exr(mi, dr, path, rgb):
@@ -446,6 +495,78 @@ def check(out, manifest, fspec, threads):
         tmp.unlink()
 
 
+def block_means(img):
+    """Mean RGB of each BLOCK_PX x BLOCK_PX block, (rows, columns, 3)."""
+    h, w, _ = img.shape
+    return img.reshape(h // BLOCK_PX, BLOCK_PX, w // BLOCK_PX, BLOCK_PX, 3).mean(axis=(1, 3))
+
+
+def builtin_check(out, manifest, scenes, fspec, threads):
+    """fspec's built-in scene against its XML (both in fspec), and the XML
+    in fspec against Mitsuba's reference (image means)."""
+    mi, dr = mitsuba(threads)
+    args = CONFIGS["auto-splat-sobol"][0]
+    film = ["--width", str(SIZE_PX), "--height", str(SIZE_PX), "--max-depth", str(MAX_DEPTH),
+            "--filter", "gaussian"]
+    tmp = out / "builtin-check.exr"
+    results = {}
+    seeds = range(1, BUILTIN_CHECK_SEEDS + 1)
+    for name in scenes:
+        if name not in BUILTIN_SCENES:
+            continue
+        # The built-in at seeds 1 ... S; the XML at the same seeds (the same
+        # paths wherever the two scenes agree) and at seeds S + 1 ... 2S
+        # (independent noise, for the test in standard errors).
+        renders = (("builtin", BUILTIN_SCENES[name], film, 0),
+                   ("xml-same-seeds", out / manifest["scenes"][name], [], 0),
+                   ("xml", out / manifest["scenes"][name], [], BUILTIN_CHECK_SEEDS))
+        images = {}
+        for kind, source, extra, offset in renders:
+            images[kind] = []
+            for seed in seeds:
+                run_fspec(fspec, source, args + extra, BUILTIN_CHECK_SPP, seed + offset, threads,
+                          tmp)
+                images[kind].append(read_exr(mi, dr, tmp))
+        blocks = {k: np.array([block_means(i) for i in v]) for k, v in images.items()}
+        b, x = blocks["builtin"], blocks["xml"]
+        diff = b.mean(axis=0) - x.mean(axis=0)
+        # Standard error of the difference of two means of S seeds each.
+        se = np.sqrt((b.var(axis=0, ddof=1) + x.var(axis=0, ddof=1)) / BUILTIN_CHECK_SEEDS)
+        z = np.abs(diff) / np.maximum(se, CHECK_TINY)
+        over = z > CHECK_SIGMAS[0]
+        paired = np.abs(b.mean(axis=0) - blocks["xml-same-seeds"].mean(axis=0))
+        scale = np.maximum(np.abs(b.mean(axis=0)), CHECK_BLACK)
+        row = {"blocks": int(z[..., 0].size), "block_px": BLOCK_PX,
+               "max_z": float(z.max()), "mean_abs_z": float(z.mean()),
+               **{f"blocks_over_{k}_sigma": int((z > k).any(axis=2).sum())
+                  for k in CHECK_SIGMAS},
+               f"blocks_over_{CHECK_SIGMAS[0]}_sigma_row_col": [
+                   [int(r), int(c)] for r, c in zip(*np.nonzero(over.any(axis=2)))],
+               "worst_block_row_col_channel": [int(v) for v in np.unravel_index(z.argmax(),
+                                                                                z.shape)],
+               "same_seeds_max_rel_block_diff": float((paired / scale).max()),
+               "same_seeds_max_abs_block_diff": float(paired.max()),
+               "builtin_mean_rgb": images_mean(images["builtin"]),
+               "xml_mean_rgb": images_mean(images["xml"]),
+               "spp": BUILTIN_CHECK_SPP, "seeds": BUILTIN_CHECK_SEEDS}
+        ref = manifest.get("references", {}).get(name)
+        if ref:
+            row["mitsuba_reference_mean_rgb"] = list(
+                map(float, read_exr(mi, dr, out / ref["image"]).mean(axis=(0, 1))))
+            row["xml_over_mitsuba"] = [a / b for a, b in zip(row["xml_mean_rgb"],
+                                                             row["mitsuba_reference_mean_rgb"])]
+        results[name] = row
+        print(name, json.dumps(row), flush=True)
+    tmp.unlink(missing_ok=True)
+    path = out / "builtin-check.json"
+    old = json.loads(path.read_text()) if path.exists() else {}
+    path.write_text(json.dumps({**old, **results}, indent=1) + "\n")
+
+
+def images_mean(images):
+    return list(map(float, np.mean([i.mean(axis=(0, 1)) for i in images], axis=0)))
+
+
 def save(out, manifest, keys):
     """Writes `keys` of `manifest` into OUT/manifest.json, keeping the other
     keys on disk: steps run as separate processes at the same time (each
@@ -496,16 +617,17 @@ def main():
     p.add_argument("--out", type=pathlib.Path, default=ROOT / "target" / "equal-time")
     p.add_argument("--fspec", default=str(ROOT / "target" / "release" / "fspec"))
     p.add_argument("--only", choices=["scenes", "reference", "mitsuba", "calibrate",
-                                      "fspec", "check"])
+                                      "fspec", "check", "builtin-check"])
     p.add_argument("--scenes", nargs="+", default=["cornell", "laser"],
-                   choices=["cornell", "laser"])
+                   choices=["cornell", "laser", *BUILTIN_SCENES])
     p.add_argument("--budgets", type=int, nargs="+", default=[64, 256, 1024])
     p.add_argument("--seeds", type=int, default=3)
     p.add_argument("--configs", nargs="+", default=list(CONFIGS), choices=list(CONFIGS),
                    help="fspec configurations calibrated and rendered (default: all)")
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--reference-spp", nargs="*", default=[], metavar="SCENE=SPP",
-                   help="reference spp per scene (default cornell=8192 laser=16384)")
+                   help="reference spp per scene (default: " + " ".join(
+                       f"{k}={v}" for k, v in REFERENCE_SPP.items()) + ")")
     p.add_argument("--force", action="store_true")
     a = p.parse_args()
     ref_spp = {}
@@ -533,6 +655,11 @@ def main():
         scenes = write_scenes(a.out, a.threads)
         manifest.update(scenes)
         save(a.out, manifest, list(scenes))
+    if step("scenes") or any(s not in manifest["scenes"] for s in a.scenes):
+        builtins = write_builtin_scenes(a.out, a.scenes)
+        if builtins:
+            manifest["scenes"].update(builtins["scenes"])
+            save(a.out, manifest, ["scenes"])
     if step("reference"):
         reference(a.out, manifest, a.scenes, ref_spp, a.threads, a.force)
     if step("mitsuba"):
@@ -544,6 +671,8 @@ def main():
                       a.configs)
     if a.only == "check":
         check(a.out, manifest, a.fspec, a.threads)
+    if a.only == "builtin-check":
+        builtin_check(a.out, manifest, a.scenes, a.fspec, a.threads)
 
 
 if __name__ == "__main__":
