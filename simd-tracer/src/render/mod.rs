@@ -588,6 +588,13 @@ fn render_tile<T: Transport>(
 }
 
 /// A splatting tile's filter and margin (module docs).
+/// Slots for one row's or column's splat weights: `2M + 1` rounded up to
+/// whole 8-lane chunks.
+const SPLAT_WEIGHT_SLOTS: usize = (2 * MAX_SPLAT_MARGIN_PX as usize + 1).div_ceil(LANES) * LANES;
+
+/// `0, 1, …, 7`: the lane offsets of one chunk of splat weights.
+const LANE_INDEX: f32x8 = f32x8::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+
 struct Splat<'a> {
     filter: &'a Filter,
     /// `M`, px.
@@ -622,19 +629,66 @@ impl<'a> Splat<'a> {
         sample: &F::Sample,
     ) {
         let reach = (2 * self.margin + 1) as usize;
-        let margin = self.margin as f32;
-        // The column weights once per sample (M ≤ MAX_SPLAT_MARGIN_PX).
-        let mut column_weights = [0.0f32; 2 * MAX_SPLAT_MARGIN_PX as usize + 1];
-        for (i, w) in column_weights.iter_mut().take(reach).enumerate() {
-            *w = self.filter.weight(dx - (i as f32 - margin));
+        // The column and row weights once per sample, 8 at a time: one
+        // chunk each where the footprint fits 8 lanes (the Gaussian's and
+        // the default tent's), else arrays of M ≤ MAX_SPLAT_MARGIN_PX.
+        if reach <= LANES {
+            let columns = self.weight_chunk(dx, 0).to_array();
+            let rows = self.weight_chunk(dy, 0).to_array();
+            self.spread(
+                film,
+                tile,
+                (lx, ly),
+                (&rows[..reach], &columns[..reach]),
+                sample,
+            );
+        } else {
+            let weights = |offset: f32| {
+                let mut weights = [0.0f32; SPLAT_WEIGHT_SLOTS];
+                for (chunk, slots) in weights.chunks_exact_mut(LANES).enumerate() {
+                    if chunk * LANES >= reach {
+                        break;
+                    }
+                    slots.copy_from_slice(&self.weight_chunk(offset, chunk * LANES).to_array());
+                }
+                weights
+            };
+            let (columns, rows) = (weights(dx), weights(dy));
+            self.spread(
+                film,
+                tile,
+                (lx, ly),
+                (&rows[..reach], &columns[..reach]),
+                sample,
+            );
         }
-        for j in 0..reach {
-            let wy = self.filter.weight(dy - (j as f32 - margin));
+    }
+
+    /// The weights of footprint columns (or rows) `first .. first + 8` for a
+    /// sample at `offset` px from its pixel's centre: `f(offset − (k − M))`.
+    fn weight_chunk(&self, offset: f32, first: usize) -> f32x8 {
+        let x = f32x8::splat(offset - (first as f32 - self.margin as f32)) - LANE_INDEX;
+        self.filter.weight_x8(x)
+    }
+
+    /// Adds `sample` with weight `rows[j] · columns[i]` to apron pixel
+    /// `(lx + i, ly + j)` (the apron is shifted by `M` in both axes),
+    /// skipping zero weights.
+    fn spread<F: Film>(
+        &self,
+        film: &F,
+        tile: &mut Tile<F::Pixel>,
+        (lx, ly): (u32, u32),
+        (rows, columns): (&[f32], &[f32]),
+        sample: &F::Sample,
+    ) {
+        let width = self.apron_width as usize;
+        for (j, &wy) in rows.iter().enumerate() {
             if wy == 0.0 {
                 continue;
             }
-            let row = (ly as usize + j) * self.apron_width as usize + lx as usize;
-            for (i, &wx) in column_weights[..reach].iter().enumerate() {
+            let row = (ly as usize + j) * width + lx as usize;
+            for (i, &wx) in columns.iter().enumerate() {
                 let w = wx * wy;
                 if w != 0.0 {
                     film.accumulate_weighted(&mut tile.apron[row + i], sample, w);
