@@ -632,9 +632,7 @@ impl<'a> Splat<'a> {
         // The column and row weights once per sample, 8 at a time: one
         // chunk each where the footprint fits 8 lanes (the Gaussian's and
         // the default tent's), else arrays of M ≤ MAX_SPLAT_MARGIN_PX.
-        if reach <= LANES {
-            let columns = self.weight_chunk(dx, 0).to_array();
-            let rows = self.weight_chunk(dy, 0).to_array();
+        let mut spread = |rows: &[f32], columns: &[f32]| {
             self.spread(
                 film,
                 tile,
@@ -642,6 +640,11 @@ impl<'a> Splat<'a> {
                 (&rows[..reach], &columns[..reach]),
                 sample,
             );
+        };
+        if reach <= LANES {
+            let columns = self.weight_chunk(dx, 0).to_array();
+            let rows = self.weight_chunk(dy, 0).to_array();
+            spread(&rows, &columns);
         } else {
             let weights = |offset: f32| {
                 let mut weights = [0.0f32; SPLAT_WEIGHT_SLOTS];
@@ -653,14 +656,7 @@ impl<'a> Splat<'a> {
                 }
                 weights
             };
-            let (columns, rows) = (weights(dx), weights(dy));
-            self.spread(
-                film,
-                tile,
-                (lx, ly),
-                (&rows[..reach], &columns[..reach]),
-                sample,
-            );
+            spread(&weights(dy), &weights(dx));
         }
     }
 
