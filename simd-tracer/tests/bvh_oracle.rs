@@ -6,8 +6,9 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 use proptest::prelude::*;
-use simd_tracer::accel::{Bvh, Hit, Traversal, WIDE_MIN_TRIANGLES};
+use simd_tracer::accel::{BYTES_PER_TRIANGLE, Bvh, BvhLayout, Hit, Traversal, WIDE_MIN_TRIANGLES};
 use simd_tracer::ids::NO_TRIANGLE;
+use simd_tracer::packet::PacketHit;
 use simd_tracer::packet::{Ray, RayPacket};
 use simd_tracer::simd::{LANES, LaneMask};
 
@@ -313,7 +314,7 @@ fn same_hit(scene: &Scene, ray: &Ray, s: &Hit, p: &Hit) -> Result<(), String> {
     }
 }
 
-fn lane_hit(hits: &simd_tracer::packet::PacketHit, lane: usize) -> Hit {
+fn lane_hit(hits: &PacketHit, lane: usize) -> Hit {
     Hit {
         t: hits.t.to_array()[lane],
         u: hits.u.to_array()[lane],
@@ -940,4 +941,92 @@ fn degenerate_triangles_are_skipped_and_never_hit() {
         bvh.occluded_packet(&RayPacket::from_rays(&[ray]))
             .is_empty()
     );
+}
+
+/// A packet hit as bits, for exact comparisons.
+fn hit_bits(h: &PacketHit) -> ([[u32; LANES]; 3], [u32; LANES], u8) {
+    (
+        [h.t, h.u, h.v].map(|v| v.to_array().map(f32::to_bits)),
+        h.triangle,
+        h.hit.0,
+    )
+}
+
+/// A tree that keeps only its 8-wide tree answers every query exactly as
+/// the wide tree of a tree of both layouts over the same input (which
+/// `packet_agrees_with_scalar_on_many_random_packets` checks against the
+/// scalar oracle), and holds at least the binary tree's per-triangle data
+/// less.
+#[test]
+fn wide_only_trees_answer_every_query_like_the_wide_tree_of_both_layouts() {
+    for (name, scene) in [
+        ("soup", soup_scene()),
+        ("big soup", big_soup_scene()),
+        ("box", box_scene()),
+        ("cornell", cornell_scene()),
+    ] {
+        let both = &scene.bvh;
+        let wide_only = Bvh::build_with_layout(&scene.triangles, BvhLayout::WideOnly);
+        wide_only.validate(&scene.triangles).unwrap();
+        assert_eq!(both.layout(), BvhLayout::BinaryAndWide, "{name}");
+        assert_eq!(wide_only.layout(), BvhLayout::WideOnly, "{name}");
+        assert_eq!(wide_only.bounds(), both.bounds(), "{name}");
+        assert_eq!(wide_only.bounce_traversal(), Traversal::Wide, "{name}");
+        assert_eq!(wide_only.shadow_traversal(), Traversal::Wide, "{name}");
+        let kept = wide_only.kept_triangles();
+        let saved = both.memory_bytes() - wide_only.memory_bytes();
+        assert!(
+            saved >= kept * (BYTES_PER_TRIANGLE - size_of::<u32>()),
+            "{name}: {saved} bytes saved for {kept} triangles"
+        );
+        let every_third: Vec<u32> = (0..scene.triangles.len() as u32).step_by(3).collect();
+        let (subset_both, subset_wide) =
+            (both.subset(&every_third), wide_only.subset(&every_third));
+        assert_eq!(subset_both, subset_wide, "{name}");
+
+        let mut rng = SplitMix(5);
+        let mut hits = 0;
+        for _ in 0..500 {
+            let specs = random_specs(&mut rng);
+            let active = (rng.next_u64() & 0xff) as u8 | 1;
+            let packet = packet_from_specs(scene, &specs, active);
+            let expected = hit_bits(&both.intersect_packet_wide(&packet));
+            let queries = [
+                ("packet", wide_only.intersect_packet(&packet)),
+                ("flat", wide_only.intersect_packet_flat(&packet)),
+                ("incoherent", wide_only.intersect_incoherent(&packet)),
+                ("lanes", wide_only.intersect_lanes(&packet)),
+                ("wide", wide_only.intersect_packet_wide(&packet)),
+            ];
+            for (query, found) in queries {
+                assert_eq!(hit_bits(&found), expected, "{name}, {query}");
+            }
+            let blocked = both.occluded_packet_wide(&packet);
+            for (query, found) in [
+                ("packet", wide_only.occluded_packet(&packet)),
+                ("flat", wide_only.occluded_packet_flat(&packet)),
+                ("incoherent", wide_only.occluded_incoherent(&packet)),
+                ("lanes", wide_only.occluded_lanes(&packet)),
+            ] {
+                assert_eq!(found, blocked, "{name}, occlusion by {query}");
+            }
+            assert_eq!(
+                hit_bits(&wide_only.intersect_packet_subset(&packet, &subset_wide)),
+                hit_bits(&both.intersect_packet_subset(&packet, &subset_both)),
+                "{name}, subset"
+            );
+            let found = both.intersect_packet_wide(&packet);
+            for lane in found.hit.iter() {
+                let ray = packet.ray(lane);
+                let triangle = found.triangle[lane];
+                assert_eq!(
+                    wide_only.hit_on(&ray, triangle),
+                    both.hit_on(&ray, triangle),
+                    "{name}"
+                );
+                hits += 1;
+            }
+        }
+        assert!(hits > 500, "{name}: {hits} hits");
+    }
 }

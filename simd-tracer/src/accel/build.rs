@@ -2,7 +2,7 @@
 //! degenerate triangles left out, leaf order, fan pairs and the wide tree.
 
 use super::triangle::{DEGENERATE_SINE, PreparedTriangle, dot, fan_pairs};
-use super::{Bvh, Traversal, WIDE_MIN_TRIANGLES, WideBvh, index_u32};
+use super::{Bvh, BvhLayout, Traversal, WIDE_MIN_TRIANGLES, WideBvh, index_u32};
 use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
@@ -114,13 +114,94 @@ pub(super) fn keeps_flat_copies(kept_triangles: usize) -> bool {
     kept_triangles <= WIDE_MIN_TRIANGLES
 }
 
+/// The fan pairs among the kept triangles, as slots `[first, second]`
+/// (ascending): [`fan_pairs`] over the kept triangles in input order, so the
+/// pairing is the input's and not the tree's. `original` maps slots to input
+/// indices.
+pub(super) fn slot_fan_pairs(input: &[[Vec3; 3]], original: &[u32]) -> Vec<[u32; 2]> {
+    let mut by_input: Vec<(u32, u32)> = original
+        .iter()
+        .enumerate()
+        .map(|(slot, &o)| (o, index_u32(slot)))
+        .collect();
+    by_input.par_sort_unstable();
+    let corners = |k: usize| by_input.get(k).and_then(|&(o, _)| input.get(o as usize));
+    let mut pairs: Vec<[u32; 2]> = fan_pairs(by_input.len(), corners)
+        .into_iter()
+        .filter_map(|k| Some([by_input.get(k)?.1, by_input.get(k + 1)?.1]))
+        .collect();
+    pairs.sort_unstable();
+    pairs
+}
+
+/// Makes the prepared record of a slot from the input on demand: its own
+/// edges, and the plane of its fan pair's first triangle where it is a
+/// pair's second. The build of a [`BvhLayout::WideOnly`] tree fills the wide
+/// blocks from it without a vector of every record, and its validation
+/// compares the blocks with it.
+pub(super) struct Preparer<'a> {
+    input: &'a [[Vec3; 3]],
+    original: &'a [u32],
+    /// Per slot, the slot of its pair's first triangle, or `u32::MAX`.
+    plane_of: Vec<u32>,
+}
+
+impl<'a> Preparer<'a> {
+    /// For the tree's slots (`original`: slot → input index) and its fan
+    /// pairs (slots).
+    pub(super) fn new(input: &'a [[Vec3; 3]], original: &'a [u32], pairs: &[[u32; 2]]) -> Self {
+        let mut plane_of = vec![u32::MAX; original.len()];
+        for &[first, second] in pairs {
+            if let Some(p) = plane_of.get_mut(second as usize) {
+                *p = first;
+            }
+        }
+        Self {
+            input,
+            original,
+            plane_of,
+        }
+    }
+
+    fn corners(&self, slot: usize) -> Option<&'a [Vec3; 3]> {
+        self.original
+            .get(slot)
+            .and_then(|&o| self.input.get(o as usize))
+    }
+
+    /// The prepared record of `slot` (`None` for a slot out of range).
+    pub(super) fn prepared(&self, slot: usize) -> Option<PreparedTriangle> {
+        let vertices = self.corners(slot)?;
+        let first = self
+            .plane_of
+            .get(slot)
+            .filter(|&&first| first != u32::MAX)
+            .and_then(|&first| self.corners(first as usize));
+        Some(match first {
+            Some(first) => PreparedTriangle::on_plane_of(vertices, &PreparedTriangle::new(first)),
+            None => PreparedTriangle::new(vertices),
+        })
+    }
+}
+
 // ---------------------------------------------------------------------------
 
 impl Bvh {
-    /// Builds over `triangles` (vertex positions, original order).
+    /// Builds over `triangles` (vertex positions, original order), with the
+    /// layout [`BvhLayout::for_triangles`] chooses for its size.
     /// Degenerate (zero-area or non-finite) triangles are skipped (never hit)
     /// and counted, see [`Bvh::skipped_triangles`].
     pub fn build(triangles: &[[Vec3; 3]]) -> Bvh {
+        Self::build_inner(triangles, None)
+    }
+
+    /// Builds over `triangles` keeping the trees of `layout` whatever its
+    /// size (tests compare the layouts on the same input).
+    pub fn build_with_layout(triangles: &[[Vec3; 3]], layout: BvhLayout) -> Bvh {
+        Self::build_inner(triangles, Some(layout))
+    }
+
+    fn build_inner(triangles: &[[Vec3; 3]], layout: Option<BvhLayout>) -> Bvh {
         // Input indices of the kept triangles, ascending.
         let kept: Vec<u32> = triangles
             .par_iter()
@@ -129,12 +210,13 @@ impl Bvh {
             .map(|(index, _)| index_u32(index))
             .collect();
         let skipped = triangles.len() - kept.len();
+        let layout = layout.unwrap_or_else(|| BvhLayout::for_triangles(kept.len()));
         let input = |kept_index: usize| {
             kept.get(kept_index)
                 .and_then(|&i| triangles.get(i as usize))
         };
 
-        let bvh2 = if kept.is_empty() {
+        let mut bvh2 = if kept.is_empty() {
             Bvh2::default()
         } else {
             let primitives: Vec<BuildTriangle<'_>> = (0..kept.len())
@@ -152,66 +234,60 @@ impl Bvh {
         };
 
         // Leaf order, so that leaves index the triangles directly.
-        let mut original = Vec::with_capacity(kept.len());
-        let mut slot_of_kept = vec![u32::MAX; kept.len()];
-        for (slot, &k) in bvh2.primitive_indices.iter().enumerate() {
-            if let (Some(&o), Some(s)) = (kept.get(k as usize), slot_of_kept.get_mut(k as usize)) {
-                original.push(o);
-                *s = index_u32(slot);
-            }
-        }
-        let mut triangles_prepared: Vec<PreparedTriangle> = original
-            .par_iter()
-            .map(|&o| {
-                triangles.get(o as usize).map_or_else(
-                    || PreparedTriangle::new(&[Vec3::ZERO; 3]),
-                    PreparedTriangle::new,
-                )
-            })
+        let original: Vec<u32> = bvh2
+            .primitive_indices
+            .iter()
+            .filter_map(|&k| kept.get(k as usize).copied())
             .collect();
+        drop(kept);
         // Fan pairs (consecutive in the input): the second takes the
         // first's plane.
-        let mut flat_pairs = Vec::new();
-        let mut paired = vec![false; original.len()];
-        for k in fan_pairs(kept.len(), input) {
-            let (Some(&first), Some(&second)) = (slot_of_kept.get(k), slot_of_kept.get(k + 1))
-            else {
-                continue;
-            };
-            let (first, second) = (first as usize, second as usize);
-            if let (Some(&plane), Some(v)) = (triangles_prepared.get(first), input(k + 1)) {
-                if let Some(prepared) = triangles_prepared.get_mut(second) {
-                    *prepared = PreparedTriangle::on_plane_of(v, &plane);
-                }
-                flat_pairs.push([index_u32(first), index_u32(second)]);
-                for slot in [first, second] {
-                    if let Some(p) = paired.get_mut(slot) {
+        let mut flat_pairs = slot_fan_pairs(triangles, &original);
+        let preparer = Preparer::new(triangles, &original, &flat_pairs);
+        let slots = original.len();
+        let triangles_prepared: Vec<PreparedTriangle> = match layout {
+            BvhLayout::BinaryAndWide => (0..slots)
+                .into_par_iter()
+                .filter_map(|slot| preparer.prepared(slot))
+                .collect(),
+            BvhLayout::WideOnly => Vec::new(),
+        };
+        let wide = WideBvh::build(&bvh2, slots, |slot| preparer.prepared(slot));
+        drop(preparer);
+        let bounds = bvh2
+            .nodes
+            .first()
+            .map(|root| (Vec3::from(root.aabb().min), Vec3::from(root.aabb().max)));
+        let mut flat_singles = Vec::new();
+        let mut flat_pair_triangles = Vec::new();
+        match layout {
+            BvhLayout::BinaryAndWide => {
+                let mut paired = vec![false; slots];
+                for slot in flat_pairs.iter().flatten() {
+                    if let Some(p) = paired.get_mut(*slot as usize) {
                         *p = true;
                     }
                 }
+                flat_singles = (0..slots).filter(|&s| !paired[s]).map(index_u32).collect();
+                if keeps_flat_copies(slots) {
+                    flat_pair_triangles = pair_triangles(&flat_pairs, &triangles_prepared);
+                }
+            }
+            BvhLayout::WideOnly => {
+                bvh2 = Bvh2::default();
+                flat_pairs = Vec::new();
             }
         }
-        drop(slot_of_kept);
-        drop(kept);
-        flat_pairs.sort_unstable();
-        let flat_pair_triangles = if keeps_flat_copies(triangles_prepared.len()) {
-            pair_triangles(&flat_pairs, &triangles_prepared)
-        } else {
-            Vec::new()
-        };
-        let flat_singles = (0..original.len())
-            .filter(|&slot| !paired[slot])
-            .map(index_u32)
-            .collect();
-        let wide = WideBvh::build(&bvh2, &triangles_prepared);
-        let (bounce, shadow) = if triangles_prepared.len() > WIDE_MIN_TRIANGLES {
+        let (bounce, shadow) = if slots > WIDE_MIN_TRIANGLES || layout == BvhLayout::WideOnly {
             (Traversal::Wide, Traversal::Wide)
         } else {
             (Traversal::Flat, Traversal::Packet)
         };
 
         Bvh {
+            layout,
             bvh2,
+            bounds,
             wide,
             bounce,
             shadow,

@@ -3,7 +3,7 @@
 
 use super::packet_traversal::PacketRays;
 use super::triangle::{PreparedTriangle, weight};
-use super::{Bvh, WideStack, index_u32};
+use super::{Bvh, BvhLayout, WideStack, index_u32};
 use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::{PacketHit, RayPacket};
 use crate::simd::{LANES, LaneMask};
@@ -84,19 +84,31 @@ impl FlatBest {
     }
 }
 
-/// A subset of a [`Bvh`]'s triangles ([`Bvh::subset`]), by slot.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct TriangleSubset(Vec<u32>);
+/// A subset of a [`Bvh`]'s triangles ([`Bvh::subset`]): their slots and a
+/// copy of their prepared records (a [`BvhLayout::WideOnly`] tree keeps
+/// them only in its wide blocks, and a subset, such as the emitters the last
+/// segment of a path tests, is read as one list).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TriangleSubset {
+    slots: Vec<u32>,
+    triangles: Vec<PreparedTriangle>,
+}
 
 impl TriangleSubset {
     /// Number of triangles.
     pub fn len(&self) -> usize {
-        self.0.len()
+        self.slots.len()
     }
 
     /// Whether the subset is empty.
     pub fn is_empty(&self) -> bool {
-        self.0.is_empty()
+        self.slots.is_empty()
+    }
+
+    /// Bytes held (vector capacities).
+    pub fn memory_bytes(&self) -> usize {
+        self.slots.capacity() * size_of::<u32>()
+            + self.triangles.capacity() * size_of::<PreparedTriangle>()
     }
 }
 impl Bvh {
@@ -132,7 +144,13 @@ impl Bvh {
     /// test with its acceptance folded into selects. Same output convention
     /// and the same hits as [`Bvh::intersect_packet`] (each lane's hit is
     /// the scalar test's minimum over all triangles).
+    ///
+    /// A [`BvhLayout::WideOnly`] tree keeps no flat lists and answers
+    /// through its 8-wide tree ([`Bvh::intersect_packet_wide`]).
     pub fn intersect_packet_flat(&self, packet: &RayPacket) -> PacketHit {
+        if self.layout == BvhLayout::WideOnly {
+            return self.intersect_packet_wide(packet);
+        }
         let rays = PacketRays::new(packet);
         let mut best = FlatBest::new(packet);
         let _: ControlFlow<()> = self.try_for_each_pair(|[first, second], a, b| {
@@ -159,12 +177,18 @@ impl Bvh {
                 *w = true;
             }
         }
-        TriangleSubset(
-            (0..self.original.len())
-                .filter(|&slot| wanted.get(self.original[slot] as usize) == Some(&true))
-                .map(index_u32)
+        let slots: Vec<u32> = (0..self.original.len())
+            .filter(|&slot| wanted.get(self.original[slot] as usize) == Some(&true))
+            .map(index_u32)
+            .collect();
+        let triangles = match self.layout {
+            BvhLayout::BinaryAndWide => slots
+                .iter()
+                .filter_map(|&slot| self.triangles.get(slot as usize).copied())
                 .collect(),
-        )
+            BvhLayout::WideOnly => self.wide.prepared_of_slots(&slots, self.original.len()),
+        };
+        TriangleSubset { slots, triangles }
     }
 
     /// Closest hits of a packet among the triangles of `subset` only, each
@@ -177,10 +201,8 @@ impl Bvh {
     ) -> PacketHit {
         let rays = PacketRays::new(packet);
         let mut best = FlatBest::new(packet);
-        for &slot in &subset.0 {
-            if let Some(triangle) = self.triangles.get(slot as usize) {
-                best.keep(rays.terms_all(triangle, best.t_max), slot_lanes(slot));
-            }
+        for (&slot, triangle) in subset.slots.iter().zip(&subset.triangles) {
+            best.keep(rays.terms_all(triangle, best.t_max), slot_lanes(slot));
         }
         best.finish(packet, &self.original)
     }
@@ -189,6 +211,9 @@ impl Bvh {
     /// occlusion twin of [`Bvh::intersect_packet_flat`]); stops when every
     /// active lane is blocked.
     pub fn occluded_packet_flat(&self, packet: &RayPacket) -> LaneMask {
+        if self.layout == BvhLayout::WideOnly {
+            return self.occluded_packet_wide(packet);
+        }
         let rays = PacketRays::new(packet);
         let wanted = u32::from(packet.active.0);
         let mut blocked = 0u32;

@@ -132,6 +132,16 @@
 //! bit-identical anyway). The pair costs clearly fewer instructions than
 //! its two triangles (instruction counts in `docs/performance.md`).
 //!
+//! # Layouts
+//!
+//! Trees up to [`WIDE_ONLY_MIN_TRIANGLES`] keep both trees
+//! ([`BvhLayout::BinaryAndWide`]); larger ones keep only the 8-wide tree
+//! ([`BvhLayout::WideOnly`]): the binary tree and the prepared triangles
+//! are dropped after the wide tree is built from them (the wide blocks are
+//! filled from the input on demand, so the build never holds both copies of
+//! the records), and every query, packets, flat and scalar alike, goes
+//! through the wide tree one ray at a time.
+//!
 //! The renderer sends camera rays through packets and incoherent rays
 //! through [`Bvh::intersect_incoherent`] (bounces) and
 //! [`Bvh::occluded_incoherent`] (shadows): up to [`WIDE_MIN_TRIANGLES`]
@@ -205,6 +215,48 @@ pub enum Traversal {
 /// `docs/performance.md`.
 pub const WIDE_MIN_TRIANGLES: usize = WIDE_WIDTH * WIDE_WIDTH;
 
+/// Which trees a [`Bvh`] keeps after its build.
+///
+/// A tree of both layouts holds the binary tree with its prepared
+/// triangles (the packet traversal of camera and shadow rays, the flat test
+/// and the scalar oracle read them) and the 8-wide tree with its own copy
+/// of the same records in its blocks. Above [`WIDE_ONLY_MIN_TRIANGLES`] the
+/// binary tree and the prepared triangles are not kept: every query goes
+/// through the 8-wide tree, which is what bounce and shadow rays in such
+/// scenes use anyway, and the tree keeps neither the 92-byte prepared
+/// records nor the binary tree's nodes and indices (figures in
+/// `docs/performance.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BvhLayout {
+    /// The binary tree with its prepared triangles and the 8-wide tree.
+    BinaryAndWide,
+    /// The 8-wide tree alone: packet, flat and scalar queries all run
+    /// through it (one ray at a time); the prepared records live only in
+    /// its blocks.
+    WideOnly,
+}
+
+/// Trees over more triangles than this keep only the 8-wide tree
+/// ([`BvhLayout::WideOnly`]). It is the size up to which the build is the
+/// thorough one tuned for the packet traversal of camera and shadow rays
+/// (`build::THOROUGH_BUILD_MAX_TRIANGLES`); up to it the binary tree and
+/// its prepared triangles take under 17 MiB (128 bytes per triangle),
+/// above it they are the largest part of a big scene's memory after the
+/// wide tree itself.
+pub const WIDE_ONLY_MIN_TRIANGLES: usize = build::THOROUGH_BUILD_MAX_TRIANGLES;
+
+impl BvhLayout {
+    /// The layout [`Bvh::build`] chooses for `kept_triangles`
+    /// non-degenerate triangles ([`WIDE_ONLY_MIN_TRIANGLES`]).
+    pub fn for_triangles(kept_triangles: usize) -> Self {
+        if kept_triangles > WIDE_ONLY_MIN_TRIANGLES {
+            Self::WideOnly
+        } else {
+            Self::BinaryAndWide
+        }
+    }
+}
+
 /// The least the BVH keeps per non-degenerate triangle: the prepared
 /// edge-test triangle (without its vertices), its input index, obvhs'
 /// primitive index and its entry in the flat test's lists (fan pairs or
@@ -228,15 +280,21 @@ pub struct Hit {
 /// BVH over a triangle soup; see the module documentation.
 #[derive(Clone)]
 pub struct Bvh {
-    /// The `obvhs` tree; leaf `first_index` values index `triangles`.
+    /// Which trees are kept.
+    layout: BvhLayout,
+    /// The `obvhs` tree; leaf `first_index` values index `triangles`
+    /// (empty in [`BvhLayout::WideOnly`]).
     bvh2: Bvh2,
+    /// The box of every kept triangle (`None` when none was kept).
+    bounds: Option<(Vec3, Vec3)>,
     /// The same tree collapsed to 8 children per node, for single rays.
     wide: WideBvh,
     /// How bounce rays find their hits ([`WIDE_MIN_TRIANGLES`]).
     bounce: Traversal,
     /// How shadow rays find their blockers ([`WIDE_MIN_TRIANGLES`]).
     shadow: Traversal,
-    /// Non-degenerate triangles in BVH (leaf) order.
+    /// Non-degenerate triangles in BVH (leaf) order (empty in
+    /// [`BvhLayout::WideOnly`]: the wide tree's blocks hold them).
     triangles: Vec<PreparedTriangle>,
     /// Slots of the fan pairs (first, second) whose second triangle takes
     /// the first one's plane ([`COPLANAR_SINE`]), in order of the first.
@@ -357,7 +415,7 @@ impl Bvh {
         self.input_count
     }
 
-    /// Number of BVH nodes.
+    /// Number of nodes of the binary tree (0 in [`BvhLayout::WideOnly`]).
     pub fn node_count(&self) -> usize {
         self.bvh2.nodes.len()
     }
@@ -439,10 +497,17 @@ impl Bvh {
 
     /// Bounds of the whole scene (`None` when no triangle was kept).
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        self.bvh2
-            .nodes
-            .first()
-            .map(|root| (Vec3::from(root.aabb().min), Vec3::from(root.aabb().max)))
+        self.bounds
+    }
+
+    /// Which trees this BVH keeps.
+    pub fn layout(&self) -> BvhLayout {
+        self.layout
+    }
+
+    /// Number of non-degenerate triangles in the tree.
+    pub fn kept_triangles(&self) -> usize {
+        self.original.len()
     }
 }
 

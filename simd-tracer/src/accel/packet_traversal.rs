@@ -4,7 +4,7 @@
 use super::triangle::{
     PreparedTriangle, cross, dot, edge_weight, edge_weights, plane_terms, safe_inverse_x8, weight,
 };
-use super::{Bvh, NodeStack, index_u32, with_node_stack};
+use super::{Bvh, BvhLayout, NodeStack, index_u32, with_node_stack};
 use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::{PacketHit, RayPacket};
 use crate::simd::{LANES, LaneMask};
@@ -282,7 +282,13 @@ impl Bvh {
     /// and Möller–Trumbore on `f32x8`); only lanes in `packet.active` are
     /// considered. Lanes without a hit carry their `t_max`, `u = v = 0` and
     /// triangle [`NO_TRIANGLE`].
+    ///
+    /// A [`BvhLayout::WideOnly`] tree answers through its 8-wide tree, one
+    /// ray at a time ([`Bvh::intersect_packet_wide`]).
     pub fn intersect_packet(&self, packet: &RayPacket) -> PacketHit {
+        if self.layout == BvhLayout::WideOnly {
+            return self.intersect_packet_wide(packet);
+        }
         let rays = PacketRays::new(packet);
         let active = packet.active.to_simd();
         let mut t_max = active.select(packet.t_max, f32x8::NEG_INFINITY);
@@ -332,9 +338,14 @@ impl Bvh {
     /// Packet occlusion: the mask of active lanes that are blocked for
     /// `t ∈ (0, t_max)`. A lane retires at its first hit; traversal stops
     /// when every active lane has.
+    /// A [`BvhLayout::WideOnly`] tree answers through its 8-wide tree
+    /// ([`Bvh::occluded_packet_wide`]).
     pub fn occluded_packet(&self, packet: &RayPacket) -> LaneMask {
         if packet.active.is_empty() {
             return LaneMask::NONE;
+        }
+        if self.layout == BvhLayout::WideOnly {
+            return self.occluded_packet_wide(packet);
         }
         let rays = PacketRays::new(packet);
         let active = packet.active.to_simd();

@@ -1,8 +1,10 @@
 //! Single rays through the binary tree with obvhs' traversal and the
 //! scalar triangle test: the oracle of every packet path.
 
-use super::triangle::{ScalarHit, accept_scalar, cross, dot, edge_terms, safe_inverse};
-use super::{Bvh, Hit};
+use super::triangle::{
+    PreparedTriangle, ScalarHit, accept_scalar, cross, dot, edge_terms, safe_inverse,
+};
+use super::{Bvh, BvhLayout, Hit, WideStack, index_u32};
 use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::{PacketHit, Ray, RayPacket};
 use crate::simd::{LANES, LaneMask};
@@ -41,6 +43,19 @@ pub(super) fn hits_by_lane(
     }
 }
 
+/// The scalar edge-function test of `ray` against one prepared triangle.
+#[inline(always)]
+fn scalar_test(
+    triangle: &PreparedTriangle,
+    ray: &Ray,
+    direction_length: f32,
+    t_max: f32,
+) -> Option<ScalarHit> {
+    let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
+    let e = edge_terms(o, d, cross(d, o), triangle, |v| v);
+    accept_scalar(&e, triangle, direction_length, t_max)
+}
+
 impl Bvh {
     /// The `obvhs` ray for `ray` (same inverse direction as the packets).
     pub(super) fn obvhs_ray(ray: &Ray) -> ObvhsRay {
@@ -62,15 +77,18 @@ impl Bvh {
         direction_length: f32,
         t_max: f32,
     ) -> Option<ScalarHit> {
-        let triangle = self.triangles.get(slot)?;
-        let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
-        let e = edge_terms(o, d, cross(d, o), triangle, |v| v);
-        accept_scalar(&e, triangle, direction_length, t_max)
+        scalar_test(self.triangles.get(slot)?, ray, direction_length, t_max)
     }
 
     /// Scalar closest hit using obvhs's own single-ray traversal (the
-    /// oracle). Hits have `t ∈ (0, ray.t_max)`.
+    /// oracle). Hits have `t ∈ (0, ray.t_max)`. A [`BvhLayout::WideOnly`]
+    /// tree has no binary tree and answers through its 8-wide tree
+    /// ([`Bvh::intersect_wide`]); the tests compare it with the oracle of a
+    /// tree of both layouts over the same input.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if self.layout == BvhLayout::WideOnly {
+            return self.intersect_wide(ray, &mut WideStack::new());
+        }
         let d = ray.direction.to_array();
         let length = dot(d, d).sqrt();
         let mut best: Option<(usize, ScalarHit)> = None;
@@ -100,8 +118,15 @@ impl Bvh {
     /// of triangles (it searches the input index).
     pub fn hit_on(&self, ray: &Ray, triangle: u32) -> Option<Hit> {
         let slot = self.original.iter().position(|&o| o == triangle)?;
+        let prepared = match self.layout {
+            BvhLayout::BinaryAndWide => *self.triangles.get(slot)?,
+            BvhLayout::WideOnly => *self
+                .wide
+                .prepared_of_slots(&[index_u32(slot)], self.original.len())
+                .first()?,
+        };
         let d = ray.direction.to_array();
-        let h = self.triangle_scalar(slot, ray, dot(d, d).sqrt(), ray.t_max)?;
+        let h = scalar_test(&prepared, ray, dot(d, d).sqrt(), ray.t_max)?;
         Some(Hit {
             t: h.t,
             u: h.u,
@@ -110,8 +135,12 @@ impl Bvh {
         })
     }
 
-    /// Scalar any-hit occlusion test for `t ∈ (0, ray.t_max)`.
+    /// Scalar any-hit occlusion test for `t ∈ (0, ray.t_max)` (through the
+    /// 8-wide tree in a [`BvhLayout::WideOnly`] tree).
     pub fn occluded(&self, ray: &Ray) -> bool {
+        if self.layout == BvhLayout::WideOnly {
+            return self.occluded_wide(ray, &mut WideStack::new());
+        }
         let d = ray.direction.to_array();
         let length = dot(d, d).sqrt();
         !self

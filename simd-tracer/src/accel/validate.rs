@@ -1,12 +1,12 @@
 //! [`Bvh::validate`]: the tree's invariants, checked iteratively (and by
 //! obvhs' own validation for trees of moderate depth).
 
-use super::Bvh;
 use super::build::{
-    THOROUGH_BUILD_MAX_TRIANGLES, is_degenerate, keeps_flat_copies, pair_triangles, tree_depth,
-    triangle_aabb,
+    Preparer, THOROUGH_BUILD_MAX_TRIANGLES, is_degenerate, keeps_flat_copies, pair_triangles,
+    slot_fan_pairs, tree_depth, triangle_aabb,
 };
 use super::triangle::{PreparedTriangle, is_fan_pair};
+use super::{Bvh, BvhLayout};
 use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -36,8 +36,12 @@ impl Bvh {
     /// record is the one its triangle of `input` (the triangles the tree was
     /// built from; the tree keeps no vertices) makes. `Err` says what is
     /// wrong.
+    ///
+    /// A [`BvhLayout::WideOnly`] tree has no binary tree, prepared triangles
+    /// or flat lists (all must be empty); its wide tree is checked against
+    /// the records its input makes, with the fan pairs found again in the
+    /// input.
     pub fn validate(&self, input: &[[Vec3; 3]]) -> Result<(), String> {
-        let n = self.triangles.len();
         if input.len() != self.input_count {
             return Err(format!(
                 "{} input triangles given, the tree was built from {}",
@@ -45,6 +49,11 @@ impl Bvh {
                 self.input_count
             ));
         }
+        self.validate_bounds(input)?;
+        if self.layout == BvhLayout::WideOnly {
+            return self.validate_wide_only(input);
+        }
+        let n = self.triangles.len();
         // The input vertices of a slot.
         let corners = |slot: usize| -> Option<[Vec3; 3]> {
             input.get(*self.original.get(slot)? as usize).copied()
@@ -179,7 +188,7 @@ impl Bvh {
         }
 
         self.wide
-            .validate(&self.triangles, corners)
+            .validate(n, |slot| self.triangles.get(slot).copied(), corners)
             .map_err(|e| format!("wide BVH: {e}"))?;
 
         // Fan pairs and singles: every slot once; each pair a coplanar fan
@@ -252,5 +261,74 @@ impl Bvh {
             }
         }
         Ok(())
+    }
+
+    /// The map back to the input: every slot names a distinct,
+    /// non-degenerate input triangle, and kept plus skipped triangles are
+    /// the input.
+    fn validate_original(&self, input: &[[Vec3; 3]]) -> Result<(), String> {
+        if self.original.len() + self.skipped != self.input_count {
+            return Err(format!(
+                "{} kept + {} skipped != {} input triangles",
+                self.original.len(),
+                self.skipped,
+                self.input_count
+            ));
+        }
+        let mut seen_input = vec![false; self.input_count];
+        for (slot, &index) in self.original.iter().enumerate() {
+            let flag = seen_input
+                .get_mut(index as usize)
+                .ok_or_else(|| format!("slot {slot} maps to input {index} out of range"))?;
+            if std::mem::replace(flag, true) {
+                return Err(format!("input triangle {index} appears twice"));
+            }
+            if input.get(index as usize).is_none_or(is_degenerate) {
+                return Err(format!("degenerate input triangle {index} is in the tree"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The scene box holds every kept triangle (and exists when one is
+    /// kept).
+    fn validate_bounds(&self, input: &[[Vec3; 3]]) -> Result<(), String> {
+        let Some((min, max)) = self.bounds else {
+            return if self.original.is_empty() {
+                Ok(())
+            } else {
+                Err("triangles are kept but the tree has no bounds".to_owned())
+            };
+        };
+        for (slot, &index) in self.original.iter().enumerate() {
+            let [a, b, c] = input
+                .get(index as usize)
+                .ok_or_else(|| format!("slot {slot} maps to input {index} out of range"))?;
+            if !(min.cmple(a.min(*b).min(*c)).all() && a.max(*b).max(*c).cmple(max).all()) {
+                return Err(format!("the bounds do not hold triangle slot {slot}"));
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Bvh::validate`] of a [`BvhLayout::WideOnly`] tree.
+    fn validate_wide_only(&self, input: &[[Vec3; 3]]) -> Result<(), String> {
+        if !(self.bvh2.nodes.is_empty()
+            && self.triangles.is_empty()
+            && self.flat_pairs.is_empty()
+            && self.flat_singles.is_empty()
+            && self.flat_pair_triangles.is_empty())
+        {
+            return Err("a wide-only tree keeps binary-tree data".to_owned());
+        }
+        self.validate_original(input)?;
+        let pairs = slot_fan_pairs(input, &self.original);
+        let preparer = Preparer::new(input, &self.original, &pairs);
+        let corners = |slot: usize| -> Option<[Vec3; 3]> {
+            input.get(*self.original.get(slot)? as usize).copied()
+        };
+        self.wide
+            .validate(self.original.len(), |slot| preparer.prepared(slot), corners)
+            .map_err(|e| format!("wide BVH: {e}"))
     }
 }

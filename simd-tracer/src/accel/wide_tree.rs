@@ -56,6 +56,7 @@ use super::{
 };
 use crate::packet::Ray;
 use glam::Vec3;
+use rayon::prelude::*;
 use wide::f32x8;
 
 /// Children per node and triangles per leaf block (the SIMD axis of this
@@ -144,15 +145,14 @@ fn lane_bits(lo: usize, hi: usize) -> u32 {
 }
 
 impl TriangleBlock {
-    fn new(prepared: &[PreparedTriangle], slots: &[u32]) -> Self {
+    fn new(prepared: impl Fn(usize) -> Option<PreparedTriangle>, slots: &[u32]) -> Self {
         debug_assert!(!slots.is_empty() && slots.len() <= WIDTH);
-        let get = |lane: usize| {
-            slots
-                .get(lane)
-                .and_then(|&slot| prepared.get(slot as usize))
-        };
+        let lanes: [Option<PreparedTriangle>; WIDTH] =
+            core::array::from_fn(|lane| slots.get(lane).and_then(|&slot| prepared(slot as usize)));
         let field = |f: &dyn Fn(&PreparedTriangle) -> f32| {
-            f32x8::new(core::array::from_fn(|lane| get(lane).map_or(0.0, f)))
+            f32x8::new(core::array::from_fn(|lane| {
+                lanes[lane].as_ref().map_or(0.0, f)
+            }))
         };
         let vec3 = |f: &dyn Fn(&PreparedTriangle) -> [f32; 3]| -> [f32x8; 3] {
             core::array::from_fn(|axis| field(&|t| f(t)[axis]))
@@ -399,10 +399,15 @@ pub(super) fn collapse(
 }
 
 impl WideBvh {
-    /// Collapses `bvh2` (whose leaves index `prepared`) into a wide tree.
-    pub(super) fn build(bvh2: &Bvh2, prepared: &[PreparedTriangle]) -> Self {
+    /// Collapses `bvh2` (whose leaves index `slots` triangle slots) into a
+    /// wide tree; `prepared(slot)` is the record of a slot.
+    pub(super) fn build(
+        bvh2: &Bvh2,
+        slots: usize,
+        prepared: impl Fn(usize) -> Option<PreparedTriangle> + Sync,
+    ) -> Self {
         let nodes2 = &bvh2.nodes;
-        if nodes2.is_empty() || prepared.is_empty() {
+        if nodes2.is_empty() || slots == 0 {
             return Self::default();
         }
         // Triangles under every binary node, children before parents
@@ -444,10 +449,34 @@ impl WideBvh {
         };
         wide.blocks = staged
             .blocks
-            .iter()
-            .map(|block| TriangleBlock::new(prepared, &block.slots[..block.used]))
+            .par_iter()
+            .map(|block| TriangleBlock::new(&prepared, &block.slots[..block.used]))
             .collect();
         wide
+    }
+
+    /// The prepared records of `wanted` slots as the blocks hold them, in
+    /// the order given (a slot in no lane is left out): one pass over the
+    /// blocks, for trees that keep no other copy.
+    pub(super) fn prepared_of_slots(&self, wanted: &[u32], slots: usize) -> Vec<PreparedTriangle> {
+        if wanted.is_empty() {
+            return Vec::new();
+        }
+        let mut lane_of = vec![u32::MAX; slots];
+        for (b, block) in self.blocks.iter().enumerate() {
+            for (t, &slot) in block.slot.iter().enumerate() {
+                if let Some(at) = lane_of.get_mut(slot as usize) {
+                    *at = super::index_u32(b * WIDTH + t);
+                }
+            }
+        }
+        wanted
+            .iter()
+            .filter_map(|&slot| {
+                let at = *lane_of.get(slot as usize)? as usize;
+                Some(self.blocks.get(at / WIDTH)?.lane(at % WIDTH))
+            })
+            .collect()
     }
 
     /// The triangle slots under binary node `index`, in leaf order.
@@ -639,10 +668,11 @@ impl WideBvh {
     /// in exactly one lane and its block data equals its prepared triangle.
     pub(super) fn validate(
         &self,
-        prepared: &[PreparedTriangle],
+        slots: usize,
+        prepared: impl Fn(usize) -> Option<PreparedTriangle>,
         corners: impl Fn(usize) -> Option<[Vec3; 3]>,
     ) -> Result<(), String> {
-        if prepared.is_empty() {
+        if slots == 0 {
             return if self.nodes.is_empty() && self.blocks.is_empty() {
                 Ok(())
             } else {
@@ -657,7 +687,7 @@ impl WideBvh {
         }
         let mut node_seen = vec![false; self.nodes.len()];
         let mut lane_seen = vec![false; self.blocks.len() * WIDTH];
-        let mut slot_seen = vec![false; prepared.len()];
+        let mut slot_seen = vec![false; slots];
         let mut pending = vec![0usize];
         while let Some(index) = pending.pop() {
             let node = self
@@ -734,7 +764,7 @@ impl WideBvh {
                             "wide node {index} child {k} does not bound triangle slot {slot}"
                         ));
                     }
-                    if self.blocks[b].lane(t) != prepared[slot as usize] {
+                    if Some(self.blocks[b].lane(t)) != prepared(slot as usize) {
                         return Err(format!("block {b} lane {t}: stale triangle data"));
                     }
                 }
@@ -759,7 +789,7 @@ impl WideBvh {
 
 #[cfg(test)]
 mod tests {
-    use super::super::Bvh;
+    use super::super::{Bvh, BvhLayout};
     use super::*;
 
     /// A soup of `count` small triangles in the unit cube (SplitMix64).
@@ -861,6 +891,92 @@ mod tests {
         let extra = broken.wide.blocks[0];
         broken.wide.blocks.push(extra);
         assert!(broken.validate(&input).is_err());
+    }
+
+    /// Every lane's prepared record by slot.
+    fn records_by_slot(bvh: &Bvh) -> Vec<Option<PreparedTriangle>> {
+        let mut records = vec![None; bvh.original.len()];
+        for block in &bvh.wide.blocks {
+            for t in 0..WIDTH {
+                if let Some(r) = records.get_mut(block.slot[t] as usize) {
+                    *r = Some(block.lane(t));
+                }
+            }
+        }
+        records
+    }
+
+    #[test]
+    fn wide_only_trees_validate_and_detect_corruption() {
+        // Random triangles and a strip of tilted planar quads split as fans
+        // (pairs whose second triangle carries the first one's plane).
+        let mut input = soup(300);
+        for i in 0..40 {
+            let x = i as f32 * 0.02;
+            let corner = |dx: f32, dy: f32| Vec3::new(x + dx, dy, 0.3 + 0.2 * dy + 0.1 * dx);
+            let (a, b, c, d) = (
+                corner(0.0, 0.0),
+                corner(0.02, 0.0),
+                corner(0.02, 0.05),
+                corner(0.0, 0.05),
+            );
+            input.extend([[a, b, c], [a, c, d]]);
+        }
+        let bvh = Bvh::build_with_layout(&input, BvhLayout::WideOnly);
+        bvh.validate(&input).unwrap();
+        assert!(bvh.bvh2.nodes.is_empty() && bvh.triangles.is_empty());
+        assert!(bvh.flat_pairs.is_empty() && bvh.flat_singles.is_empty());
+        // The same wide tree as a tree of both layouts, pairs' planes
+        // included.
+        let full = Bvh::build_with_layout(&input, BvhLayout::BinaryAndWide);
+        assert!(full.flat_pairs.len() >= 40, "{}", full.flat_pairs.len());
+        assert_eq!(bvh.original, full.original);
+        assert_eq!(bvh.bounds(), full.bounds());
+        let records = records_by_slot(&bvh);
+        assert_eq!(records, records_by_slot(&full));
+        assert_eq!(
+            records,
+            full.triangles.iter().copied().map(Some).collect::<Vec<_>>()
+        );
+
+        // A pair's second triangle with its own plane, not the first one's.
+        let second = full.flat_pairs[0][1] as usize;
+        let own = PreparedTriangle::new(&input[bvh.original[second] as usize]);
+        assert_ne!(Some(own), records[second]);
+        let mut broken = bvh.clone();
+        'lanes: for block in &mut broken.wide.blocks {
+            for t in 0..WIDTH {
+                if block.slot[t] as usize == second {
+                    let set = |v: &mut f32x8, x: f32| {
+                        let mut lanes = v.to_array();
+                        lanes[t] = x;
+                        *v = f32x8::new(lanes);
+                    };
+                    for axis in 0..3 {
+                        set(&mut block.normal[axis], own.normal[axis]);
+                    }
+                    set(&mut block.plane, own.plane);
+                    set(&mut block.grazing, own.grazing);
+                    break 'lanes;
+                }
+            }
+        }
+        assert!(broken.validate(&input).unwrap_err().contains("stale"));
+
+        // Two slots naming the same input triangle.
+        let mut broken = bvh.clone();
+        broken.original[1] = broken.original[0];
+        assert!(broken.validate(&input).is_err());
+
+        // Bounds that miss a triangle.
+        let mut broken = bvh.clone();
+        broken.bounds = broken.bounds.map(|(min, max)| (min, 0.5 * (min + max)));
+        assert!(broken.validate(&input).unwrap_err().contains("bounds"));
+
+        // Binary-tree data kept beside the wide tree.
+        let mut broken = bvh;
+        broken.triangles.push(own);
+        assert!(broken.validate(&input).unwrap_err().contains("binary"));
     }
 
     #[test]

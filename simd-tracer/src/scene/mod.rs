@@ -529,7 +529,7 @@ impl Scene {
             self.bvh.memory_bytes() + self.instances.as_ref().map_or(0, Instances::memory_bytes);
         let lights = self.lights.len() * LIGHT_BYTES
             + self.lights.index_memory_bytes()
-            + self.emitters.len() * size_of::<u32>()
+            + self.emitters.memory_bytes()
             + self.light_sampler.memory_bytes()
             + self
                 .environment_map
