@@ -20,6 +20,10 @@
    bounce), `caustic` (the spectrum the prism casts on the wall) and
    `glass` (the prism itself).
 
+Every transport runs with fspec's defaults otherwise, so `--coeffs auto`
+gives the Fourier transport and the hybrid with C = 4 the same N (32 on
+`prism`), and the hybrid with C = 1 or 8 N = 12 (the sizes compiled in).
+
 Prints Markdown tables (docs/results.md, "Hybrid transport").
 """
 

@@ -227,10 +227,11 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     pub transport: Option<TransportKind>,
     /// Fourier coefficients N (4, 8, 12, 16, 24, 32; cv: 4, 8, 12; hybrid:
-    /// 12), or auto: the smallest N whose truncation keeps the colour of
-    /// every light × reflectance product of the scene within ΔE2000 0.44
-    /// (cv and hybrid: 12). Default: the scene's `[render] coeffs`, else
-    /// auto.
+    /// 12, 16, 24, 32 with C = 4, 12 with C = 1 or 8), or auto: the
+    /// smallest N whose truncation keeps the colour of every light ×
+    /// reflectance product of the scene within ΔE2000 0.44 (hybrid: the
+    /// same, at least 12; cv: 12). Default: the scene's `[render] coeffs`,
+    /// else auto.
     #[arg(long, value_name = "N|auto", value_parser = CoeffsChoice::parse)]
     pub coeffs: Option<CoeffsChoice>,
     /// Sampled wavelengths per path C (1, 2, 4, 8, 12, 16, 32; cv: 4, 8, 12;
@@ -927,7 +928,15 @@ impl TransportSpec {
 }
 
 /// The `(N, C)` the hybrid transport is compiled for ([`with_transport`]).
-const HYBRID_SIZES: [(usize, usize); 3] = [(12, 1), (12, 4), (12, 8)];
+/// With the default `C` ([`HYBRID_WAVELENGTHS`]) every N of
+/// `--coeffs auto` from 12 up, so that a hybrid path carries the N the
+/// Fourier transport would choose for the scene; the other C at N = 12,
+/// where they were measured (docs/results.md, "Hybrid transport").
+const HYBRID_SIZES: [(usize, usize); 6] = [(12, 1), (12, 4), (12, 8), (16, 4), (24, 4), (32, 4)];
+
+/// The smallest N the hybrid transport is compiled for (`--coeffs auto`
+/// choosing 4 or 8 gives the hybrid 12).
+const HYBRID_MIN_COEFFS: usize = 12;
 
 /// Wavelengths drawn where a hybrid path meets dispersion when
 /// `--wavelengths` is not given: 4, measured against 1 and 8 on the
@@ -1139,8 +1148,11 @@ pub fn with_transport<K: TransportTask>(
             (12, 1) => hybrid::<12, 1, K>(basis, sampling, buffer, to_color, task),
             (12, 4) => hybrid::<12, 4, K>(basis, sampling, buffer, to_color, task),
             (12, 8) => hybrid::<12, 8, K>(basis, sampling, buffer, to_color, task),
+            (16, 4) => hybrid::<16, 4, K>(basis, sampling, buffer, to_color, task),
+            (24, 4) => hybrid::<24, 4, K>(basis, sampling, buffer, to_color, task),
+            (32, 4) => hybrid::<32, 4, K>(basis, sampling, buffer, to_color, task),
             (n, c) => Err(CliError::input(format!(
-                "--transport hybrid with --coeffs {n} --wavelengths {c} is not supported (N = 12, C in 1, 4, 8)"
+                "--transport hybrid with --coeffs {n} --wavelengths {c} is not supported (N in 12, 16, 24, 32 with C = 4; N = 12 with C in 1, 4, 8)"
             ))),
         },
     }
@@ -1810,9 +1822,11 @@ pub fn render(
 
 /// `args` with N settled: `--coeffs`, else the scene's `[render] coeffs`,
 /// else `auto`; `auto` on the Fourier transport is chosen from the scene's
-/// spectra (`coefficient_choice`), with the line that says why; control
-/// variates, sampled and hybrid transports keep [`UNRESOLVED_COEFFS`]
-/// (the hybrid is compiled for N = 12 only).
+/// spectra (`coefficient_choice`), with the line that says why, and on the
+/// hybrid transport likewise (its Fourier part is the Fourier transport's,
+/// so it carries the same N), raised to [`HYBRID_MIN_COEFFS`] and kept at
+/// it for C other than [`HYBRID_WAVELENGTHS`] ([`HYBRID_SIZES`]); control
+/// variates and sampled transports keep [`UNRESOLVED_COEFFS`].
 fn resolve_coeffs(
     args: &RenderArgs,
     defaults: &SceneDefaults,
@@ -1829,10 +1843,27 @@ fn resolve_coeffs(
             let chosen = choose_for_scene(scene, observer)?;
             (chosen.coeffs, Some(chosen.describe()))
         }
-        (
-            CoeffsChoice::Auto,
-            TransportKind::Cv | TransportKind::Sampled | TransportKind::Hybrid,
-        ) => (UNRESOLVED_COEFFS, None),
+        (CoeffsChoice::Auto, TransportKind::Hybrid) => {
+            let chosen = choose_for_scene(scene, observer)?;
+            let wavelengths = args.wavelengths.unwrap_or(HYBRID_WAVELENGTHS);
+            let coeffs = if wavelengths == HYBRID_WAVELENGTHS {
+                chosen.coeffs.max(HYBRID_MIN_COEFFS)
+            } else {
+                HYBRID_MIN_COEFFS
+            };
+            let note = if coeffs == chosen.coeffs {
+                chosen.describe()
+            } else {
+                format!(
+                    "{}; the hybrid transport with C = {wavelengths} takes N = {coeffs}",
+                    chosen.describe()
+                )
+            };
+            (coeffs, Some(note))
+        }
+        (CoeffsChoice::Auto, TransportKind::Cv | TransportKind::Sampled) => {
+            (UNRESOLVED_COEFFS, None)
+        }
     };
     let resolved = RenderArgs {
         coeffs: Some(CoeffsChoice::Fixed(coeffs)),
@@ -1903,6 +1934,42 @@ mod tests {
             panic!("{argv:?}");
         };
         render.args
+    }
+
+    /// Every hybrid size of [`HYBRID_SIZES`] is compiled in, and the sizes
+    /// beside them are refused.
+    #[test]
+    fn the_hybrid_sizes_are_the_compiled_ones() {
+        struct Build;
+        impl TransportTask for Build {
+            type Output = ();
+            fn run<T: Transport>(self, _transport: &T) -> Result<(), CliError> {
+                Ok(())
+            }
+        }
+        let observer = Arc::new(Observer::default());
+        let basis = TransportBasis {
+            range: SpectralRange::VISIBLE,
+            observer: &observer,
+        };
+        let spec = |coeffs, wavelengths| TransportSpec::Hybrid {
+            coeffs,
+            wavelengths,
+            sampling: Sampling::Hero,
+            buffer: BufferKind::Rgb,
+            to_color: ToColor::Series,
+        };
+        for (coeffs, wavelengths) in HYBRID_SIZES {
+            assert!(
+                with_transport(&spec(coeffs, wavelengths), basis, Build).is_ok(),
+                "N = {coeffs}, C = {wavelengths}"
+            );
+        }
+        assert!(HYBRID_SIZES.contains(&(HYBRID_MIN_COEFFS, HYBRID_WAVELENGTHS)));
+        for (coeffs, wavelengths) in [(8, 4), (16, 1), (32, 8), (12, 2), (48, 4)] {
+            assert!(!HYBRID_SIZES.contains(&(coeffs, wavelengths)));
+            assert!(with_transport(&spec(coeffs, wavelengths), basis, Build).is_err());
+        }
     }
 
     /// A scene's `[render] transport` applies where `--transport` is not

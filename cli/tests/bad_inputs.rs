@@ -216,8 +216,20 @@ fn unsupported_hybrid_sizes_and_transport_names_are_refused() -> TestResult {
     )?;
     refused(
         &dir,
-        &["--transport", "hybrid", "--coeffs", "16"],
-        &["--coeffs 16"],
+        &["--transport", "hybrid", "--coeffs", "8"],
+        &["--coeffs 8", "N in 12, 16, 24, 32 with C = 4"],
+    )?;
+    refused(
+        &dir,
+        &[
+            "--transport",
+            "hybrid",
+            "--coeffs",
+            "16",
+            "--wavelengths",
+            "8",
+        ],
+        &["--coeffs 16", "--wavelengths 8"],
     )?;
     refused(
         &dir,

@@ -338,16 +338,43 @@ fn hybrid_without_dispersion_renders_as_fourier() -> TestResult {
         args.extend_from_slice(transport);
         Ok(render_ok(&dir, &args)?.1)
     };
-    let fourier = render("cornell", &["--coeffs", "12"], "fourier.exr")?;
+    // `--coeffs auto` (the default) gives the hybrid the Fourier
+    // transport's N.
+    let chosen = |stderr: &str| -> Option<String> {
+        let at = stderr.find("coefficients: N = ")?;
+        stderr[at..].split_whitespace().nth(3).map(str::to_owned)
+    };
+    let fourier = render("cornell", &[], "fourier.exr")?;
     assert!(!fourier.contains(note), "{fourier}");
     let hybrid = render("cornell", &["--transport", "hybrid"], "hybrid.exr")?;
     assert!(hybrid.contains(note), "{hybrid}");
+    assert_eq!(chosen(&hybrid), chosen(&fourier), "{hybrid}");
     assert_eq!(
         fs::read(dir.join("fourier.exr"))?,
         fs::read(dir.join("hybrid.exr"))?
     );
+    // N = 12 is not the Fourier default on this scene, so the images differ.
+    let twelve = render(
+        "cornell",
+        &["--transport", "hybrid", "--coeffs", "12"],
+        "12.exr",
+    )?;
+    assert!(twelve.contains(note), "{twelve}");
+    assert_ne!(
+        fs::read(dir.join("12.exr"))?,
+        fs::read(dir.join("hybrid.exr"))?
+    );
     let prism = render("prism", &["--transport", "hybrid"], "prism.exr")?;
     assert!(!prism.contains(note), "{prism}");
+    let prism_fourier = render("prism", &[], "prism-fourier.exr")?;
+    assert_eq!(chosen(&prism), chosen(&prism_fourier), "{prism}");
+    assert_ne!(chosen(&prism).as_deref(), Some("12"), "{prism}");
+    let one = render(
+        "prism",
+        &["--transport", "hybrid", "--wavelengths", "1"],
+        "one.exr",
+    )?;
+    assert!(one.contains("with C = 1 takes N = 12"), "{one}");
     let part = render("cornell", &["--transport", "hybrid"], "part.fspart")?;
     assert!(!part.contains(note), "{part}");
     Ok(())

@@ -28,8 +28,9 @@ use spectral_core::delta_e::delta_e2000;
 use spectral_core::observer::Observer;
 use spectral_core::sampling::WavelengthStrategy;
 use spectral_core::xyz::XyzRoute;
-use spectral_core::{ConstantSpectrum, SpectralRange};
+use spectral_core::{ConstantSpectrum, FourierSpectrum, SpectralRange};
 use std::sync::Arc;
+use wide::f32x8;
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
@@ -314,5 +315,60 @@ fn through_dispersive_glass_the_hybrid_converges_to_the_sampled_transport() -> T
         z.iter().any(|&z| z > Z_BOUND),
         "negative control: light stripes 10 % darker, z = {z:?}"
     );
+    Ok(())
+}
+
+/// The hybrid's product is the Fourier product and the sampled product
+/// part by part, bit for bit; where one series is zero in every lane (a
+/// throughput whose lanes have all split) the skipped truncated product
+/// gives the zero it would have made.
+#[test]
+fn the_product_is_the_product_of_each_part() -> TestResult {
+    let hybrid = hybrid::<4>(Buffer::Spectral, XyzRoute::Series)?;
+    let fourier = FourierTransport::<12>::new(RANGE, Buffer::Spectral, XyzRoute::Series)?;
+    let sampled = SampledTransport::<4>::new(RANGE, WavelengthStrategy::Hero);
+    let series = |seed: f32| {
+        let mut s = fourier.zero();
+        for (k, c) in s.coeffs.iter_mut().enumerate() {
+            *c = f32x8::new(core::array::from_fn(|lane| {
+                ((seed + k as f32) * 0.37 + lane as f32 * 0.11).sin()
+            }));
+        }
+        s
+    };
+    let values = |seed: f32| -> [f32x8; 4] {
+        core::array::from_fn(|i| {
+            f32x8::new(core::array::from_fn(|lane| seed + (i * 8 + lane) as f32))
+        })
+    };
+    let bits = |s: &(_, [f32x8; 4])| {
+        let (f, v): &(FourierSpectrum<f32x8, 12>, [f32x8; 4]) = s;
+        (
+            f.coeffs.map(|c| c.to_array().map(f32::to_bits)),
+            v.map(|c| c.to_array().map(f32::to_bits)),
+        )
+    };
+    let (a, b) = ((series(1.0), values(0.5)), (series(2.0), values(3.0)));
+    let product = hybrid.mul(&a, &b);
+    assert_eq!(
+        bits(&product),
+        bits(&(fourier.mul(&a.0, &b.0), sampled.mul(&a.1, &b.1)))
+    );
+    // An all-zero series on either side: a zero series, the sampled part
+    // multiplied as before.
+    for (x, y) in [((fourier.zero(), a.1), b), (a, (fourier.zero(), b.1))] {
+        let product = hybrid.mul(&x, &y);
+        assert_eq!(
+            bits(&product),
+            bits(&(fourier.zero(), sampled.mul(&x.1, &y.1)))
+        );
+        assert_eq!(
+            fourier
+                .mul(&x.0, &y.0)
+                .coeffs
+                .map(|c| c.to_array().map(f32::abs)),
+            fourier.zero().coeffs.map(|c| c.to_array())
+        );
+    }
     Ok(())
 }

@@ -183,6 +183,16 @@ fn restricted(fluorescence: &Fluorescence, keep: LaneMask) -> Fluorescence {
     }
 }
 
+/// Whether every coefficient of every lane of `series` is zero (`±0`; a
+/// NaN is not zero).
+#[inline(always)]
+fn is_zero<const N: usize>(series: &FourierSpectrum<f32x8, N>) -> bool {
+    series
+        .coeffs
+        .iter()
+        .all(|c| c.simd_eq(f32x8::ZERO).to_bitmask() == (1 << LANES) - 1)
+}
+
 /// `value` with lane `lane` set to `v`.
 fn with_lane(value: f32x8, lane: usize, v: f32) -> f32x8 {
     let mut lanes = value.to_array();
@@ -283,9 +293,17 @@ impl<const N: usize, const C: usize> Transport for HybridTransport<N, C> {
         (self.fourier.gather_ids(scene, &(), ids, lanes), split)
     }
 
+    /// Part by part; the truncated product is skipped where either series
+    /// is zero in every lane (a throughput whose lanes have all split):
+    /// its `N²` multiply-adds would only make zeros.
     #[inline(always)]
     fn mul(&self, a: &Self::Spectra, b: &Self::Spectra) -> Self::Spectra {
-        (self.fourier.mul(&a.0, &b.0), self.sampled.mul(&a.1, &b.1))
+        let fourier = if is_zero(&a.0) || is_zero(&b.0) {
+            self.fourier.zero()
+        } else {
+            self.fourier.mul(&a.0, &b.0)
+        };
+        (fourier, self.sampled.mul(&a.1, &b.1))
     }
 
     fn scale(&self, a: &Self::Spectra, weight: f32x8) -> Self::Spectra {
