@@ -1228,15 +1228,21 @@ impl SceneBuilder {
         if !self.vertex_normals.is_empty() {
             shading_index.resize(self.triangles.len(), NO_ID);
         }
-        // Material ids were checked above, so every triangle has a record.
+        // Material ids were checked above, so every triangle has a record
+        // (`Surface::NONE` is unreachable). An indexed map collects into
+        // one vector of the final size, without the per-thread pieces a
+        // filtering collect would join (a second copy at the peak).
         let mut surfaces: Vec<Surface> = self
             .triangles
             .par_iter()
             .zip(self.triangle_material.par_iter())
-            .filter_map(|(vertices, &id)| {
-                let material = self.materials.get(id.index())?;
-                let normal = geometric_normal(vertices);
-                Some(Surface::new(normal, triangle_area(vertices), id, material))
+            .map(|(vertices, &id)| {
+                self.materials
+                    .get(id.index())
+                    .map_or(Surface::NONE, |material| {
+                        let normal = geometric_normal(vertices);
+                        Surface::new(normal, triangle_area(vertices), id, material)
+                    })
             })
             .collect();
         let mut lights = LightSet::new(&self.triangles, &mut surfaces, &self.spectra);
