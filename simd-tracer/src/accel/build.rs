@@ -252,7 +252,11 @@ impl Bvh {
                 .collect(),
             BvhLayout::WideOnly => Vec::new(),
         };
-        let wide = WideBvh::build(&bvh2, slots, |slot| preparer.prepared(slot));
+        let wide = if triangles_prepared.is_empty() {
+            WideBvh::build(&bvh2, slots, |slot| preparer.prepared(slot))
+        } else {
+            WideBvh::build(&bvh2, slots, |slot| triangles_prepared.get(slot).copied())
+        };
         drop(preparer);
         let bounds = bvh2
             .nodes

@@ -5,7 +5,7 @@ use super::build::{
     Preparer, THOROUGH_BUILD_MAX_TRIANGLES, is_degenerate, keeps_flat_copies, pair_triangles,
     slot_fan_pairs, tree_depth, triangle_aabb,
 };
-use super::triangle::{PreparedTriangle, is_fan_pair};
+use super::triangle::is_fan_pair;
 use super::{Bvh, BvhLayout};
 use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
@@ -72,12 +72,6 @@ impl Bvh {
                 "{} primitive indices for {} triangles",
                 self.bvh2.primitive_indices.len(),
                 n
-            ));
-        }
-        if n + self.skipped != self.input_count {
-            return Err(format!(
-                "{} kept + {} skipped != {} input triangles",
-                n, self.skipped, self.input_count
             ));
         }
         if n == 0 {
@@ -192,9 +186,8 @@ impl Bvh {
             .map_err(|e| format!("wide BVH: {e}"))?;
 
         // Fan pairs and singles: every slot once; each pair a coplanar fan
-        // whose second triangle carries the first one's plane.
-        // Per slot, the first triangle of its pair if it is a pair's second.
-        let mut first_of = vec![u32::MAX; n];
+        // whose second triangle carries the first one's plane (checked with
+        // the records below).
         let mut listed = vec![0u32; n];
         let mut count = |slot: u32| {
             listed
@@ -215,7 +208,6 @@ impl Bvh {
                     "slots {first} and {second} are not a coplanar fan pair"
                 ));
             }
-            first_of[b] = first;
         }
         for &single in &self.flat_singles {
             count(single)?;
@@ -235,28 +227,12 @@ impl Bvh {
             ));
         }
 
-        // The slot data and the map back to the input.
-        let mut seen_input = vec![false; self.input_count];
-        for (slot, &input) in self.original.iter().enumerate() {
-            let flag = seen_input
-                .get_mut(input as usize)
-                .ok_or_else(|| format!("slot {slot} maps to input {input} out of range"))?;
-            if *flag {
-                return Err(format!("input triangle {input} appears twice"));
-            }
-            *flag = true;
-            let vertices = &corners(slot).ok_or_else(|| missing(slot))?;
-            if is_degenerate(vertices) {
-                return Err(format!("degenerate input triangle {input} is in the tree"));
-            }
-            let prepared = match first_of.get(slot).filter(|&&first| first != u32::MAX) {
-                Some(&first) => PreparedTriangle::on_plane_of(
-                    vertices,
-                    &PreparedTriangle::new(&corners(first as usize).ok_or_else(|| missing(slot))?),
-                ),
-                None => PreparedTriangle::new(vertices),
-            };
-            if prepared != self.triangles[slot] {
+        // The map back to the input, and every record as the input makes
+        // it (a pair's second with its first's plane).
+        self.validate_original(input)?;
+        let preparer = Preparer::new(input, &self.original, &self.flat_pairs);
+        for (slot, stored) in self.triangles.iter().enumerate() {
+            if preparer.prepared(slot).as_ref() != Some(stored) {
                 return Err(format!("prepared data of slot {slot} is stale"));
             }
         }
