@@ -7,7 +7,9 @@
 1. Cost: CPU seconds (user + system of the child, `getrusage`) per sample
    per pixel of `fspec render` for the Fourier transport and the hybrid on
    `cornell` (nothing disperses) and on `prism`, and for the sampled
-   transport and the hybrid with C = 1, 4, 8 on `prism`; the renders of
+   transport (hero wavelengths and `--sampling lights`) and the hybrid
+   with C = 1, 4, 8 (its default `--sampling lights`) and with C = 4 and
+   hero wavelengths on `prism`; the renders of
    each round are alternated and the median of three rounds is kept.
 2. Noise at equal time: every transport gets the CPU time of the hybrid
    (C = 4) at `--budget-spp` samples per pixel, converted to its own spp by
@@ -47,8 +49,10 @@ REGIONS = {
 TRANSPORTS = {
     "fourier": ["--transport", "fourier"],
     "sampled C=4": ["--transport", "sampled", "--wavelengths", "4"],
+    "sampled C=4 lights": ["--transport", "sampled", "--wavelengths", "4", "--sampling", "lights"],
     "hybrid C=1": ["--transport", "hybrid", "--wavelengths", "1"],
     "hybrid C=4": ["--transport", "hybrid", "--wavelengths", "4"],
+    "hybrid C=4 hero": ["--transport", "hybrid", "--wavelengths", "4", "--sampling", "hero"],
     "hybrid C=8": ["--transport", "hybrid", "--wavelengths", "8"],
 }
 

@@ -193,10 +193,8 @@ impl Palette {
     /// The emission spectra and reflectances of `scene` (module docs).
     pub fn of(scene: &Scene) -> Self {
         let index = |id: SpectrumId| (!id.is_none()).then_some(id.0 as usize);
-        let mut emitters = BTreeSet::new();
         let mut reflectances = BTreeSet::new();
         for material in scene.materials() {
-            emitters.extend(material.emission.and_then(index));
             match &material.bsdf {
                 Bsdf::Lambert {
                     albedo: Albedo::Spectrum(id),
@@ -209,10 +207,12 @@ impl Palette {
                 _ => {}
             }
         }
-        emitters.extend(scene.light_sampler().emission_spectra().filter_map(index));
-        emitters.extend(scene.environment().and_then(index));
         Self {
-            emitters: emitters.into_iter().collect(),
+            emitters: scene
+                .emission_spectra()
+                .into_iter()
+                .filter_map(index)
+                .collect(),
             reflectances: reflectances.into_iter().collect(),
         }
     }

@@ -231,6 +231,7 @@ pub fn run(args: &MergeArgs) -> Result<MergeSummary, CliError> {
     let basis = TransportBasis {
         range,
         observer: &Arc::new(Observer::default()),
+        density: None,
     };
     let result = with_transport(&identity.transport, basis, ResolveTask { state: &merged })?;
     let mut written = output.write_images(&result, &range)?;

@@ -33,6 +33,7 @@ use simd_tracer::render::{
 use simd_tracer::sampling::sampler::SamplerKind;
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::SceneOptions;
+use simd_tracer::transport::emission_density::{EmissionDensity, emission_density};
 use simd_tracer::transport::{
     ControlVariateTransport, FourierTransport, HybridSettings, HybridTransport, SampledTransport,
     Transport,
@@ -103,6 +104,10 @@ pub enum Sampling {
     Hero,
     /// Visible-importance density (pbrt-v4 / Mitsuba 3), hero rotation in CDF space.
     Visible,
+    /// A density that follows the scene's lamps: the visible density and
+    /// each emission spectrum times the observer, in equal parts, hero
+    /// rotation in its CDF space (the hybrid's default).
+    Lights,
 }
 
 /// How coefficients become colour.
@@ -239,9 +244,10 @@ pub struct RenderArgs {
     /// sampled and hybrid, 8 for cv.
     #[arg(long)]
     pub wavelengths: Option<usize>,
-    /// How sampled wavelengths are chosen.
-    #[arg(long, value_enum, default_value_t = Sampling::Hero)]
-    pub sampling: Sampling,
+    /// How sampled wavelengths are chosen [default: lights for hybrid,
+    /// hero otherwise].
+    #[arg(long, value_enum)]
+    pub sampling: Option<Sampling>,
     /// Conversion from coefficients to colour.
     #[arg(long, value_enum, default_value_t = ToColor::Zeroth)]
     pub to_color: ToColor,
@@ -845,6 +851,31 @@ pub enum TransportSpec {
 }
 
 impl TransportSpec {
+    /// How its sampled wavelengths are drawn (none for Fourier).
+    pub fn sampling(&self) -> Option<Sampling> {
+        match *self {
+            Self::Fourier { .. } => None,
+            Self::Sampled { sampling, .. }
+            | Self::Cv { sampling, .. }
+            | Self::Hybrid { sampling, .. } => Some(sampling),
+        }
+    }
+
+    /// The lights density of `scene` where this transport draws from it
+    /// (`--sampling lights`), for [`TransportBasis::density`].
+    pub fn lights_density(
+        &self,
+        scene: &Scene,
+        observer: &Observer,
+    ) -> Result<Option<Arc<EmissionDensity>>, CliError> {
+        if self.sampling() != Some(Sampling::Lights) {
+            return Ok(None);
+        }
+        emission_density(scene, observer)
+            .map(|density| Some(Arc::new(density)))
+            .map_err(CliError::input)
+    }
+
     /// Whether its film keeps Fourier coefficients per pixel (a Fourier
     /// transport with a spectral buffer): spectral and coefficient EXR
     /// outputs need them.
@@ -868,18 +899,18 @@ impl TransportSpec {
             },
             TransportKind::Sampled => Self::Sampled {
                 wavelengths: args.wavelengths.unwrap_or(4),
-                sampling: args.sampling,
+                sampling: args.sampling.unwrap_or(Sampling::Hero),
             },
             TransportKind::Cv => Self::Cv {
                 wavelengths: args.wavelengths.unwrap_or(8),
                 coeffs: args.coeff_count(),
-                sampling: args.sampling,
+                sampling: args.sampling.unwrap_or(Sampling::Hero),
                 alpha_per_pixel: args.cv_alpha_per_pixel,
             },
             TransportKind::Hybrid => Self::Hybrid {
                 coeffs: args.coeff_count(),
                 wavelengths: args.wavelengths.unwrap_or(HYBRID_WAVELENGTHS),
-                sampling: args.sampling,
+                sampling: args.sampling.unwrap_or(HYBRID_SAMPLING),
                 buffer: args.buffer,
                 to_color: args.to_color,
             },
@@ -938,6 +969,12 @@ const HYBRID_SIZES: [(usize, usize); 6] = [(12, 1), (12, 4), (12, 8), (16, 4), (
 /// choosing 4 or 8 gives the hybrid 12).
 const HYBRID_MIN_COEFFS: usize = 12;
 
+/// How a hybrid path draws its wavelengths at its split when `--sampling`
+/// is not given: from the scene's lamps, where the sampled continuation's
+/// light comes from (`simd_tracer::transport::emission_density`; measured
+/// in docs/results.md, "Hybrid transport").
+pub const HYBRID_SAMPLING: Sampling = Sampling::Lights;
+
 /// Wavelengths drawn where a hybrid path meets dispersion when
 /// `--wavelengths` is not given: 4, measured against 1 and 8 on the
 /// `prism` scene (docs/results.md, "Hybrid transport").
@@ -979,8 +1016,20 @@ pub fn strategy(sampling: Sampling) -> WavelengthStrategy {
         Sampling::Uniform => WavelengthStrategy::Uniform,
         Sampling::Stratified => WavelengthStrategy::Stratified,
         Sampling::Hero => WavelengthStrategy::Hero,
-        Sampling::Visible => WavelengthStrategy::VisibleHero,
+        // The lights density's own draws need the scene
+        // ([`TransportBasis::density`], built where a render or a probe
+        // starts); where nothing is traced (merging parts) the visible
+        // density stands in.
+        Sampling::Visible | Sampling::Lights => WavelengthStrategy::VisibleHero,
     }
+}
+
+/// The density the transport draws from: the scene's lights density for
+/// `--sampling lights`, else none (the strategy).
+fn density<'a>(sampling: Sampling, basis: &TransportBasis<'a>) -> Option<Arc<EmissionDensity>> {
+    (sampling == Sampling::Lights)
+        .then(|| basis.density.cloned())
+        .flatten()
 }
 
 fn route(to_color: ToColor) -> XyzRoute {
@@ -1004,6 +1053,9 @@ pub struct TransportBasis<'a> {
     pub range: SpectralRange,
     /// What the film's channels measure.
     pub observer: &'a Arc<Observer>,
+    /// The scene's lights density (`--sampling lights`); `None` where
+    /// nothing is traced (merging parts).
+    pub density: Option<&'a Arc<EmissionDensity>>,
 }
 
 fn fourier<const N: usize, K: TransportTask>(
@@ -1027,11 +1079,14 @@ fn sampled<const C: usize, K: TransportTask>(
     sampling: Sampling,
     task: K,
 ) -> Result<K::Output, CliError> {
-    task.run(&SampledTransport::<C>::with_observer(
-        basis.range,
-        strategy(sampling),
-        Arc::clone(basis.observer),
-    ))
+    task.run(
+        &SampledTransport::<C>::with_observer(
+            basis.range,
+            strategy(sampling),
+            Arc::clone(basis.observer),
+        )
+        .with_density(density(sampling, &basis)),
+    )
 }
 
 fn cv<const C: usize, const N: usize, K: TransportTask>(
@@ -1040,6 +1095,11 @@ fn cv<const C: usize, const N: usize, K: TransportTask>(
     alpha_per_pixel: bool,
     task: K,
 ) -> Result<K::Output, CliError> {
+    if sampling == Sampling::Lights {
+        return Err(CliError::input(
+            "--sampling lights is not supported by the cv transport (its control variate draws by a fixed strategy): use hero, visible, stratified or uniform",
+        ));
+    }
     let alpha = if alpha_per_pixel {
         AlphaMode::PerPixel
     } else {
@@ -1071,6 +1131,7 @@ fn hybrid<const N: usize, const C: usize, K: TransportTask>(
         route: route(to_color),
         strategy: strategy(sampling),
         observer: basis.observer,
+        density: density(sampling, &basis).as_ref(),
     })
     .map_err(range_error)?;
     task.run(&transport)
@@ -1802,14 +1863,16 @@ pub fn render(
         },
         coefficient_note,
     };
-    let basis = TransportBasis {
-        range: scene.range(),
-        observer: &colour_observer,
-    };
     let (spec, dispatch_note) = TransportSpec::of(args).for_scene(&scene, splitting);
     if let Some(note) = dispatch_note {
         observer.notice(&RenderNotice::Note(note));
     }
+    let lights = spec.lights_density(&scene, &colour_observer)?;
+    let basis = TransportBasis {
+        range: scene.range(),
+        observer: &colour_observer,
+        density: lights.as_ref(),
+    };
     let (result, state, memory) = with_transport(&spec, basis, task)?;
     let requested = [parts.job_first_pass, parts.job_first_pass + parts.spp];
     Ok(RenderedFrame {
@@ -1951,6 +2014,7 @@ mod tests {
         let basis = TransportBasis {
             range: SpectralRange::VISIBLE,
             observer: &observer,
+            density: None,
         };
         let spec = |coeffs, wavelengths| TransportSpec::Hybrid {
             coeffs,

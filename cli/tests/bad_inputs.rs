@@ -200,6 +200,11 @@ fn unsupported_control_variate_sizes_are_refused() -> TestResult {
         &["--transport", "cv", "--coeffs", "16"],
         &["--coeffs 16"],
     )?;
+    refused(
+        &dir,
+        &["--transport", "cv", "--sampling", "lights"],
+        &["--sampling lights", "cv transport"],
+    )?;
     Ok(())
 }
 

@@ -188,7 +188,7 @@ fn default_render_writes_png_and_exr_in_the_current_folder() -> TestResult {
 #[test]
 fn every_builtin_scene_renders_clean_in_every_transport() -> TestResult {
     let dir = test_dir("builtins")?;
-    let transports: [&[&str]; 5] = [
+    let transports: [&[&str]; 6] = [
         &["--transport", "fourier", "--coeffs", "8"],
         &[
             "--transport",
@@ -208,6 +208,7 @@ fn every_builtin_scene_renders_clean_in_every_transport() -> TestResult {
             "8",
         ],
         &["--transport", "cv"],
+        &["--transport", "sampled", "--sampling", "lights"],
     ];
     for scene in builtin_names()? {
         for (t, transport) in transports.iter().enumerate() {
@@ -319,6 +320,39 @@ fn same_seed_gives_identical_files_with_one_and_two_threads() -> TestResult {
     args.extend(["--seed", "8", "--out", "d.exr"]);
     render_ok(&dir, &args)?;
     assert_ne!(a, fs::read(dir.join("d.exr"))?);
+    Ok(())
+}
+
+/// The hybrid draws its split's wavelengths from the scene's lights
+/// density unless `--sampling` says otherwise: the default's image is
+/// `--sampling lights`'s byte for byte, and `--sampling hero`'s differs
+/// (the comparison can fail).
+#[test]
+fn the_hybrid_draws_from_the_lights_by_default() -> TestResult {
+    let dir = test_dir("hybrid-lights")?;
+    let render = |sampling: &[&str], out: &str| -> TestResult<Vec<u8>> {
+        let mut args = vec![
+            "prism",
+            "--transport",
+            "hybrid",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "4",
+            "--seed",
+            "5",
+            "--out",
+            out,
+        ];
+        args.extend_from_slice(sampling);
+        render_ok(&dir, &args)?;
+        Ok(fs::read(dir.join(out))?)
+    };
+    let default = render(&[], "default.exr")?;
+    assert_eq!(default, render(&["--sampling", "lights"], "lights.exr")?);
+    assert_ne!(default, render(&["--sampling", "hero"], "hero.exr")?);
     Ok(())
 }
 

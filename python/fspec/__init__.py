@@ -569,7 +569,7 @@ def render(
     transport: str = "fourier",
     coeffs: Optional[Union[int, str]] = None,
     wavelengths: Optional[int] = None,
-    sampling: str = "hero",
+    sampling: Optional[str] = None,
     sampler: Optional[str] = None,
     to_color: str = "zeroth",
     buffer: str = "spectral",
@@ -609,7 +609,9 @@ def render(
             ``"cv"`` (control variates; both in 4, 8, 12) or ``"hybrid"``
             (Fourier until a path meets dispersion, sampled after it;
             ``coeffs`` 12, ``wavelengths`` in 1, 4, 8).
-        sampling: ``"uniform"``, ``"stratified"``, ``"hero"``, ``"visible"``.
+        sampling: ``"uniform"``, ``"stratified"``, ``"hero"``, ``"visible"``,
+            ``"lights"`` (the scene's lamps; the default of ``"hybrid"``,
+            ``"hero"`` the others').
         sampler: ``"sobol"`` (the default, except with ``"cv"``) or
             ``"independent"``.
         to_color: route from coefficients to colour (:func:`to_xyz`).

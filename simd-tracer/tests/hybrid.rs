@@ -20,6 +20,7 @@ use simd_tracer::scene::shapes::add_quad_uv;
 use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::shading::material::Material;
 use simd_tracer::spectra::SpectrumSource;
+use simd_tracer::transport::emission_density::{EmissionDensity, emission_density};
 use simd_tracer::transport::{
     FourierTransport, HybridSettings, HybridTransport, SampledTransport, Transport,
 };
@@ -62,12 +63,23 @@ fn run<T: Transport>(t: &T, scene: &Scene, s: &RenderSettings) -> TestResult<Ren
 }
 
 fn hybrid<const C: usize>(buffer: Buffer, route: XyzRoute) -> TestResult<HybridTransport<12, C>> {
+    hybrid_drawing(buffer, route, None)
+}
+
+/// The hybrid drawing its split's wavelengths from `density` (`None`: by
+/// uniform hero wavelengths).
+fn hybrid_drawing<const C: usize>(
+    buffer: Buffer,
+    route: XyzRoute,
+    density: Option<&Arc<EmissionDensity>>,
+) -> TestResult<HybridTransport<12, C>> {
     Ok(HybridTransport::new(&HybridSettings {
         range: RANGE,
         buffer,
         route,
         strategy: WavelengthStrategy::Hero,
         observer: &Arc::new(Observer::default()),
+        density,
     })?)
 }
 
@@ -270,7 +282,9 @@ const DARKER: f64 = 0.9;
 
 /// Through the dispersive wedge the hybrid converges to the sampled
 /// transport: its mean ΔE2000 against a sampled reference stays within
-/// the reference's own seed-to-seed ΔE, and its image mean within 4σ.
+/// the reference's own seed-to-seed ΔE, and its image mean within 4σ,
+/// whether its split draws uniform hero wavelengths or from the lights
+/// density.
 /// The Fourier transport (no dispersion) fails the ΔE bound; light
 /// stripes 10 % darker fail the mean-colour bound.
 #[test]
@@ -302,6 +316,22 @@ fn through_dispersive_glass_the_hybrid_converges_to_the_sampled_transport() -> T
     assert!(
         z.iter().all(|&z| z <= Z_BOUND),
         "hybrid mean colour: z = {z:?}"
+    );
+    // The same with the split's wavelengths drawn from the scene's lights
+    // density (the hybrid's default in fspec).
+    let lights = Arc::new(emission_density(&scene, &Observer::default())?);
+    let hybrid_lights = hybrid_drawing::<4>(Buffer::Spectral, XyzRoute::Zeroth, Some(&lights))?;
+    let (lights_image, lights_means) = renders(&hybrid_lights, &scene, 400)?;
+    let lights_error = mean_delta_e(&lights_image, &reference, white);
+    eprintln!("hybrid drawing from the lights density: {lights_error:.3}");
+    assert!(
+        lights_error <= DELTA_E_FACTOR * noise,
+        "hybrid (lights density) {lights_error} vs noise {noise}"
+    );
+    let z = z_scores(&lights_means, &reference_means);
+    assert!(
+        z.iter().all(|&z| z <= Z_BOUND),
+        "hybrid (lights density) mean colour: z = {z:?}"
     );
     assert!(
         z_scores(&second_means, &reference_means)

@@ -97,6 +97,7 @@ fn transports(range: SpectralRange) -> TestResult<Vec<(String, Renderer)>> {
                 route: XyzRoute::Zeroth,
                 strategy: Hero,
                 observer: &Default::default(),
+                density: None,
             })?,
         ),
         boxed(
@@ -107,6 +108,7 @@ fn transports(range: SpectralRange) -> TestResult<Vec<(String, Renderer)>> {
                 route: XyzRoute::Series,
                 strategy: VisibleHero,
                 observer: &Default::default(),
+                density: None,
             })?,
         ),
     ])

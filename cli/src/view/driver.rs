@@ -409,9 +409,18 @@ fn render_generation(
             observer: Arc::clone(&observer),
         }),
     };
+    // One density serves both halves of a split view (it is the scene's).
+    let lights = match settings.transport.lights_density(&scene, &observer)? {
+        Some(density) => Some(density),
+        None => match &settings.split {
+            Some(right) => right.lights_density(&scene, &observer)?,
+            None => None,
+        },
+    };
     let basis = TransportBasis {
         range: scene.range(),
         observer: &observer,
+        density: lights.as_ref(),
     };
     match settings.split {
         None => render_cmd::with_transport(

@@ -23,6 +23,7 @@ use simd_tracer::film::{BinnedEstimate, SpectralBins};
 use simd_tracer::render::{PassJob, PixelWindow, RenderSettings, render_passes};
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::camera::Camera;
+use simd_tracer::transport::emission_density::emission_density;
 use simd_tracer::transport::{BinnedSampledTransport, Transport};
 use spectral_core::SpectralRange;
 use spectral_core::observer::Observer;
@@ -158,6 +159,7 @@ impl ProbeScene {
         let basis = render_cmd::TransportBasis {
             range,
             observer: &self.observer,
+            density: None,
         };
         let (coefficients, fourier_paths) = render_cmd::with_transport(
             &self.fourier_spec(),
@@ -169,13 +171,20 @@ impl ProbeScene {
         )?;
         let bins = probe_bins(range)?;
         let sampling = self.sampling();
+        let density = match sampling {
+            Sampling::Lights => Some(Arc::new(
+                emission_density(&scene, &self.observer).map_err(CliError::input)?,
+            )),
+            _ => None,
+        };
         let transport = BinnedSampledTransport::<PROBE_WAVELENGTHS>::new(
             range,
             render_cmd::strategy(sampling),
             Arc::clone(&self.observer),
             bins,
         )
-        .map_err(CliError::input)?;
+        .map_err(CliError::input)?
+        .with_density(density);
         let job = PassJob {
             keep_state: true,
             ..PassJob::default()

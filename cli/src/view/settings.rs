@@ -361,6 +361,7 @@ impl ViewSettings {
         let basis = render_cmd::TransportBasis {
             range: SpectralRange::VISIBLE,
             observer: &observer,
+            density: None,
         };
         let mut film_pixel_bytes =
             render_cmd::with_transport(&self.transport, basis, FilmPixelBytes)?;
@@ -516,7 +517,7 @@ mod tests {
             TransportSpec::Hybrid {
                 coeffs: 12,
                 wavelengths: 8,
-                sampling: Sampling::Visible,
+                sampling: Sampling::Lights,
                 buffer: BufferKind::Rgb,
                 to_color: ToColor::Series,
             },

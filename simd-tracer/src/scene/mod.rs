@@ -267,6 +267,24 @@ impl Scene {
         self.environment.is_some() || self.environment_map.is_some()
     }
 
+    /// Every emission spectrum of the scene, once each, in index order:
+    /// emissive materials', point and directional lights' and the constant
+    /// environment's (an environment map's texels have their own spectra
+    /// and are not listed).
+    pub fn emission_spectra(&self) -> Vec<SpectrumId> {
+        let mut ids: Vec<SpectrumId> = self
+            .materials
+            .iter()
+            .filter_map(|material| material.emission)
+            .chain(self.light_sampler.emission_spectra())
+            .chain(self.environment)
+            .filter(|id| !id.is_none())
+            .collect();
+        ids.sort_unstable_by_key(|id| id.0);
+        ids.dedup();
+        ids
+    }
+
     /// The light selection of next-event estimation.
     #[inline]
     pub fn light_sampler(&self) -> &LightSampler {

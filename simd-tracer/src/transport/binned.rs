@@ -10,6 +10,7 @@
 //! sums a pixel), and a whole render's pixels must not carry dozens of
 //! bins; the viewer traces one pixel with this transport on request.
 
+use super::emission_density::EmissionDensity;
 use super::sampled::{PacketWavelengths, sampled_lane};
 use super::{SampledTransport, Transport};
 use crate::film::{BinnedFilm, BinnedSample, SpectralBins};
@@ -45,6 +46,13 @@ impl<const C: usize> BinnedSampledTransport<C> {
             inner: SampledTransport::with_observer(range, strategy, observer),
             film: BinnedFilm::new(bins)?,
         })
+    }
+
+    /// The same drawing its wavelengths from `density`
+    /// ([`SampledTransport::with_density`]).
+    pub fn with_density(mut self, density: Option<Arc<EmissionDensity>>) -> Self {
+        self.inner = self.inner.with_density(density);
+        self
     }
 }
 

@@ -27,7 +27,9 @@
 //! sees through `k` is `R = ∫ x̄(λ) T(λ) L_k(λ) dλ`, `L_k(λ)` the radiance
 //! arriving at `k` from the rest of the path, whose directions depend on
 //! `λ`. At `k` the transport draws `λ_1 … λ_C` by the sampled transport's
-//! strategy (each `λ_i` with the marginal density `p`: hero rotations are
+//! strategy or from the scene's lights density ([`super::emission_density`],
+//! fspec's default for the hybrid), each `λ_i` with the marginal density
+//! `p` (hero rotations, in λ or in the density's cumulative space, are
 //! stratified copies of one draw), sets the sampled throughput to the
 //! series' values `S_i = T_N(λ_i)` (the series of the throughput itself,
 //! evaluated once; the emission it meets later is multiplied in at its
@@ -69,6 +71,7 @@
 //! multiplies beside the `N²` of a truncated product). Figures in
 //! `docs/performance.md`.
 
+use super::emission_density::EmissionDensity;
 use super::fourier::{FourierTransport, gather_fourier};
 use super::sampled::{
     PacketWavelengths, SampledTransport, fluoresce_sampled, gather_sampled, sampled_lane,
@@ -111,6 +114,9 @@ pub struct HybridSettings<'a> {
     pub route: XyzRoute,
     /// How the wavelengths are drawn at a split.
     pub strategy: WavelengthStrategy,
+    /// Where set, the split's wavelengths are drawn from this density
+    /// instead ([`super::emission_density`]).
+    pub density: Option<&'a Arc<EmissionDensity>>,
     /// What the film's channels measure.
     pub observer: &'a Arc<Observer>,
 }
@@ -129,7 +135,8 @@ impl<const N: usize, const C: usize> HybridTransport<N, C> {
             range,
             settings.strategy,
             Arc::clone(settings.observer),
-        );
+        )
+        .with_density(settings.density.cloned());
         let idle = PacketWavelengths::new(
             [SampledWavelengths::sample(settings.strategy, &range, [0.0; C]); LANES],
             &range,
@@ -224,7 +231,10 @@ impl<const N: usize, const C: usize> Transport for HybridTransport<N, C> {
     const SPLITS_AT_DISPERSION: bool = true;
 
     fn describe(&self) -> String {
-        format!("hybrid N={N} C={C} {:?}", self.sampled.strategy)
+        match self.sampled.density {
+            Some(_) => format!("hybrid N={N} C={C} lights"),
+            None => format!("hybrid N={N} C={C} {:?}", self.sampled.strategy),
+        }
     }
 
     fn film(&self) -> &HybridFilm<N> {
@@ -383,11 +393,7 @@ impl<const N: usize, const C: usize> Transport for HybridTransport<N, C> {
         let u: [[f32; LANES]; C] =
             core::array::from_fn(|i| rngs.draw(wavelength_dimension(i as u32)).to_array());
         for lane in new.iter() {
-            let drawn = SampledWavelengths::<C>::sample(
-                self.sampled.strategy,
-                &self.sampled.range,
-                core::array::from_fn(|i| u[i][lane]),
-            );
+            let drawn = self.sampled.draw(core::array::from_fn(|i| u[i][lane]));
             let series = throughput.0.lane(lane);
             let past_event = lanes.past_event.contains(lane);
             for (i, (&lambda_nm, &pdf)) in

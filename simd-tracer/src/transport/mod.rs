@@ -40,6 +40,7 @@ mod control_variate;
 pub use control_variate::ControlVariateTransport;
 mod hybrid;
 pub use hybrid::{HybridSettings, HybridTransport, HybridWavelengths};
+pub mod emission_density;
 
 /// The lanes of a [`Transport::split`]: those that meet dispersion, and of
 /// them those past a fluorescent event (whose excited side is integrated

@@ -2,6 +2,7 @@
 //! form, element-wise products, each sample an XYZ estimate.
 
 use super::Transport;
+use super::emission_density::EmissionDensity;
 use super::fourier::reference_value;
 use crate::film::XyzFilm;
 use crate::sampling::sampler::UniformStream;
@@ -24,6 +25,10 @@ pub struct SampledTransport<const C: usize> {
     pub(super) strategy: WavelengthStrategy,
     pub(super) range: SpectralRange,
     pub(super) observer: Arc<Observer>,
+    /// Where set, wavelengths are drawn from this density by hero rotation
+    /// in its cumulative space instead of by `strategy`
+    /// ([`super::emission_density`]).
+    pub(super) density: Option<Arc<EmissionDensity>>,
 }
 
 impl<const C: usize> SampledTransport<C> {
@@ -44,6 +49,24 @@ impl<const C: usize> SampledTransport<C> {
             strategy,
             range,
             observer,
+            density: None,
+        }
+    }
+
+    /// The same drawing its wavelengths from `density` (hero rotation in
+    /// its cumulative space; `None`: by the strategy).
+    pub fn with_density(mut self, density: Option<Arc<EmissionDensity>>) -> Self {
+        self.density = density;
+        self
+    }
+
+    /// `C` wavelengths from the uniform numbers `u` (the density's hero
+    /// rotation uses `u[0]` only).
+    #[inline]
+    pub(super) fn draw(&self, u: [f32; C]) -> SampledWavelengths<C> {
+        match &self.density {
+            Some(density) => density.sample_hero(u[0]),
+            None => SampledWavelengths::sample(self.strategy, &self.range, u),
         }
     }
 }
@@ -225,7 +248,10 @@ impl<const C: usize> Transport for SampledTransport<C> {
     type Film = XyzFilm;
 
     fn describe(&self) -> String {
-        format!("sampled C={C} {:?}", self.strategy)
+        match self.density {
+            Some(_) => format!("sampled C={C} lights"),
+            None => format!("sampled C={C} {:?}", self.strategy),
+        }
     }
 
     fn film(&self) -> &XyzFilm {
@@ -239,7 +265,7 @@ impl<const C: usize> Transport for SampledTransport<C> {
         let lanes = core::array::from_fn(|lane| {
             let mut rng = stream(lane);
             let u: [f32; C] = core::array::from_fn(|_| rng.next_f32());
-            SampledWavelengths::sample(self.strategy, &self.range, u)
+            self.draw(u)
         });
         PacketWavelengths::new(lanes, &self.range)
     }
