@@ -112,13 +112,20 @@ impl<const N: usize> Film for FourierFilm<N> {
     }
 
     fn accumulate_weighted(&self, pixel: &mut Self::Pixel, sample: &Self::Sample, weight: f32) {
+        // One loop of known length per buffer (not a slice of either), so
+        // that the N adds of a splat's every pixel unroll into vector adds.
         let weight = f64::from(weight);
-        let sums: (&mut [f64], &[f32]) = match self.buffer {
-            Buffer::Spectral => (&mut pixel.coeffs, &sample.coeffs),
-            Buffer::Xyz => (&mut pixel.xyz, &sample.xyz),
-        };
-        for (acc, &c) in sums.0.iter_mut().zip(sums.1) {
-            *acc += weight * f64::from(c);
+        match self.buffer {
+            Buffer::Spectral => {
+                for (acc, &c) in pixel.coeffs.iter_mut().zip(&sample.coeffs) {
+                    *acc += weight * f64::from(c);
+                }
+            }
+            Buffer::Xyz => {
+                for (acc, &c) in pixel.xyz.iter_mut().zip(&sample.xyz) {
+                    *acc += weight * f64::from(c);
+                }
+            }
         }
         pixel.count += weight;
     }
