@@ -31,6 +31,7 @@ use spectral_core::sampling::WavelengthStrategy;
 use spectral_core::xyz::XyzRoute;
 use spectral_core::{ConstantSpectrum, FourierSpectrum, SpectralRange};
 use std::sync::Arc;
+use test_support::z_scores;
 use wide::f32x8;
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
@@ -250,20 +251,6 @@ fn mean_delta_e(a: &[Xyz], b: &[Xyz], white: Xyz) -> f64 {
         .map(|(x, y)| delta_e2000(x.to_lab(white), y.to_lab(white)))
         .sum::<f64>()
         / a.len() as f64
-}
-
-/// Per channel, how many standard errors apart two sets of image means are.
-fn z_scores(a: &[[f64; 3]], b: &[[f64; 3]]) -> [f64; 3] {
-    let stats = |v: &[[f64; 3]], k: usize| {
-        let n = v.len() as f64;
-        let mean = v.iter().map(|m| m[k]).sum::<f64>() / n;
-        let var = v.iter().map(|m| (m[k] - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        (mean, var / n)
-    };
-    core::array::from_fn(|k| {
-        let ((ma, va), (mb, vb)) = (stats(a, k), stats(b, k));
-        (ma - mb).abs() / (va + vb).sqrt().max(f64::MIN_POSITIVE)
-    })
 }
 
 /// Bound on z-scores of estimates that agree in expectation (4σ: with

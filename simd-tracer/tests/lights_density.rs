@@ -23,6 +23,7 @@ use spectral_core::SpectralRange;
 use spectral_core::observer::Observer;
 use spectral_core::sampling::WavelengthStrategy;
 use std::sync::Arc;
+use test_support::z_scores;
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
@@ -88,20 +89,6 @@ fn renders<T: Transport>(t: &T, scene: &Scene, first: u64) -> TestResult<Renders
         out.images.push(image);
     }
     Ok(out)
-}
-
-/// Per channel, how many standard errors apart two sets of image means are.
-fn z_scores(a: &[[f64; 3]], b: &[[f64; 3]]) -> [f64; 3] {
-    let stats = |v: &[[f64; 3]], k: usize| {
-        let n = v.len() as f64;
-        let mean = v.iter().map(|m| m[k]).sum::<f64>() / n;
-        let var = v.iter().map(|m| (m[k] - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        (mean, var / n)
-    };
-    core::array::from_fn(|k| {
-        let ((ma, va), (mb, vb)) = (stats(a, k), stats(b, k));
-        (ma - mb).abs() / (va + vb).sqrt().max(f64::MIN_POSITIVE)
-    })
 }
 
 /// The mean over pixels of the seed-to-seed variance of the chromaticity

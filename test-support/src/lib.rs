@@ -2,6 +2,9 @@
 //! dev-dependency only (it needs `std`; `spectral-core` stays `no_std`), and
 //! it is not published.
 //!
+//! [`z_scores`] compares two sets of per-seed image means (the
+//! statistical tests of the transports).
+//!
 //! [`replay_corpus`] runs every committed input of a fuzz target
 //! (`fuzz/corpus/<target>/`) through the target's body, so the seeds and
 //! every crash turned regression input run in CI on stable Rust.
@@ -93,6 +96,22 @@ fn replay_dir(dir: PathBuf, mut body: impl FnMut(&[u8])) -> Result<usize, Replay
         body(&bytes);
     }
     Ok(files.len())
+}
+
+/// Per channel, how many standard errors apart the means of two sets of
+/// per-seed estimates are: `|ā − b̄| / sqrt(s_a²/n_a + s_b²/n_b)` with the
+/// sample variances (each set needs two estimates at least).
+pub fn z_scores(a: &[[f64; 3]], b: &[[f64; 3]]) -> [f64; 3] {
+    let stats = |v: &[[f64; 3]], k: usize| {
+        let n = v.len() as f64;
+        let mean = v.iter().map(|m| m[k]).sum::<f64>() / n;
+        let var = v.iter().map(|m| (m[k] - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        (mean, var / n)
+    };
+    core::array::from_fn(|k| {
+        let ((ma, va), (mb, vb)) = (stats(a, k), stats(b, k));
+        (ma - mb).abs() / (va + vb).sqrt().max(f64::MIN_POSITIVE)
+    })
 }
 
 #[cfg(test)]
