@@ -20,7 +20,9 @@
    Y = 1), averaged over three regions of the `prism` image: `sphere` (the
    diffuse sphere under the FL11 lamp, no glass on its paths' first
    bounce), `caustic` (the spectrum the prism casts on the wall) and
-   `glass` (the prism itself).
+   `glass` (the prism itself). A third table splits the hybrids' films into
+   their two parts: the light of paths that never split (the Fourier part)
+   and of paths after their split (the sampled part).
 
 Every transport runs with fspec's defaults otherwise, so `--coeffs auto`
 gives the Fourier transport and the hybrid with C = 4 the same N (32 on
@@ -81,8 +83,10 @@ def cost_per_spp(fspec, out_dir, side, cases, spp, rounds=3):
     return {case: statistics.median(v) for case, v in times.items()}
 
 
-def read_xyz(path):
-    """Per-pixel XYZ of a partial film rendered with an XYZ buffer."""
+def read_xyz(path, part="both"):
+    """Per-pixel XYZ of a partial film rendered with an XYZ buffer; of a
+    hybrid film `part` picks the sum of both parts, the `sampled` part (the
+    light of paths after their split) or the `fourier` part (the rest)."""
     with open(path, "rb") as f:
         data = f.read()
     first = data.index(b"\n")
@@ -91,8 +95,21 @@ def read_xyz(path):
     pixels = np.frombuffer(data[second + 1:], dtype="<f8").reshape(-1, header["values_per_pixel"])
     count, sums = pixels[:, -1:], pixels[:, :-1]
     # Hybrid: three sampled sums, then the Fourier part's three XYZ sums.
-    xyz = sums[:, 0:3] + sums[:, 3:6] if sums.shape[1] == 6 else sums[:, 0:3]
+    if sums.shape[1] == 6:
+        xyz = {"both": sums[:, 0:3] + sums[:, 3:6], "sampled": sums[:, 0:3],
+               "fourier": sums[:, 3:6]}[part]
+    else:
+        xyz = sums[:, 0:3]
     return xyz / np.maximum(count, 1e-300)
+
+
+def region_noise(paths, side, part="both"):
+    """Mean over each region of the per-pixel a* b* standard deviation over
+    the seeds' films `paths`."""
+    labs = np.stack([lab(read_xyz(path, part)).reshape(side, side, 3) for path in paths])
+    chroma = np.sqrt(labs[..., 1].var(axis=0, ddof=1) + labs[..., 2].var(axis=0, ddof=1))
+    return [chroma[int(y0 * side):int(y1 * side), int(x0 * side):int(x1 * side)].mean()
+            for (x0, y0, x1, y1) in REGIONS.values()]
 
 
 def lab(xyz):
@@ -129,23 +146,30 @@ def main():
     print("| transport | spp | " + " | ".join(REGIONS) + " |")
     print("| --- | --- | " + " | ".join("---" for _ in REGIONS) + " |")
     side = args.side
+    films = {}
     for transport in TRANSPORTS:
         spp = max(1, round(budget / costs[("prism", transport)]))
-        labs = []
+        paths = []
         for seed in range(args.seeds):
             path = os.path.join(args.out_dir, f"{transport.replace(' ', '_')}_{seed}.fspart")
             subprocess.run(render(args.fspec, "prism", transport, side, spp, 10 + seed, path,
                                   ["--buffer", "rgb"]),
                            check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-            xyz = read_xyz(path)
-            labs.append(lab(xyz).reshape(side, side, 3))
-        labs = np.stack(labs)
-        chroma = np.sqrt(labs[..., 1].var(axis=0, ddof=1) + labs[..., 2].var(axis=0, ddof=1))
-        cells = []
-        for (x0, y0, x1, y1) in REGIONS.values():
-            region = chroma[int(y0 * side):int(y1 * side), int(x0 * side):int(x1 * side)]
-            cells.append(f"{region.mean():.2f}")
+            paths.append(path)
+        films[transport] = paths
+        cells = [f"{v:.2f}" for v in region_noise(paths, side)]
         print(f"| {transport} | {spp} | " + " | ".join(cells) + " |")
+
+    print("\nThe hybrids' two parts apart (the same films; each part's a* b* as if it were "
+          "the image):\n")
+    print("| transport | part | " + " | ".join(REGIONS) + " |")
+    print("| --- | --- | " + " | ".join("---" for _ in REGIONS) + " |")
+    for transport, paths in films.items():
+        if not transport.startswith("hybrid"):
+            continue
+        for part in ("fourier", "sampled"):
+            cells = [f"{v:.2f}" for v in region_noise(paths, side, part)]
+            print(f"| {transport} | {part} | " + " | ".join(cells) + " |")
     sys.stdout.flush()
 
 
