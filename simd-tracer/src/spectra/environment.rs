@@ -53,9 +53,11 @@
 use crate::spectra::{MAX_COEFFS, SceneSpectrum, SpectrumSource};
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
+use spectral_core::cmf;
 use spectral_core::upsample::{SigmoidPolynomial, srgb_reflectance};
 use spectral_core::{FourierSpectrum, SpectralError, SpectralRange, Spectrum};
 use std::f32::consts::{PI, TAU};
+use wide::f64x4;
 
 /// Fourier coefficients stored per texel.
 pub const ENVIRONMENT_COEFFS: usize = 16;
@@ -78,19 +80,34 @@ const GAUSS_LEGENDRE_2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_
 /// IEC 61966-2-1).
 const LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
 
-/// Rows of the per-texel projection: `(λ, Σ-weight · D(λ) · cos(jφ) / W)`.
+/// Nodes of the per-texel projection taken at once: the `f64` lanes of
+/// one AVX2 register.
+const NODE_LANES: usize = 4;
+
+/// A sigmoid argument this large (or infinite) is saturated: `S = 0` or
+/// `1` exactly, as `SigmoidPolynomial::value` has it (and `x²` would
+/// overflow).
+const SIGMOID_SATURATED: f64 = 1e100;
+
+/// Rows of the per-texel projection: `(λ, Σ-weight · D(λ) · cos(jφ) / W)`,
+/// in chunks of [`NODE_LANES`] nodes (the last padded with nodes of
+/// weight 0). Each texel evaluates its sigmoid polynomial at every node,
+/// four nodes at a time ([`Projection::coefficients`]; its scalar oracle
+/// is the sum over the nodes of `SigmoidPolynomial::value` times the
+/// weights, tested).
 struct Projection {
-    lambda_nm: Vec<f64>,
-    /// `weights[q][j]`.
-    weights: Vec<[f64; ENVIRONMENT_COEFFS]>,
+    /// `t = (λ − 360)/470`, clamped to `[0, 1]`, of each node: the
+    /// sigmoid polynomial's variable.
+    t: Vec<f64x4>,
+    /// `weights[chunk][j]`: coefficient `j`'s weights of the chunk's nodes.
+    weights: Vec<[f64x4; ENVIRONMENT_COEFFS]>,
 }
 
 impl Projection {
     fn new(range: &SpectralRange, illuminant: &SceneSpectrum) -> Self {
         let panels = (range.width_nm() / PANEL_NM).ceil().max(1.0) as usize;
         let panel_nm = range.width_nm() / panels as f64;
-        let mut lambda_nm = Vec::with_capacity(2 * panels);
-        let mut weights = Vec::with_capacity(2 * panels);
+        let mut nodes: Vec<(f64, [f64; ENVIRONMENT_COEFFS])> = Vec::with_capacity(2 * panels);
         for panel in 0..panels {
             let centre_nm = range.min_nm() + (panel as f64 + 0.5) * panel_nm;
             for node in GAUSS_LEGENDRE_2 {
@@ -98,22 +115,50 @@ impl Projection {
                 let base =
                     0.5 * panel_nm * f64::from(illuminant.value(l as f32)) / range.width_nm();
                 let phase = range.phase(l);
-                lambda_nm.push(l);
-                weights.push(core::array::from_fn(|j| base * (j as f64 * phase).cos()));
+                nodes.push((l, core::array::from_fn(|j| base * (j as f64 * phase).cos())));
             }
         }
-        Self { lambda_nm, weights }
+        let sigmoid_t =
+            |l: f64| ((l - cmf::FIRST_NM) / (cmf::LAST_NM - cmf::FIRST_NM)).clamp(0.0, 1.0);
+        let chunks = nodes.chunks(NODE_LANES);
+        let t = chunks
+            .clone()
+            .map(|chunk| {
+                f64x4::new(core::array::from_fn(|i| {
+                    chunk.get(i).map_or(0.0, |n| sigmoid_t(n.0))
+                }))
+            })
+            .collect();
+        let weights = chunks
+            .map(|chunk| {
+                core::array::from_fn(|j| {
+                    f64x4::new(core::array::from_fn(|i| {
+                        chunk.get(i).map_or(0.0, |n| n.1[j])
+                    }))
+                })
+            })
+            .collect();
+        Self { t, weights }
     }
 
+    /// The projection of `scale · S(c0 t² + c1 t + c2)`: the sigmoid at four
+    /// nodes at a time, `S(x) = ½ + ½ x/√(1 + x²)`, saturated beyond
+    /// [`SIGMOID_SATURATED`].
     fn coefficients(&self, shape: &SigmoidPolynomial, scale: f64) -> [f32; ENVIRONMENT_COEFFS] {
-        let mut sums = [0.0f64; ENVIRONMENT_COEFFS];
-        for (&l, row) in self.lambda_nm.iter().zip(&self.weights) {
-            let s = shape.value(l);
-            for (sum, w) in sums.iter_mut().zip(row) {
-                *sum += s * w;
+        let [c0, c1, c2] = shape.coeffs.map(f64x4::splat);
+        let (half, one) = (f64x4::splat(0.5), f64x4::ONE);
+        let saturated = f64x4::splat(SIGMOID_SATURATED);
+        let mut sums = [f64x4::ZERO; ENVIRONMENT_COEFFS];
+        for (&t, row) in self.t.iter().zip(&self.weights) {
+            let x = (c0 * t + c1) * t + c2;
+            let smooth = half + half * x / (one + x * x).sqrt();
+            let step = x.simd_gt(f64x4::ZERO).select(one, f64x4::ZERO);
+            let s = x.abs().simd_gt(saturated).select(step, smooth);
+            for (sum, &w) in sums.iter_mut().zip(row) {
+                *sum = s.mul_add(w, *sum);
             }
         }
-        sums.map(|c| (c * scale) as f32)
+        sums.map(|c| (c.reduce_add() * scale) as f32)
     }
 }
 
@@ -583,6 +628,46 @@ mod tests {
             Ok(map) => map,
             Err(e) => panic!("{e}"),
         }
+    }
+
+    /// The four-node projection against its scalar oracle: the sum over
+    /// the nodes of `SigmoidPolynomial::value` (at the node's wavelength)
+    /// times the node's weights, for ordinary, steep and saturated
+    /// polynomials (whose `x²` overflows: `S` is 0 or 1 there).
+    #[test]
+    fn the_projection_is_its_scalar_oracle() -> Result<(), SpectralError> {
+        let range = SpectralRange::VISIBLE;
+        let illuminant = SceneSpectrum::new(SpectrumSource::RgbIlluminant([1.0; 3]), range)?;
+        let projection = Projection::new(&range, &illuminant);
+        let shapes = [
+            [0.0, 0.0, 0.3],
+            [-12.5, 9.0, -1.0],
+            [310.0, -280.0, 55.0],
+            [1e120, 0.0, -1.0],
+            [-1e200, 1e200, 0.0],
+            [0.0, 0.0, f64::INFINITY],
+        ];
+        for coeffs in shapes {
+            let shape = SigmoidPolynomial { coeffs };
+            let mut oracle = [0.0f64; ENVIRONMENT_COEFFS];
+            for (t, row) in projection.t.iter().zip(&projection.weights) {
+                for (lane, &t) in t.to_array().iter().enumerate() {
+                    let lambda_nm = cmf::FIRST_NM + t * (cmf::LAST_NM - cmf::FIRST_NM);
+                    let s = shape.value(lambda_nm);
+                    for (sum, w) in oracle.iter_mut().zip(row) {
+                        *sum += s * w.to_array()[lane];
+                    }
+                }
+            }
+            let got = projection.coefficients(&shape, 1.0);
+            for (j, (&g, &o)) in got.iter().zip(&oracle).enumerate() {
+                assert!(
+                    (f64::from(g) - o).abs() <= 1e-6 * o.abs().max(1e-3),
+                    "{coeffs:?} coefficient {j}: {g} against {o}"
+                );
+            }
+        }
+        Ok(())
     }
 
     #[test]
