@@ -2,7 +2,7 @@
 //! degenerate triangles left out, leaf order, fan pairs and the wide tree.
 
 use super::triangle::{DEGENERATE_SINE, PreparedTriangle, dot, fan_pairs};
-use super::{Bvh, BvhLayout, Traversal, WIDE_MIN_TRIANGLES, WideBvh, index_u32};
+use super::{BlockTriangle, Bvh, BvhLayout, Traversal, WIDE_MIN_TRIANGLES, WideBvh, index_u32};
 use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
@@ -163,7 +163,7 @@ impl<'a> Preparer<'a> {
         }
     }
 
-    fn corners(&self, slot: usize) -> Option<&'a [Vec3; 3]> {
+    pub(super) fn corners(&self, slot: usize) -> Option<&'a [Vec3; 3]> {
         self.original
             .get(slot)
             .and_then(|&o| self.input.get(o as usize))
@@ -252,11 +252,16 @@ impl Bvh {
                 .collect(),
             BvhLayout::WideOnly => Vec::new(),
         };
-        let wide = if triangles_prepared.is_empty() {
-            WideBvh::build(&bvh2, slots, |slot| preparer.prepared(slot))
-        } else {
-            WideBvh::build(&bvh2, slots, |slot| triangles_prepared.get(slot).copied())
-        };
+        let wide = WideBvh::build(&bvh2, slots, |slot| {
+            let prepared = match triangles_prepared.get(slot) {
+                Some(&prepared) => prepared,
+                None => preparer.prepared(slot)?,
+            };
+            Some(BlockTriangle {
+                corners: *preparer.corners(slot)?,
+                prepared,
+            })
+        });
         drop(preparer);
         let bounds = bvh2
             .nodes

@@ -168,7 +168,7 @@ use crate::simd::LaneMask;
 
 mod triangle;
 use triangle::{
-    PreparedTriangle, ScalarHit, cross, dot, edge_weights, plane_terms, safe_inverse, weight,
+    PreparedTriangle, ScalarHit, cross, dot, edge_weights, plane_terms, safe_inverse, sub3, weight,
 };
 mod build;
 mod single_ray;
@@ -182,7 +182,7 @@ mod instances;
 pub use instances::{BOUNDS_PAD, InstanceBvh, InstanceHit, InstanceInput};
 mod top_level;
 mod wide_tree;
-use wide_tree::WideBvh;
+use wide_tree::{BlockTriangle, WideBvh};
 pub use wide_tree::{WIDTH as WIDE_WIDTH, WideStack};
 
 /// Stack entries kept inline before spilling to the heap.

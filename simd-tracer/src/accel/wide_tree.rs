@@ -37,6 +37,20 @@
 //! Sharing changes no result: a leaf's triangles keep their order within
 //! the block's lanes, and the lanes of the other leaves are masked off.
 //!
+//! # Triangle blocks
+//!
+//! A lane holds its triangle's plane (`n`, `n · v0`, the grazing
+//! threshold: those of its fan pair's first triangle for a pair's second)
+//! and its three vertices, 14 floats. The edge test needs each edge's
+//! Plücker coordinates `p × q` and `p − q` (18 floats); a block derives
+//! them from the vertices when some lane's plane distance is in range,
+//! with the generic operations [`PreparedTriangle::new`] uses on `f32`, so
+//! every lane equals the prepared record bit for bit and shared edges stay
+//! watertight. Storing the derived edges instead took 23 floats a lane, the
+//! largest part of a big scene's memory (768 bytes a block against 480);
+//! the plane stays stored because it is read for every lane first and
+//! decides most rejections.
+//!
 //! # Traversal
 //!
 //! A node tests the ray against its 8 child boxes at once (the slab test of
@@ -52,7 +66,7 @@
 
 use super::{
     Bvh2, Bvh2Node, InlineStack, PreparedTriangle, ScalarHit, cross, dot, edge_weights, inside_x8,
-    plane_terms, safe_inverse, weight,
+    plane_terms, safe_inverse, sub3, weight,
 };
 use crate::packet::Ray;
 use glam::Vec3;
@@ -120,19 +134,30 @@ impl WideNode {
     }
 }
 
-/// Up to [`WIDTH`] prepared triangles, field by field, triangle in lane.
-/// The lanes in use are the first ones; the traversal masks lanes by the
-/// leaf it tests, so the block keeps no lane mask of its own.
+/// Up to [`WIDTH`] triangles, field by field, triangle in lane: the plane
+/// of each prepared triangle and its vertices, from which the test derives
+/// the edges' Plücker coordinates (module docs, "Triangle blocks"). The
+/// lanes in use are the first ones; the traversal masks lanes by the leaf
+/// it tests, so the block keeps no lane mask of its own.
 #[derive(Debug, Clone, Copy)]
 struct TriangleBlock {
     normal: [f32x8; 3],
     plane: f32x8,
     grazing: f32x8,
-    edge_moment: [[f32x8; 3]; 3],
-    edge_direction: [[f32x8; 3]; 3],
+    /// The vertices `v0, v1, v2`.
+    corners: [[f32x8; 3]; 3],
     /// Index into the parent's prepared triangles, per lane; [`NO_SLOT`] in
     /// unused lanes.
     slot: [u32; WIDTH],
+}
+
+/// What a block lane is made from: a triangle's vertices and its prepared
+/// record (whose plane may be its fan pair's first triangle's; its edges
+/// are those of `corners`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct BlockTriangle {
+    pub(super) corners: [Vec3; 3],
+    pub(super) prepared: PreparedTriangle,
 }
 
 /// The slot of an unused block lane.
@@ -145,35 +170,55 @@ fn lane_bits(lo: usize, hi: usize) -> u32 {
 }
 
 impl TriangleBlock {
-    fn new(prepared: impl Fn(usize) -> Option<PreparedTriangle>, slots: &[u32]) -> Self {
+    fn new(triangle: impl Fn(usize) -> Option<BlockTriangle>, slots: &[u32]) -> Self {
         debug_assert!(!slots.is_empty() && slots.len() <= WIDTH);
-        let lanes: [Option<PreparedTriangle>; WIDTH] =
-            core::array::from_fn(|lane| slots.get(lane).and_then(|&slot| prepared(slot as usize)));
-        let field = |f: &dyn Fn(&PreparedTriangle) -> f32| {
+        let lanes: [Option<BlockTriangle>; WIDTH] =
+            core::array::from_fn(|lane| slots.get(lane).and_then(|&slot| triangle(slot as usize)));
+        debug_assert!(lanes.iter().flatten().all(|t| {
+            let own = PreparedTriangle::new(&t.corners);
+            (own.edge_moment, own.edge_direction)
+                == (t.prepared.edge_moment, t.prepared.edge_direction)
+        }));
+        let field = |f: &dyn Fn(&BlockTriangle) -> f32| {
             f32x8::new(core::array::from_fn(|lane| {
                 lanes[lane].as_ref().map_or(0.0, f)
             }))
         };
-        let vec3 = |f: &dyn Fn(&PreparedTriangle) -> [f32; 3]| -> [f32x8; 3] {
+        let vec3 = |f: &dyn Fn(&BlockTriangle) -> [f32; 3]| -> [f32x8; 3] {
             core::array::from_fn(|axis| field(&|t| f(t)[axis]))
         };
         Self {
-            normal: vec3(&|t| t.normal),
-            plane: field(&|t| t.plane),
-            grazing: field(&|t| t.grazing),
-            edge_moment: core::array::from_fn(|k| vec3(&|t| t.edge_moment[k])),
-            edge_direction: core::array::from_fn(|k| vec3(&|t| t.edge_direction[k])),
+            normal: vec3(&|t| t.prepared.normal),
+            plane: field(&|t| t.prepared.plane),
+            grazing: field(&|t| t.prepared.grazing),
+            corners: core::array::from_fn(|k| vec3(&|t| t.corners[k].to_array())),
             slot: core::array::from_fn(|lane| slots.get(lane).copied().unwrap_or(NO_SLOT)),
         }
     }
 
-    /// The prepared triangle in `lane` as stored (for validation).
+    /// The edges' Plücker coordinates `(p × q, p − q)` of every lane, for
+    /// the edges `(v1, v2)`, `(v2, v0)`, `(v0, v1)`: the operations of
+    /// [`PreparedTriangle::new`], so each lane is bit for bit the prepared
+    /// record's.
+    #[inline(always)]
+    fn edges(&self) -> ([[f32x8; 3]; 3], [[f32x8; 3]; 3]) {
+        let [a, b, c] = self.corners;
+        let edges = [(b, c), (c, a), (a, b)];
+        (
+            edges.map(|(p, q)| cross(p, q)),
+            edges.map(|(p, q)| sub3(p, q)),
+        )
+    }
+
+    /// The prepared triangle in `lane` as stored (for validation and the
+    /// traversals that test one triangle).
     fn lane(&self, lane: usize) -> PreparedTriangle {
         let at = |v: f32x8| v.to_array()[lane];
         let vec3 = |v: [f32x8; 3]| v.map(at);
+        let (edge_moment, edge_direction) = self.edges();
         PreparedTriangle {
-            edge_moment: self.edge_moment.map(vec3),
-            edge_direction: self.edge_direction.map(vec3),
+            edge_moment: edge_moment.map(vec3),
+            edge_direction: edge_direction.map(vec3),
             normal: vec3(self.normal),
             plane: at(self.plane),
             grazing: at(self.grazing),
@@ -245,12 +290,8 @@ impl SplatRay {
         if in_range.to_bitmask() & lanes == 0 {
             return None;
         }
-        let [w0, w1, w2] = edge_weights(
-            self.direction,
-            self.moment,
-            &block.edge_moment,
-            &block.edge_direction,
-        );
+        let (edge_moment, edge_direction) = block.edges();
+        let [w0, w1, w2] = edge_weights(self.direction, self.moment, &edge_moment, &edge_direction);
         let (sum, inside) = inside_x8(w0, w1, w2);
         let accept = (in_range & inside).to_bitmask() & lanes;
         (accept != 0).then_some((accept, t, w1, w2, sum))
@@ -400,11 +441,11 @@ pub(super) fn collapse(
 
 impl WideBvh {
     /// Collapses `bvh2` (whose leaves index `slots` triangle slots) into a
-    /// wide tree; `prepared(slot)` is the record of a slot.
+    /// wide tree; `triangle(slot)` is the vertices and record of a slot.
     pub(super) fn build(
         bvh2: &Bvh2,
         slots: usize,
-        prepared: impl Fn(usize) -> Option<PreparedTriangle> + Sync,
+        triangle: impl Fn(usize) -> Option<BlockTriangle> + Sync,
     ) -> Self {
         let nodes2 = &bvh2.nodes;
         if nodes2.is_empty() || slots == 0 {
@@ -450,7 +491,7 @@ impl WideBvh {
         wide.blocks = staged
             .blocks
             .par_iter()
-            .map(|block| TriangleBlock::new(&prepared, &block.slots[..block.used]))
+            .map(|block| TriangleBlock::new(&triangle, &block.slots[..block.used]))
             .collect();
         wide
     }

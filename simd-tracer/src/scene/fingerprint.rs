@@ -17,6 +17,7 @@
 //! word, about 40 ms for a million triangles.
 
 use super::Scene;
+use glam::Vec2;
 
 /// FNV-1a's 64-bit offset basis.
 const FNV_OFFSET_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
@@ -73,8 +74,14 @@ impl Scene {
             hash.floats(triangle.iter().flat_map(|v| v.to_array()));
             hash.word(self.triangle_material()[index].index() as u32);
         }
-        for uv in self.uvs() {
-            hash.floats(uv.iter().flat_map(|v| v.to_array()));
+        // Every triangle's coordinates once any has some (zeros for those
+        // without), as when they were stored for every triangle: digests
+        // of earlier partial files stay valid.
+        if self.has_uvs() {
+            for index in 0..self.triangles().len() {
+                let uv = self.uvs(index).copied().unwrap_or([Vec2::ZERO; 3]);
+                hash.floats(uv.iter().flat_map(|v| v.to_array()));
+            }
         }
         for index in 0..self.triangles().len() {
             if let Some(normals) = self.vertex_normals(index) {

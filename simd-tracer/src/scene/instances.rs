@@ -36,12 +36,13 @@
 //! tests compare with).
 
 use crate::accel::InstanceBvh;
-use crate::ids::{MaterialId, NO_ID};
+use crate::ids::MaterialId;
 use crate::shading::material::Material;
 use crate::shading::surface::Surface;
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::SceneBuilder;
+use super::attributes::SparseAttribute;
 use super::mesh::MeshData;
 use super::transform::Transform;
 
@@ -93,12 +94,10 @@ pub(super) struct InstanceRequest {
 pub struct InstancedMesh {
     triangles: Vec<[Vec3; 3]>,
     triangle_material: Vec<MaterialId>,
-    /// Empty when every triangle's are zero.
-    uvs: Vec<[Vec2; 3]>,
-    /// Per triangle, its entry in `vertex_normals` or [`NO_ID`]; empty when
-    /// no triangle is smooth.
-    shading_index: Vec<u32>,
-    vertex_normals: Vec<[Vec3; 3]>,
+    /// Those of the triangles with non-zero ones.
+    uvs: SparseAttribute<[Vec2; 3]>,
+    /// Those of the smooth triangles.
+    vertex_normals: SparseAttribute<[Vec3; 3]>,
 }
 
 impl InstancedMesh {
@@ -120,20 +119,17 @@ impl InstancedMesh {
                 },
             )?;
         }
-        let mut shading_index = object.shading_index;
-        if !object.vertex_normals.is_empty() {
-            shading_index.resize(object.triangles.len(), NO_ID);
-        }
         let mut mesh = Self {
             triangles: object.triangles,
             triangle_material: object.triangle_material,
             uvs: object.uvs,
-            shading_index,
             vertex_normals: object.vertex_normals,
         };
+        let n = mesh.triangles.len();
         mesh.triangles.shrink_to_fit();
         mesh.triangle_material.shrink_to_fit();
-        mesh.uvs.shrink_to_fit();
+        mesh.uvs.finish(n);
+        mesh.vertex_normals.finish(n);
         Ok((mesh, object.skipped))
     }
 
@@ -149,9 +145,8 @@ impl InstancedMesh {
         }
         vec_bytes(&self.triangles)
             + vec_bytes(&self.triangle_material)
-            + vec_bytes(&self.uvs)
-            + vec_bytes(&self.shading_index)
-            + vec_bytes(&self.vertex_normals)
+            + self.uvs.memory_bytes()
+            + self.vertex_normals.memory_bytes()
     }
 }
 
@@ -310,8 +305,7 @@ impl Instances {
         if shading.face_normals {
             return None;
         }
-        let at = *mesh.shading_index.get(index)?;
-        let normals = mesh.vertex_normals.get(at as usize)?;
+        let normals = mesh.vertex_normals.get(index)?;
         let [n0, n1, n2] = normals.map(|n| (shading.normal_matrix * n).try_normalize());
         Some([n0?, n1?, n2?])
     }
@@ -355,33 +349,26 @@ impl Instances {
             + self.bvh.memory_bytes()
     }
 
-    /// Checks the meshes' layout (one material per triangle, texture
-    /// coordinates and shading indices for all triangles or none, shading
-    /// indices in range), that every material exists and none emits, that
+    /// Checks the meshes' layout (one material per triangle, the sparse
+    /// texture coordinates and vertex normals as
+    /// `SparseAttribute::validate`), that every material exists and none emits, that
     /// each instance's record is the one its placement makes and names the
     /// mesh and map of its tree entry, and the
     /// two-level tree ([`InstanceBvh::validate`]).
     pub fn validate(&self, materials: &[Material]) -> Result<(), String> {
         for (k, mesh) in self.meshes.iter().enumerate() {
             let n = mesh.triangles.len();
-            let sized = |len: usize| len == 0 || len == n;
-            if mesh.triangle_material.len() != n
-                || !sized(mesh.uvs.len())
-                || !sized(mesh.shading_index.len())
-            {
+            if mesh.triangle_material.len() != n {
                 return Err(format!(
                     "instanced mesh {k}: per-triangle lists of different lengths"
                 ));
             }
-            if mesh
-                .shading_index
-                .iter()
-                .any(|&i| i != NO_ID && i as usize >= mesh.vertex_normals.len())
-            {
-                return Err(format!(
-                    "instanced mesh {k}: a vertex-normal index out of range"
-                ));
-            }
+            mesh.uvs
+                .validate(n)
+                .map_err(|e| format!("instanced mesh {k}: texture coordinates: {e}"))?;
+            mesh.vertex_normals
+                .validate(n)
+                .map_err(|e| format!("instanced mesh {k}: vertex normals: {e}"))?;
         }
         if self.placements.len() != self.shading.len() || self.bvh.len() != self.shading.len() {
             return Err("instance records of different counts".to_owned());
@@ -429,16 +416,23 @@ impl Instances {
 }
 
 impl InstancedMesh {
-    /// Every per-triangle value as 32-bit words, for the fingerprint.
+    /// Every per-triangle value as 32-bit words, for the fingerprint: the
+    /// same words as when texture coordinates were stored for every
+    /// triangle once any had some (zeros for the others), so digests of
+    /// earlier partial files stay valid.
     pub(crate) fn words(&self) -> impl Iterator<Item = u32> + '_ {
+        let dense_uvs = (0..self.triangles.len())
+            .filter(|_| !self.uvs.is_empty())
+            .map(|t| self.uvs.get(t).copied().unwrap_or([Vec2::ZERO; 3]));
         let floats = self
             .triangles
             .iter()
             .flatten()
             .flat_map(|v| v.to_array())
-            .chain(self.uvs.iter().flatten().flat_map(|v| v.to_array()))
+            .chain(dense_uvs.flatten().flat_map(|v| v.to_array()))
             .chain(
                 self.vertex_normals
+                    .values()
                     .iter()
                     .flatten()
                     .flat_map(|v| v.to_array()),
@@ -446,7 +440,7 @@ impl InstancedMesh {
             .map(f32::to_bits);
         floats
             .chain(self.triangle_material.iter().map(|m| m.0))
-            .chain(self.shading_index.iter().copied())
+            .chain(self.vertex_normals.index().iter().copied())
     }
 }
 

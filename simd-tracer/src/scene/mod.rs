@@ -7,6 +7,7 @@
 //! dropped at build time and counted in [`Scene::skipped_triangles`].
 
 pub mod analytic;
+mod attributes;
 pub mod builtin;
 pub mod camera;
 mod fingerprint;
@@ -21,8 +22,9 @@ pub mod transform;
 
 use crate::accel::{Bvh, InstanceHit, TriangleSubset};
 use crate::ids::NO_INSTANCE;
-use crate::ids::{AngularId, FluorophoreId, MaterialId, NO_ID, SpectrumId, TextureId};
+use crate::ids::{AngularId, FluorophoreId, MaterialId, SpectrumId, TextureId};
 use crate::packet::{PacketHit, Ray, RayPacket};
+use crate::scene::attributes::SparseAttribute;
 use crate::scene::camera::Camera;
 use crate::scene::instances::{
     InstancePlacement, InstanceRequest, InstancedMesh, InstancedMeshId, Instances, Instancing,
@@ -115,16 +117,13 @@ pub struct Scene {
     triangles: Vec<[Vec3; 3]>,
     /// Material of each triangle.
     triangle_material: Vec<MaterialId>,
-    /// Texture coordinates of each triangle's vertices, or empty when every
-    /// triangle's are zero (then nothing is stored per triangle).
-    uvs: Vec<[Vec2; 3]>,
-    /// Per triangle, the index of its vertex normals in
-    /// [`Scene::vertex_normals`], or [`NO_ID`] (flat shaded). Empty if no
-    /// triangle is smooth.
-    shading_index: Vec<u32>,
+    /// Texture coordinates of the triangles whose vertices have non-zero
+    /// ones (the others' are zero).
+    uvs: SparseAttribute<[Vec2; 3]>,
     /// Unit vertex normals of the smooth triangles, on the front side of
-    /// their triangle (their mean points the way the winding does).
-    vertex_normals: Vec<[Vec3; 3]>,
+    /// their triangle (their mean points the way the winding does); the
+    /// others are shaded flat.
+    vertex_normals: SparseAttribute<[Vec3; 3]>,
     /// The camera.
     camera: Camera,
     /// Radiance arriving from every direction that escapes the scene.
@@ -215,17 +214,23 @@ impl Scene {
         &self.triangle_material
     }
 
-    /// Texture coordinates per triangle; empty when every triangle's are
-    /// zero.
-    pub fn uvs(&self) -> &[[Vec2; 3]] {
-        &self.uvs
+    /// The texture coordinates of triangle `index`'s vertices; `None` when
+    /// they are all zero.
+    #[inline]
+    pub fn uvs(&self, index: usize) -> Option<&[Vec2; 3]> {
+        self.uvs.get(index)
+    }
+
+    /// Whether any triangle of the scene's own has non-zero texture
+    /// coordinates.
+    pub fn has_uvs(&self) -> bool {
+        !self.uvs.is_empty()
     }
 
     /// The unit vertex normals of triangle `index`, if it is smooth shaded.
     #[inline]
     pub fn vertex_normals(&self, index: usize) -> Option<&[Vec3; 3]> {
-        let at = *self.shading_index.get(index)?;
-        self.vertex_normals.get(at as usize)
+        self.vertex_normals.get(index)
     }
 
     /// Whether any triangle (of the scene's own or of an instance) has
@@ -492,13 +497,13 @@ impl Scene {
             &self.lights,
         )?;
         self.lights.validate()?;
-        if !(self.uvs.is_empty() || self.uvs.len() == self.triangles.len()) {
-            return Err(format!(
-                "{} texture coordinate triples for {} triangles",
-                self.uvs.len(),
-                self.triangles.len()
-            ));
-        }
+        let triangles = self.triangles.len();
+        self.uvs
+            .validate(triangles)
+            .map_err(|e| format!("texture coordinates: {e}"))?;
+        self.vertex_normals
+            .validate(triangles)
+            .map_err(|e| format!("vertex normals: {e}"))?;
         if self.spectrum_registers != SpectrumRegisters::new(&self.spectra) {
             return Err("the spectrum registers do not hold the scene's spectra".to_owned());
         }
@@ -539,9 +544,8 @@ impl Scene {
         }
         let geometry = vec_bytes(&self.triangles)
             + vec_bytes(&self.triangle_material)
-            + vec_bytes(&self.uvs)
-            + vec_bytes(&self.shading_index)
-            + vec_bytes(&self.vertex_normals)
+            + self.uvs.memory_bytes()
+            + self.vertex_normals.memory_bytes()
             + self.packed_surfaces.memory_bytes();
         let bvh =
             self.bvh.memory_bytes() + self.instances.as_ref().map_or(0, Instances::memory_bytes);
@@ -639,9 +643,8 @@ pub struct SceneBuilder {
     fluorophores: Vec<SceneFluorophore>,
     triangles: Vec<[Vec3; 3]>,
     triangle_material: Vec<MaterialId>,
-    uvs: Vec<[Vec2; 3]>,
-    shading_index: Vec<u32>,
-    vertex_normals: Vec<[Vec3; 3]>,
+    uvs: SparseAttribute<[Vec2; 3]>,
+    vertex_normals: SparseAttribute<[Vec3; 3]>,
     camera: Option<Camera>,
     environment: Option<SpectrumId>,
     environment_map: Option<EnvironmentMap>,
@@ -702,9 +705,8 @@ impl SceneBuilder {
             fluorophores: Vec::new(),
             triangles: Vec::new(),
             triangle_material: Vec::new(),
-            uvs: Vec::new(),
-            shading_index: Vec::new(),
-            vertex_normals: Vec::new(),
+            uvs: SparseAttribute::default(),
+            vertex_normals: SparseAttribute::default(),
             camera: None,
             environment: None,
             environment_map: None,
@@ -934,22 +936,16 @@ impl SceneBuilder {
             uvs.swap(1, 2);
             unit = Some([n[0], n[2], n[1]]);
         }
+        let triangle = self.triangles.len();
         if let Some(n) = unit {
-            if self.shading_index.len() < self.triangles.len() {
-                self.shading_index.resize(self.triangles.len(), NO_ID);
-            }
-            self.shading_index.push(self.vertex_normals.len() as u32);
-            self.vertex_normals.push(n);
-        } else if !self.shading_index.is_empty() {
-            self.shading_index.push(NO_ID);
+            self.vertex_normals.set(triangle, n);
         }
-        // Texture coordinates are stored once a triangle has non-zero ones
-        // (bits: a -0 would interpolate differently from the 0 of an empty
-        // table), then for every triangle.
+        // Texture coordinates are stored for the triangles that have
+        // non-zero ones (bits: a -0 interpolates differently from the 0 of
+        // a triangle without).
         let zero_uvs = uvs.iter().all(|t| t.x.to_bits() == 0 && t.y.to_bits() == 0);
-        if !zero_uvs || !self.uvs.is_empty() {
-            self.uvs.resize(self.triangles.len(), [Vec2::ZERO; 3]);
-            self.uvs.push(uvs);
+        if !zero_uvs {
+            self.uvs.set(triangle, uvs);
         }
         self.triangles.push(vertices);
         self.triangle_material.push(material);
@@ -997,7 +993,7 @@ impl SceneBuilder {
             };
             if self.add_shaded_triangle([a, b, c], uvs, vertex_normals, placement.material) {
                 added.triangles += 1;
-                if self.shading_index.last().is_some_and(|&i| i != NO_ID) {
+                if self.vertex_normals.get(self.triangles.len() - 1).is_some() {
                     added.smooth += 1;
                 }
             } else {
@@ -1185,7 +1181,8 @@ impl SceneBuilder {
         // Pushes left up to twice the space the soup needs.
         self.triangles.shrink_to_fit();
         self.triangle_material.shrink_to_fit();
-        self.uvs.shrink_to_fit();
+        self.uvs.finish(self.triangles.len());
+        self.vertex_normals.finish(self.triangles.len());
         let camera = self.camera.ok_or(SceneError::NoCamera)?;
         if self.triangles.is_empty() && instances.is_none() {
             return Err(SceneError::Empty);
@@ -1241,10 +1238,6 @@ impl SceneBuilder {
             instances
                 .validate(&self.materials)
                 .map_err(SceneError::Bvh)?;
-        }
-        let mut shading_index = self.shading_index;
-        if !self.vertex_normals.is_empty() {
-            shading_index.resize(self.triangles.len(), NO_ID);
         }
         // Material ids were checked above, so every triangle has a record
         // (`Surface::NONE` is unreachable). An indexed map collects into
@@ -1312,7 +1305,6 @@ impl SceneBuilder {
             triangles: self.triangles,
             triangle_material: self.triangle_material,
             uvs: self.uvs,
-            shading_index,
             vertex_normals: self.vertex_normals,
             camera,
             environment: self.environment,
@@ -1350,7 +1342,9 @@ mod tests {
         b.add_triangle(triangle.map(|v| v - Vec3::Z), m);
         b.set_camera(Camera::look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 40.0)?);
         let scene = b.build()?;
-        assert_eq!(scene.uvs(), [[Vec2::ZERO; 3], uv, [Vec2::ZERO; 3]]);
+        let stored: Vec<Option<&[Vec2; 3]>> = (0..3).map(|t| scene.uvs(t)).collect();
+        assert_eq!(stored, [None, Some(&uv), None]);
+        assert!(scene.has_uvs());
         assert_eq!(scene.validate_surfaces(), Ok(()));
         Ok(())
     }
@@ -1366,7 +1360,10 @@ mod tests {
         stale.triangle_material.swap(0, 8);
         assert!(stale.validate_surfaces().is_err());
         let mut stale = cornell_box(SpectralRange::VISIBLE)?;
-        stale.uvs.push([glam::Vec2::ZERO; 3]);
+        stale.uvs.push_unnamed([glam::Vec2::ZERO; 3]);
+        assert!(stale.validate_surfaces().is_err());
+        let mut stale = cornell_box(SpectralRange::VISIBLE)?;
+        stale.vertex_normals.push_unnamed([glam::Vec3::Z; 3]);
         assert!(stale.validate_surfaces().is_err());
         Ok(())
     }
