@@ -42,7 +42,7 @@ use crate::shading::surface::Surface;
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::SceneBuilder;
-use super::attributes::SparseAttribute;
+use super::attributes::{SparseAttribute, VertexNormals};
 use super::mesh::MeshData;
 use super::transform::Transform;
 
@@ -97,7 +97,7 @@ pub struct InstancedMesh {
     /// Those of the triangles with non-zero ones.
     uvs: SparseAttribute<[Vec2; 3]>,
     /// Those of the smooth triangles.
-    vertex_normals: SparseAttribute<[Vec3; 3]>,
+    vertex_normals: VertexNormals,
 }
 
 impl InstancedMesh {
@@ -431,9 +431,8 @@ impl InstancedMesh {
             .flat_map(|v| v.to_array())
             .chain(dense_uvs.flatten().flat_map(|v| v.to_array()))
             .chain(
-                self.vertex_normals
-                    .values()
-                    .iter()
+                (0..self.triangles.len())
+                    .filter_map(|t| self.vertex_normals.get(t))
                     .flatten()
                     .flat_map(|v| v.to_array()),
             )

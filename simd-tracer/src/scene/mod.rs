@@ -22,9 +22,9 @@ pub mod transform;
 
 use crate::accel::{Bvh, InstanceHit, TriangleSubset};
 use crate::ids::NO_INSTANCE;
-use crate::ids::{AngularId, FluorophoreId, MaterialId, SpectrumId, TextureId};
+use crate::ids::{AngularId, FluorophoreId, MaterialId, NO_ID, SpectrumId, TextureId};
 use crate::packet::{PacketHit, Ray, RayPacket};
-use crate::scene::attributes::SparseAttribute;
+use crate::scene::attributes::{SparseAttribute, VertexNormals};
 use crate::scene::camera::Camera;
 use crate::scene::instances::{
     InstancePlacement, InstanceRequest, InstancedMesh, InstancedMeshId, Instances, Instancing,
@@ -121,9 +121,9 @@ pub struct Scene {
     /// ones (the others' are zero).
     uvs: SparseAttribute<[Vec2; 3]>,
     /// Unit vertex normals of the smooth triangles, on the front side of
-    /// their triangle (their mean points the way the winding does); the
-    /// others are shaded flat.
-    vertex_normals: SparseAttribute<[Vec3; 3]>,
+    /// their triangle (their mean points the way the winding does), each
+    /// mesh vertex's once; the others are shaded flat.
+    vertex_normals: VertexNormals,
     /// The camera.
     camera: Camera,
     /// Radiance arriving from every direction that escapes the scene.
@@ -229,7 +229,7 @@ impl Scene {
 
     /// The unit vertex normals of triangle `index`, if it is smooth shaded.
     #[inline]
-    pub fn vertex_normals(&self, index: usize) -> Option<&[Vec3; 3]> {
+    pub fn vertex_normals(&self, index: usize) -> Option<[Vec3; 3]> {
         self.vertex_normals.get(index)
     }
 
@@ -445,7 +445,7 @@ impl Scene {
     #[inline]
     pub fn hit_vertex_normals(&self, triangle: u32, instance: u32) -> Option<[Vec3; 3]> {
         if instance == NO_INSTANCE {
-            return self.vertex_normals(triangle as usize).copied();
+            return self.vertex_normals(triangle as usize);
         }
         self.instances.as_ref()?.vertex_normals(triangle, instance)
     }
@@ -644,7 +644,7 @@ pub struct SceneBuilder {
     triangles: Vec<[Vec3; 3]>,
     triangle_material: Vec<MaterialId>,
     uvs: SparseAttribute<[Vec2; 3]>,
-    vertex_normals: SparseAttribute<[Vec3; 3]>,
+    vertex_normals: VertexNormals,
     camera: Option<Camera>,
     environment: Option<SpectrumId>,
     environment_map: Option<EnvironmentMap>,
@@ -656,6 +656,17 @@ pub struct SceneBuilder {
     instance_requests: Vec<InstanceRequest>,
     instancing: Instancing,
     skipped: usize,
+}
+
+/// Where a smooth triangle's vertex normals go in the table
+/// ([`VertexNormals`]).
+enum NormalEntries<'a> {
+    /// Three new entries (normals given per triangle).
+    New,
+    /// The mesh vertices of the triangle's corners, and per mesh vertex its
+    /// entry once added ([`NO_ID`] before): each mesh vertex's normal is
+    /// stored once.
+    Mesh([u32; 3], &'a mut [u32]),
 }
 
 /// Vertex normals within this cosine of the face normal (about 0.08°)
@@ -706,7 +717,7 @@ impl SceneBuilder {
             triangles: Vec::new(),
             triangle_material: Vec::new(),
             uvs: SparseAttribute::default(),
-            vertex_normals: SparseAttribute::default(),
+            vertex_normals: VertexNormals::default(),
             camera: None,
             environment: None,
             environment_map: None,
@@ -911,6 +922,23 @@ impl SceneBuilder {
         normals: Option<[Vec3; 3]>,
         material: MaterialId,
     ) -> bool {
+        self.add_triangle_normals(
+            vertices,
+            uvs,
+            normals.map(|n| (n, NormalEntries::New)),
+            material,
+        )
+    }
+
+    /// [`SceneBuilder::add_shaded_triangle`] with the vertex normals'
+    /// table entries coming from `normals`' source.
+    fn add_triangle_normals(
+        &mut self,
+        vertices: [Vec3; 3],
+        uvs: [Vec2; 3],
+        normals: Option<([Vec3; 3], NormalEntries<'_>)>,
+        material: MaterialId,
+    ) -> bool {
         let [a, b, c] = vertices;
         let cross = (b - a).cross(c - a);
         let area2 = cross.length_squared();
@@ -919,26 +947,45 @@ impl SceneBuilder {
             self.skipped += 1;
             return false;
         }
-        let unit = normals.and_then(|[n0, n1, n2]| {
-            Some([
-                n0.try_normalize()?,
-                n1.try_normalize()?,
-                n2.try_normalize()?,
-            ])
+        let unit = normals.and_then(|([n0, n1, n2], source)| {
+            Some((
+                [
+                    n0.try_normalize()?,
+                    n1.try_normalize()?,
+                    n2.try_normalize()?,
+                ],
+                source,
+            ))
         });
         // Vertex normals that all equal the face normal shade flat: no
         // interpolation per hit.
         let face = cross.normalize();
-        let unit = unit.filter(|n| n.iter().any(|n| n.dot(face) < FLAT_COSINE));
-        let (mut vertices, mut uvs, mut unit) = (vertices, uvs, unit);
-        if let Some(n) = unit.filter(|n| (n[0] + n[1] + n[2]).dot(cross) < 0.0) {
+        let unit = unit.filter(|(n, _)| n.iter().any(|n| n.dot(face) < FLAT_COSINE));
+        let (mut vertices, mut uvs, mut order) = (vertices, uvs, [0, 1, 2]);
+        if unit
+            .as_ref()
+            .is_some_and(|(n, _)| (n[0] + n[1] + n[2]).dot(cross) < 0.0)
+        {
             vertices.swap(1, 2);
             uvs.swap(1, 2);
-            unit = Some([n[0], n[2], n[1]]);
+            order = [0, 2, 1];
         }
         let triangle = self.triangles.len();
-        if let Some(n) = unit {
-            self.vertex_normals.set(triangle, n);
+        if let Some((n, source)) = unit {
+            let entries = match source {
+                NormalEntries::New => n.map(|n| self.vertex_normals.push(n)),
+                NormalEntries::Mesh(vertex, slots) => {
+                    core::array::from_fn(|k| match slots.get_mut(vertex[k] as usize) {
+                        Some(slot) if *slot != NO_ID => *slot,
+                        Some(slot) => {
+                            *slot = self.vertex_normals.push(n[k]);
+                            *slot
+                        }
+                        None => self.vertex_normals.push(n[k]),
+                    })
+                }
+            };
+            self.vertex_normals.set(triangle, order.map(|k| entries[k]));
         }
         // Texture coordinates are stored for the triangles that have
         // non-zero ones (bits: a -0 interpolates differently from the 0 of
@@ -979,6 +1026,9 @@ impl SceneBuilder {
             Vec::new()
         };
         let swap = transform.flips_handedness() != placement.flip_normals;
+        // The table entry of each mesh vertex's normal, once a smooth
+        // triangle has added it.
+        let mut slots = vec![NO_ID; normals.len()];
         let mut added = MeshAdded::default();
         for &[i0, i1, i2] in &mesh.triangles {
             let order = if swap { [i0, i2, i1] } else { [i0, i1, i2] };
@@ -988,10 +1038,12 @@ impl SceneBuilder {
             };
             let uvs = order.map(|i| mesh.uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO));
             let vertex_normals = match at(&normals) {
-                [Some(n0), Some(n1), Some(n2)] => Some([n0, n1, n2]),
+                [Some(n0), Some(n1), Some(n2)] => {
+                    Some(([n0, n1, n2], NormalEntries::Mesh(order, &mut slots)))
+                }
                 _ => None,
             };
-            if self.add_shaded_triangle([a, b, c], uvs, vertex_normals, placement.material) {
+            if self.add_triangle_normals([a, b, c], uvs, vertex_normals, placement.material) {
                 added.triangles += 1;
                 if self.vertex_normals.get(self.triangles.len() - 1).is_some() {
                     added.smooth += 1;
@@ -1327,6 +1379,66 @@ mod tests {
     use spectral_core::SpectralRange;
 
     #[test]
+    fn a_mesh_stores_each_vertex_normal_once_and_reads_back_what_each_triangle_would()
+    -> Result<(), Box<dyn std::error::Error>> {
+        use super::{MeshPlacement, SceneBuilder, camera::Camera, transform::Transform};
+        use glam::Vec3;
+        // A sphere squashed and mirrored: normals by the inverse transpose,
+        // windings swapped, every triangle smooth.
+        let mesh = super::analytic::sphere_mesh(24);
+        let transform = Transform::scale(Vec3::new(-1.0, 0.5, 2.0))?;
+        let scene_with = |per_triangle: bool| -> Result<super::Scene, Box<dyn std::error::Error>> {
+            let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
+            let grey = b.add_spectrum("grey", crate::spectra::SpectrumSource::Constant(0.5))?;
+            let m = b.add_material(crate::shading::material::Material::lambert("grey", grey));
+            if per_triangle {
+                for &[i0, i1, i2] in &mesh.triangles {
+                    // The mirror swaps the winding, as add_mesh_data does.
+                    let order = [i0, i2, i1].map(|i| i as usize);
+                    let normals = order.map(|i| transform.normal(mesh.normals[i]));
+                    let [Some(n0), Some(n1), Some(n2)] = normals else {
+                        return Err("a normal did not transform".into());
+                    };
+                    let vertices = order.map(|i| transform.point(mesh.positions[i]));
+                    b.add_shaded_triangle(vertices, [glam::Vec2::ZERO; 3], Some([n0, n1, n2]), m);
+                }
+            } else {
+                b.add_mesh_data(
+                    &mesh,
+                    &MeshPlacement {
+                        transform: &transform,
+                        material: m,
+                        flip_normals: false,
+                        face_normals: false,
+                    },
+                )?;
+            }
+            b.set_camera(Camera::look_at(Vec3::Z * 9.0, Vec3::ZERO, Vec3::Y, 40.0)?);
+            Ok(b.build()?)
+        };
+        let (shared, each) = (scene_with(false)?, scene_with(true)?);
+        assert_eq!(shared.triangles(), each.triangles());
+        for t in 0..shared.triangles().len() {
+            assert!(shared.vertex_normals(t).is_some(), "triangle {t} is flat");
+            assert_eq!(
+                shared.vertex_normals(t),
+                each.vertex_normals(t),
+                "triangle {t}"
+            );
+        }
+        assert_eq!(shared.validate_surfaces(), Ok(()));
+        // Three entries a triangle given one by one, about one a triangle
+        // from the mesh (a closed surface has half as many vertices as
+        // triangles, plus the sphere's seam).
+        let (shared_bytes, each_bytes) = (
+            shared.vertex_normals.memory_bytes(),
+            each.vertex_normals.memory_bytes(),
+        );
+        assert!(2 * shared_bytes < each_bytes, "{shared_bytes} {each_bytes}");
+        Ok(())
+    }
+
+    #[test]
     fn texture_coordinates_are_stored_from_the_first_non_zero_ones()
     -> Result<(), Box<dyn std::error::Error>> {
         use super::{SceneBuilder, camera::Camera};
@@ -1363,7 +1475,8 @@ mod tests {
         stale.uvs.push_unnamed([glam::Vec2::ZERO; 3]);
         assert!(stale.validate_surfaces().is_err());
         let mut stale = cornell_box(SpectralRange::VISIBLE)?;
-        stale.vertex_normals.push_unnamed([glam::Vec3::Z; 3]);
+        stale.vertex_normals.push(glam::Vec3::Z);
+        stale.vertex_normals.scale_table(2.0);
         assert!(stale.validate_surfaces().is_err());
         Ok(())
     }
