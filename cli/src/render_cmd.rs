@@ -988,15 +988,26 @@ impl RenderArgs {
     }
 }
 
-/// `args` with the scene's transport where `--transport` is not given.
+/// `args` with the scene's transport and wavelength sampling where
+/// `--transport` and `--sampling` are not given (`None` when neither
+/// applies).
 fn with_scene_transport(args: &RenderArgs, defaults: &SceneDefaults) -> Option<RenderArgs> {
-    let name = defaults
+    let kind = defaults
         .transport
         .as_deref()
-        .filter(|_| args.transport.is_none())?;
-    let kind = TransportKind::from_str(name, false).ok()?;
+        .filter(|_| args.transport.is_none())
+        .and_then(|name| TransportKind::from_str(name, false).ok());
+    let sampling = defaults
+        .sampling
+        .as_deref()
+        .filter(|_| args.sampling.is_none())
+        .and_then(|name| Sampling::from_str(name, false).ok());
+    if kind.is_none() && sampling.is_none() {
+        return None;
+    }
     Some(RenderArgs {
-        transport: Some(kind),
+        transport: kind.or(args.transport),
+        sampling: sampling.or(args.sampling),
         ..args.clone()
     })
 }
@@ -1252,7 +1263,7 @@ impl TransportTask for RenderTask<'_> {
             } else {
                 0
             }
-            + splat_apron_bytes(self.settings, film_pixel);
+            + splat_ring_bytes(self.settings, film_pixel);
         let memory = (self.preflight)(pixel_bytes, size_of::<T>() as u64)?;
         if let Some(note) = self.coefficient_note {
             self.observer.notice(&RenderNotice::Note(note));
@@ -1268,16 +1279,17 @@ impl TransportTask for RenderTask<'_> {
     }
 }
 
-/// Bytes per window pixel of a splatting render's aprons: each tile's
-/// grown by the filter's margin `M` on every side, `((T + 2M)/T)²` film
-/// pixels per pixel (`T` = [`TILE_SIZE`]), rounded up; 0 when sampling.
-fn splat_apron_bytes(settings: &RenderSettings, film_pixel_bytes: u64) -> u64 {
+/// Bytes per window pixel of a splatting render's rings: each tile's
+/// apron (the tile grown by the filter's margin `M` on every side) less the
+/// tile, `((T + 2M)² − T²)/T²` film pixels per pixel (`T` =
+/// [`TILE_SIZE`]), rounded up; 0 when sampling.
+fn splat_ring_bytes(settings: &RenderSettings, film_pixel_bytes: u64) -> u64 {
     if settings.film != FilmMode::Splat {
         return 0;
     }
     let tile = u64::from(TILE_SIZE);
     let apron_side = tile + 2 * u64::from(settings.filter.splat_margin_px());
-    (film_pixel_bytes * apron_side * apron_side).div_ceil(tile * tile)
+    (film_pixel_bytes * (apron_side * apron_side - tile * tile)).div_ceil(tile * tile)
 }
 
 /// `fspec merge`'s task: the image of a film state.
@@ -2065,6 +2077,46 @@ mod tests {
         assert_eq!(
             TransportKind::value_variants().len(),
             crate::scene_file::TRANSPORT_NAMES.len()
+        );
+    }
+
+    /// A scene's `[render] sampling` applies where `--sampling` is not
+    /// given, with the scene's transport or the flag's, and every name it
+    /// may hold is a sampling of the command line.
+    #[test]
+    fn the_scene_sampling_fills_in_a_missing_flag() {
+        let scene = SceneDefaults {
+            sampling: Some("visible".into()),
+            ..SceneDefaults::default()
+        };
+        let Some(filled) = with_scene_transport(&args(&["--transport", "hybrid"]), &scene) else {
+            panic!("not filled in");
+        };
+        assert_eq!(
+            TransportSpec::of(&filled).sampling(),
+            Some(Sampling::Visible)
+        );
+        assert_eq!(filled.transport_kind(), TransportKind::Hybrid);
+        let flag = args(&["--transport", "sampled", "--sampling", "uniform"]);
+        assert!(with_scene_transport(&flag, &scene).is_none());
+        let both = SceneDefaults {
+            transport: Some("sampled".into()),
+            sampling: Some("lights".into()),
+            ..SceneDefaults::default()
+        };
+        let Some(filled) = with_scene_transport(&args(&[]), &both) else {
+            panic!("not filled in");
+        };
+        assert_eq!(
+            TransportSpec::of(&filled).sampling(),
+            Some(Sampling::Lights)
+        );
+        for name in crate::scene_file::SAMPLING_NAMES {
+            assert!(Sampling::from_str(name, false).is_ok(), "{name}");
+        }
+        assert_eq!(
+            Sampling::value_variants().len(),
+            crate::scene_file::SAMPLING_NAMES.len()
         );
     }
 }

@@ -40,6 +40,8 @@ pub struct SceneDefaults {
     pub instances: crate::scene_file::InstanceCount,
     /// The transport's name (`[render] transport`).
     pub transport: Option<String>,
+    /// The wavelength sampling's name (`[render] sampling`).
+    pub sampling: Option<String>,
     /// Fourier coefficients, a number or `auto`.
     pub coeffs: Option<crate::coefficient_choice::CoeffsChoice>,
 }
@@ -92,6 +94,7 @@ pub fn resolve_scene(
         crop: loaded.render.crop,
         instances: loaded.instances,
         transport: loaded.render.transport.clone(),
+        sampling: loaded.render.sampling.clone(),
         coeffs: loaded.render.coeffs,
     };
     Ok((loaded.builder, defaults, loaded.warnings))

@@ -249,6 +249,20 @@ fn unsupported_hybrid_sizes_and_transport_names_are_refused() -> TestResult {
         &[&path],
         &["transport.toml:2", "transport `magic`", "hybrid"],
     )?;
+    let scene = dir.join("sampling.toml");
+    fs::write(&scene, format!("[render]\nsampling = \"magic\"\n{QUAD}"))?;
+    let path = scene.to_string_lossy().into_owned();
+    refused(
+        &dir,
+        &[&path],
+        &["sampling.toml:2", "sampling `magic`", "lights"],
+    )?;
+    // The scene's sampling meets the same checks as the flag's.
+    let scene = dir.join("cv-lights.toml");
+    let text = format!("[render]\ntransport = \"cv\"\nsampling = \"lights\"\n{QUAD}");
+    fs::write(&scene, text)?;
+    let path = scene.to_string_lossy().into_owned();
+    refused(&dir, &[&path], &["lights"])?;
     Ok(())
 }
 

@@ -107,11 +107,16 @@ fn pass_ranges_merge<T: Transport>(
     assert_eq!(merged.passes, 0..PASSES, "{name}");
     assert_eq!(merged.rejected, whole_state.rejected, "{name}");
     // Additions into a pixel: one per pass when sampling; when splatting
-    // one per pass and tile whose apron covers the pixel, at most 4 (2 × 2
-    // tiles) with a margin under a tile's side.
+    // (render::FilmState's docs) per pass one per splat of its own tile's
+    // samples that reaches it, at most (2M + 1)² at one sample per pixel
+    // and pass, and one per other tile whose ring covers it, at most 3
+    // (2 × 2 tiles) with a margin under a tile's side.
     let additions_per_pass = match film {
         FilmMode::Sample => 1.0,
-        FilmMode::Splat => 4.0,
+        FilmMode::Splat => {
+            let footprint = f64::from(2 * Filter::gaussian().splat_margin_px() + 1);
+            footprint * footprint + 3.0
+        }
     };
     let n = f64::from(PASSES) * additions_per_pass;
     let largest = whole_state

@@ -245,6 +245,9 @@ pub struct RenderDefaults {
     pub crop: Option<CropWindow>,
     /// What a path carries, one of [`TRANSPORT_NAMES`] (TOML scenes only).
     pub transport: Option<String>,
+    /// How sampled wavelengths are drawn, one of [`SAMPLING_NAMES`] (TOML
+    /// scenes only).
+    pub sampling: Option<String>,
     /// Fourier coefficients, a number or `auto` (TOML scenes only).
     pub coeffs: Option<crate::coefficient_choice::CoeffsChoice>,
 }
@@ -252,6 +255,10 @@ pub struct RenderDefaults {
 /// The transports a TOML scene's `[render] transport` may name: those of
 /// `fspec render --transport`.
 pub const TRANSPORT_NAMES: [&str; 4] = ["fourier", "sampled", "cv", "hybrid"];
+
+/// The wavelength samplings a TOML scene's `[render] sampling` may name:
+/// those of `fspec render --sampling`.
+pub const SAMPLING_NAMES: [&str; 5] = ["uniform", "stratified", "hero", "visible", "lights"];
 
 /// A pixel reconstruction filter named by a scene file.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -22,9 +22,11 @@
 //! `(n − 1) u Σ|x|` of the exact sum (`u = 2⁻⁵³`, Higham, *Accuracy and
 //! Stability of Numerical Algorithms*, 2nd ed., §4.2), so they differ by at
 //! most `2 (n − 1) u Σ|x|`, far below the `f32` of every output. When
-//! splatting, `n` counts the additions into the pixel: one per pass and
-//! tile whose apron covers it (at most 4 while the margin is under a
-//! tile's side), each apron's own sum being the same in both.
+//! splatting, `n` counts the additions into the pixel: per pass one per
+//! splat of its own tile's samples that reaches it (at most `(2M + 1)²`
+//! at one sample per pixel and pass) and one per other tile whose ring
+//! covers it (at most 3 while the margin is under a tile's side), each
+//! ring's own sum being the same in both.
 
 use super::{PixelWindow, RenderError};
 use crate::film::{Film, FilmMode};

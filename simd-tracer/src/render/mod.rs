@@ -24,22 +24,27 @@
 //! tasks own, and `f64` addition is not associative, so the order in which
 //! a pixel's contributions are added must not depend on scheduling:
 //!
-//! * each tile splats into an apron of its own (the tile grown by `M` on
-//!   every side), emptied before every pass, in the fixed order of its
-//!   packets and lanes;
-//! * after every pass the aprons are added into the film's pixels: each
-//!   tile (in parallel) adds, pixel by pixel, the aprons that cover it in
+//! * each tile splats into its own pixels directly and into a ring of its
+//!   own for the rest of its apron (the tile grown by `M` on every side,
+//!   less the tile), in the fixed order of its packets and lanes; the ring
+//!   is emptied before every pass;
+//! * after every pass the rings are added into the film's pixels: each
+//!   tile (in parallel) adds, pixel by pixel, the rings that cover it in
 //!   the fixed order of the tiles (row-major on the film's tile grid).
 //!
-//! A pixel's sum is thus `(…((S + a₁) + a₂) …)` over passes and tiles in
-//! one order whatever the thread count and whatever the batch sizes, which
+//! A pixel's sum is thus `(…((S + s₁) + s₂) … + r₁) + r₂ …)` over passes:
+//! its own tile's splats in their order, then the other tiles' rings in
+//! theirs, whatever the thread count and whatever the batch sizes, which
 //! the measured speed sets and only the progress callback sees: the flush
 //! happens per pass inside a batch, never per batch. Per pass rather than
 //! per group of passes: a group would need its passes aligned to absolute
 //! pass indices so that `--passes` ranges and resumed renders stop at its
-//! edges, and the flush (one `f64` add per value of the apron, about
-//! `(1 + 2M/16)²` of the film per pass) is small beside tracing. The
-//! aprons cost that much memory beside the film.
+//! edges, and the flush (one `f64` add per value of the ring, about
+//! `(1 + 2M/16)² − 1` of the film per pass) is small beside tracing. The
+//! rings cost that much memory beside the film: 0.56 of it with the
+//! default Gaussian (`M` = 2). Whole aprons, tile included, cost 1.56 of
+//! it, the largest part of a small scene's peak memory, and a clearing and
+//! a flush of the tile's own pixels every pass.
 //!
 //! A cropped splat render traces the window grown by `M` (on the packet
 //! grid, clipped to the film) and flushes into the window only. A window
@@ -369,9 +374,9 @@ struct Tile<P> {
     height: u32,
     pixels: Vec<P>,
     /// Splatting: the current pass's splats over the tile grown by the
-    /// margin `M` on every side, row-major from `(x0 − M, y0 − M)`
-    /// (module docs); empty when sampling.
-    apron: Vec<P>,
+    /// margin `M` on every side but outside the tile, laid out by
+    /// [`Ring`] (module docs); empty when sampling.
+    ring: Vec<P>,
     rejected: u64,
     rays: RayCounts,
 }
@@ -496,7 +501,7 @@ fn render_tile<T: Transport>(
     let splat = Splat::new(settings, tile);
     if splat.is_some() {
         let film = transport.film();
-        tile.apron.iter_mut().for_each(|p| *p = film.empty_pixel());
+        tile.ring.iter_mut().for_each(|p| *p = film.empty_pixel());
     }
     for first in (0..count).step_by(GROUP) {
         let lanes: [[Option<(u32, u32)>; LANES]; GROUP] = core::array::from_fn(|g| {
@@ -595,12 +600,66 @@ const SPLAT_WEIGHT_SLOTS: usize = (2 * MAX_SPLAT_MARGIN_PX as usize + 1).div_cei
 /// `0, 1, …, 7`: the lane offsets of one chunk of splat weights.
 const LANE_INDEX: f32x8 = f32x8::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
 
+/// Where a tile's apron pixels outside the tile live in its ring: the `M`
+/// rows above the tile (apron width each), then for each of the tile's
+/// rows its `M` pixels left and `M` right, then the `M` rows below.
+/// Apron coordinates `(ax, ay)` count from the apron's corner
+/// `(x0 − M, y0 − M)`.
+#[derive(Debug, Clone, Copy)]
+struct Ring {
+    /// `M`, px.
+    margin: usize,
+    /// The tile's width, px.
+    width: usize,
+    /// The tile's height, px.
+    height: usize,
+}
+
+impl Ring {
+    fn of<P>(tile: &Tile<P>, margin: u32) -> Self {
+        Self {
+            margin: margin as usize,
+            width: tile.width as usize,
+            height: tile.height as usize,
+        }
+    }
+
+    /// Pixels of the ring.
+    fn len(&self) -> usize {
+        let apron_width = self.width + 2 * self.margin;
+        2 * self.margin * (apron_width + self.height)
+    }
+
+    /// The tile pixel of apron pixel `(ax, ay)` (`Ok`, row-major in the
+    /// tile) or its ring slot (`Err`); the pixel is in the apron.
+    #[inline(always)]
+    fn place(&self, ax: usize, ay: usize) -> Result<usize, usize> {
+        let (m, w, h) = (self.margin, self.width, self.height);
+        let apron_width = w + 2 * m;
+        debug_assert!(ax < apron_width && ay < h + 2 * m);
+        if ay < m {
+            return Err(ay * apron_width + ax);
+        }
+        if ay >= m + h {
+            return Err(m * apron_width + 2 * m * h + (ay - m - h) * apron_width + ax);
+        }
+        let row = m * apron_width + (ay - m) * 2 * m;
+        if ax < m {
+            Err(row + ax)
+        } else if ax >= m + w {
+            Err(row + m + (ax - m - w))
+        } else {
+            Ok((ay - m) * w + (ax - m))
+        }
+    }
+}
+
 struct Splat<'a> {
     filter: &'a Filter,
     /// `M`, px.
     margin: u32,
-    /// Apron width, `tile width + 2M`.
-    apron_width: u32,
+    /// The tile's apron less the tile.
+    ring: Ring,
 }
 
 impl<'a> Splat<'a> {
@@ -611,7 +670,7 @@ impl<'a> Splat<'a> {
             Self {
                 filter: &settings.filter,
                 margin,
-                apron_width: tile.width + 2 * margin,
+                ring: Ring::of(tile, margin),
             }
         })
     }
@@ -668,8 +727,8 @@ impl<'a> Splat<'a> {
     }
 
     /// Adds `sample` with weight `rows[j] · columns[i]` to apron pixel
-    /// `(lx + i, ly + j)` (the apron is shifted by `M` in both axes),
-    /// skipping zero weights.
+    /// `(lx + i, ly + j)` (the apron is shifted by `M` in both axes): the
+    /// tile's own pixel or its ring slot, skipping zero weights.
     fn spread<F: Film>(
         &self,
         film: &F,
@@ -678,42 +737,39 @@ impl<'a> Splat<'a> {
         (rows, columns): (&[f32], &[f32]),
         sample: &F::Sample,
     ) {
-        let width = self.apron_width as usize;
         for (j, &wy) in rows.iter().enumerate() {
             if wy == 0.0 {
                 continue;
             }
-            let row = (ly as usize + j) * width + lx as usize;
             for (i, &wx) in columns.iter().enumerate() {
                 let w = wx * wy;
-                if w != 0.0 {
-                    film.accumulate_weighted(&mut tile.apron[row + i], sample, w);
+                if w == 0.0 {
+                    continue;
                 }
+                let pixel = match self.ring.place(lx as usize + i, ly as usize + j) {
+                    Ok(own) => &mut tile.pixels[own],
+                    Err(slot) => &mut tile.ring[slot],
+                };
+                film.accumulate_weighted(pixel, sample, w);
             }
         }
     }
 }
 
-/// Adds every tile's apron into the pixels of `window` it covers (module
+/// Adds every tile's ring into the pixels of `window` it covers (module
 /// docs): `sources[t]` lists, in tile order, the tiles whose aprons cover
-/// some of tile `t`'s window pixels.
-fn flush_aprons<F: Film>(
+/// some of tile `t`'s window pixels (its own apron's pixels there are its
+/// own, already summed).
+fn flush_rings<F: Film>(
     film: &F,
     tiles: &mut [Tile<F::Pixel>],
     sources: &[Vec<usize>],
     margin: u32,
     window: &PixelWindow,
 ) {
-    let aprons: Vec<(u32, u32, u32, Vec<F::Pixel>)> = tiles
+    let rings: Vec<(u32, u32, Ring, Vec<F::Pixel>)> = tiles
         .iter_mut()
-        .map(|t| {
-            (
-                t.x0,
-                t.y0,
-                t.width + 2 * margin,
-                std::mem::take(&mut t.apron),
-            )
-        })
+        .map(|t| (t.x0, t.y0, Ring::of(t, margin), std::mem::take(&mut t.ring)))
         .collect();
     tiles
         .par_iter_mut()
@@ -729,24 +785,27 @@ fn flush_aprons<F: Film>(
                 y0.max(wy0)..(y0 + i64::from(tile.height)).min(wy0 + i64::from(window.height));
             let margin = i64::from(margin);
             for &source in sources {
-                let (sx0, sy0, apron_width, apron) = &aprons[source];
-                let apron_width = i64::from(*apron_width);
-                let apron_height = apron.len() as i64 / apron_width;
+                let (sx0, sy0, geometry, ring) = &rings[source];
+                let apron_width = (geometry.width + 2 * geometry.margin) as i64;
+                let apron_height = (geometry.height + 2 * geometry.margin) as i64;
                 // The apron's corner in film coordinates, and its overlap
                 // with the kept pixels.
                 let (ax0, ay0) = (i64::from(*sx0) - margin, i64::from(*sy0) - margin);
                 let columns = kept_x.start.max(ax0)..kept_x.end.min(ax0 + apron_width);
                 for y in kept_y.start.max(ay0)..kept_y.end.min(ay0 + apron_height) {
                     for x in columns.clone() {
+                        let place = geometry.place((x - ax0) as usize, (y - ay0) as usize);
+                        // The source's own pixels (this tile's, when it is
+                        // its own source) hold their splats already.
+                        let Err(slot) = place else { continue };
                         let at = ((y - y0) * i64::from(tile.width) + x - x0) as usize;
-                        let from = ((y - ay0) * apron_width + x - ax0) as usize;
-                        film.add_pixel(&mut tile.pixels[at], &apron[from]);
+                        film.add_pixel(&mut tile.pixels[at], &ring[slot]);
                     }
                 }
             }
         });
-    for (tile, (.., apron)) in tiles.iter_mut().zip(aprons) {
-        tile.apron = apron;
+    for (tile, (.., ring)) in tiles.iter_mut().zip(rings) {
+        tile.ring = ring;
     }
 }
 
@@ -959,21 +1018,20 @@ pub fn render_observed<T: Transport>(
                 continue;
             }
             let (width, height) = (x_end - x0, y_end - y0);
-            let apron_pixels = if splat {
-                ((width + 2 * margin) * (height + 2 * margin)) as usize
-            } else {
-                0
-            };
-            tiles.push(Tile {
+            let mut tile = Tile {
                 x0,
                 y0,
                 width,
                 height,
                 pixels: vec![film.empty_pixel(); (width * height) as usize],
-                apron: vec![film.empty_pixel(); apron_pixels],
+                ring: Vec::new(),
                 rejected: 0,
                 rays: RayCounts::default(),
-            });
+            };
+            if splat {
+                tile.ring = vec![film.empty_pixel(); Ring::of(&tile, margin).len()];
+            }
+            tiles.push(tile);
         }
     }
     let sources = if splat {
@@ -1004,14 +1062,14 @@ pub fn render_observed<T: Transport>(
         let batch_start = Instant::now();
         pool.install(|| {
             if splat {
-                // One pass at a time, its aprons flushed before the next
+                // One pass at a time, its rings flushed before the next
                 // (module docs): the batch never reaches the sums.
                 for pass in first..end {
                     tiles.par_iter_mut().for_each_init(
                         || GroupState::new(transport),
                         |state, tile| render_tile(transport, scene, settings, pass, state, tile),
                     );
-                    flush_aprons(film, &mut tiles, &sources, margin, &window);
+                    flush_rings(film, &mut tiles, &sources, margin, &window);
                 }
             } else {
                 tiles.par_iter_mut().for_each_init(

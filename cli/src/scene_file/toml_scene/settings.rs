@@ -7,7 +7,7 @@ use crate::coeffs::MAX_COEFFS;
 use crate::error::CliError;
 use crate::scene_file::construction::MapSettings;
 use crate::scene_file::toml_reader::Item;
-use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults, TRANSPORT_NAMES};
+use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults, SAMPLING_NAMES, TRANSPORT_NAMES};
 use crate::sensor_file::{ObserverChoice, load_sensor_csv};
 use glam::{Mat3, Vec3};
 use simd_tracer::film::FilmMode;
@@ -31,6 +31,7 @@ impl Loader<'_> {
                 "hide_emitters",
                 "film",
                 "transport",
+                "sampling",
                 "coeffs",
                 "sampler",
                 "observer",
@@ -57,6 +58,23 @@ impl Loader<'_> {
         let get = |key: &str, min: i64, max: i64| -> Result<Option<i64>, CliError> {
             table.get(key).map(|i| i.integer(src, min, max)).transpose()
         };
+        // A string that must be one of `names`, kept as written for the
+        // command line's parser (an unknown one is refused here, not
+        // ignored there).
+        let named = |key: &str, names: &[&str]| -> Result<Option<String>, CliError> {
+            table
+                .get(key)
+                .map(|i| {
+                    let name = i.string(src)?;
+                    names
+                        .contains(&name)
+                        .then(|| name.to_string())
+                        .ok_or_else(|| {
+                            i.err(src, format!("{key} `{name}`: use {}", names.join(", ")))
+                        })
+                })
+                .transpose()
+        };
         let u32_max = i64::from(u32::MAX);
         Ok(RenderDefaults {
             observer,
@@ -77,21 +95,8 @@ impl Loader<'_> {
                         .ok_or_else(|| i.err(src, format!("film `{name}`: use sample or splat")))
                 })
                 .transpose()?,
-            transport: table
-                .get("transport")
-                .map(|i| {
-                    let name = i.string(src)?;
-                    TRANSPORT_NAMES
-                        .contains(&name)
-                        .then(|| name.to_string())
-                        .ok_or_else(|| {
-                            i.err(
-                                src,
-                                format!("transport `{name}`: use {}", TRANSPORT_NAMES.join(", ")),
-                            )
-                        })
-                })
-                .transpose()?,
+            transport: named("transport", &TRANSPORT_NAMES)?,
+            sampling: named("sampling", &SAMPLING_NAMES)?,
             coeffs: table
                 .get("coeffs")
                 .map(|i| match i.string(src) {
