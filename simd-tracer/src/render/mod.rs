@@ -757,9 +757,8 @@ impl<'a> Splat<'a> {
 }
 
 /// Adds every tile's ring into the pixels of `window` it covers (module
-/// docs): `sources[t]` lists, in tile order, the tiles whose aprons cover
-/// some of tile `t`'s window pixels (its own apron's pixels there are its
-/// own, already summed).
+/// docs): `sources[t]` lists, in tile order, the other tiles whose rings
+/// cover some of tile `t`'s window pixels ([`ring_sources`]).
 fn flush_rings<F: Film>(
     film: &F,
     tiles: &mut [Tile<F::Pixel>],
@@ -795,8 +794,7 @@ fn flush_rings<F: Film>(
                 for y in kept_y.start.max(ay0)..kept_y.end.min(ay0 + apron_height) {
                     for x in columns.clone() {
                         let place = geometry.place((x - ax0) as usize, (y - ay0) as usize);
-                        // The source's own pixels (this tile's, when it is
-                        // its own source) hold their splats already.
+                        // The source's own pixels are not in its ring.
                         let Err(slot) = place else { continue };
                         let at = ((y - y0) * i64::from(tile.width) + x - x0) as usize;
                         film.add_pixel(&mut tile.pixels[at], &ring[slot]);
@@ -809,9 +807,10 @@ fn flush_rings<F: Film>(
     }
 }
 
-/// For each tile, the tiles (in order) whose aprons, the tiles grown by
-/// `margin`, overlap its pixels in `window`.
-fn apron_sources<P>(tiles: &[Tile<P>], margin: u32, window: &PixelWindow) -> Vec<Vec<usize>> {
+/// For each tile, the other tiles (in order) whose aprons, the tiles grown
+/// by `margin`, overlap its pixels in `window`: the rings that reach it (a
+/// tile's own ring lies outside it).
+fn ring_sources<P>(tiles: &[Tile<P>], margin: u32, window: &PixelWindow) -> Vec<Vec<usize>> {
     let rect = |t: &Tile<P>, grow: u32| {
         (
             i64::from(t.x0) - i64::from(grow),
@@ -827,7 +826,8 @@ fn apron_sources<P>(tiles: &[Tile<P>], margin: u32, window: &PixelWindow) -> Vec
     );
     tiles
         .iter()
-        .map(|tile| {
+        .enumerate()
+        .map(|(own, tile)| {
             let (x0, y0, x1, y1) = rect(tile, 0);
             let (x0, y0, x1, y1) = (x0.max(wx0), y0.max(wy0), x1.min(wx1), y1.min(wy1));
             if x0 >= x1 || y0 >= y1 {
@@ -836,9 +836,9 @@ fn apron_sources<P>(tiles: &[Tile<P>], margin: u32, window: &PixelWindow) -> Vec
             tiles
                 .iter()
                 .enumerate()
-                .filter(|(_, source)| {
+                .filter(|&(index, source)| {
                     let (sx0, sy0, sx1, sy1) = rect(source, margin);
-                    sx0 < x1 && x0 < sx1 && sy0 < y1 && y0 < sy1
+                    index != own && sx0 < x1 && x0 < sx1 && sy0 < y1 && y0 < sy1
                 })
                 .map(|(index, _)| index)
                 .collect()
@@ -1035,7 +1035,7 @@ pub fn render_observed<T: Transport>(
         }
     }
     let sources = if splat {
-        apron_sources(&tiles, margin, &window)
+        ring_sources(&tiles, margin, &window)
     } else {
         Vec::new()
     };
