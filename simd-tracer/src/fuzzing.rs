@@ -5,7 +5,8 @@
 //! * [`traversal`]: packet, wide-tree, flat and scalar traversal agree on
 //!   arbitrary finite triangles and rays (same hit or miss; same triangle,
 //!   or the same `t` up to rounding; the wide tree and the flat test may
-//!   also find hits the oracle's box rounding culls, never lose one).
+//!   also find hits the oracle's box rounding culls, never lose one), on
+//!   the trees of both builds ([`BvhBuild`]).
 //! * [`obj`]: arbitrary OBJ and MTL text through the loader and the scene
 //!   build: `Err` or a valid scene, never a panic.
 //! * [`ply`]: arbitrary bytes through the PLY parser: `Err` or a mesh that
@@ -16,7 +17,7 @@
 //!   inflated stream of a one-shape file (compressed here), since zlib's
 //!   checksum makes nearly every mutation of compressed data fail early.
 
-use crate::accel::{Bvh, Hit, WideStack};
+use crate::accel::{Bvh, BvhBuild, BvhLayout, Hit, WideStack};
 use crate::packet::{Ray, RayPacket};
 use crate::scene::camera::Camera;
 use crate::scene::obj::{ObjSource, load_obj};
@@ -87,12 +88,6 @@ pub fn traversal(bytes: &[u8]) {
             ]
         })
         .collect();
-    let bvh = Bvh::build(&triangles);
-    assert!(
-        bvh.validate(&triangles).is_ok(),
-        "{:?}",
-        bvh.validate(&triangles)
-    );
     let ray_values: Vec<f32> = floats(&bytes[..split]).collect();
     let rays: Vec<Ray> = ray_values
         .chunks_exact(9)
@@ -103,7 +98,20 @@ pub fn traversal(bytes: &[u8]) {
             t_max: if c[6] > 0.0 { c[6] } else { f32::INFINITY },
         })
         .collect();
-    let packet = RayPacket::from_rays(&rays);
+    for method in [BvhBuild::Ploc, BvhBuild::Binned] {
+        let bvh = Bvh::build_with(&triangles, BvhLayout::BinaryAndWide, method);
+        assert!(
+            bvh.validate(&triangles).is_ok(),
+            "{method:?}: {:?}",
+            bvh.validate(&triangles)
+        );
+        check_traversal(&bvh, &triangles, &rays);
+    }
+}
+
+/// The checks of [`traversal`] on one tree.
+fn check_traversal(bvh: &Bvh, triangles: &[[Vec3; 3]], rays: &[Ray]) {
+    let packet = RayPacket::from_rays(rays);
     let hits = bvh.intersect_packet(&packet);
     let blocked = bvh.occluded_packet(&packet);
     let flat = bvh.intersect_packet_flat(&packet);
@@ -156,7 +164,7 @@ pub fn traversal(bytes: &[u8]) {
         if let Some(h) = scalar {
             let w = wide.unwrap_or_else(|| panic!("lane {lane}: wide tree misses {h:?}"));
             assert!(
-                w.t < h.t || agrees(ray, &triangles, (w.triangle, w.t), (h.triangle, h.t)),
+                w.t < h.t || agrees(ray, triangles, (w.triangle, w.t), (h.triangle, h.t)),
                 "lane {lane}: wide {w:?} vs {h:?}"
             );
         }
@@ -174,7 +182,7 @@ pub fn traversal(bytes: &[u8]) {
             let t = hits.t.to_array()[lane];
             let packet_triangle = hits.triangle[lane];
             assert!(
-                agrees(ray, &triangles, (packet_triangle, t), (h.triangle, h.t)),
+                agrees(ray, triangles, (packet_triangle, t), (h.triangle, h.t)),
                 "lane {lane}: {t} (triangle {packet_triangle}) vs {} (triangle {})",
                 h.t,
                 h.triangle

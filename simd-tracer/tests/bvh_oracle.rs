@@ -6,7 +6,9 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 use proptest::prelude::*;
-use simd_tracer::accel::{BYTES_PER_TRIANGLE, Bvh, BvhLayout, Hit, Traversal, WIDE_MIN_TRIANGLES};
+use simd_tracer::accel::{
+    BYTES_PER_TRIANGLE, Bvh, BvhBuild, BvhLayout, Hit, Traversal, WIDE_MIN_TRIANGLES,
+};
 use simd_tracer::ids::NO_TRIANGLE;
 use simd_tracer::packet::PacketHit;
 use simd_tracer::packet::{Ray, RayPacket};
@@ -108,6 +110,18 @@ struct Scene {
 impl Scene {
     fn new(triangles: Vec<[Vec3; 3]>) -> Self {
         let bvh = Bvh::build(&triangles);
+        Self::with_bvh(triangles, bvh)
+    }
+
+    /// The scene over the same triangles with the binary tree of the binned
+    /// build (both layouts kept, so the scalar oracle and the packets run
+    /// on that tree).
+    fn binned(&self) -> Self {
+        let bvh = Bvh::build_with(&self.triangles, BvhLayout::BinaryAndWide, BvhBuild::Binned);
+        Self::with_bvh(self.triangles.clone(), bvh)
+    }
+
+    fn with_bvh(triangles: Vec<[Vec3; 3]>, bvh: Bvh) -> Self {
         let (lo, hi) = triangles.iter().flatten().fold(
             (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
             |(lo, hi), p| (lo.min(*p), hi.max(*p)),
@@ -642,12 +656,40 @@ fn incoherent_rays_take_flat_or_packet_in_small_scenes_and_wide_in_larger_ones()
 
 #[test]
 fn packet_agrees_with_scalar_on_many_random_packets() {
-    for (name, scene) in [
+    check_many_random_packets(&[
         ("soup", soup_scene()),
         ("big soup", big_soup_scene()),
         ("box", box_scene()),
         ("cornell", cornell_scene()),
-    ] {
+    ]);
+}
+
+/// The trees of the binned build (`BvhBuild::Binned`, the build of large
+/// scenes) pass every check of the PLOC trees above: obvhs' validation and
+/// this crate's, and the packet, wide, flat and scalar queries agreeing ray
+/// by ray.
+#[test]
+fn binned_trees_pass_the_same_checks() {
+    let scenes = [
+        ("soup", soup_scene().binned()),
+        ("big soup", big_soup_scene().binned()),
+        ("box", box_scene().binned()),
+        ("cornell", cornell_scene().binned()),
+    ];
+    for (name, scene) in &scenes {
+        scene
+            .bvh
+            .validate(&scene.triangles)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(scene.bvh.kept_triangles(), scene.triangles.len(), "{name}");
+    }
+    assert!(scenes[1].1.bvh.wide_node_count() > 8);
+    let refs: Vec<(&str, &Scene)> = scenes.iter().map(|(name, scene)| (*name, scene)).collect();
+    check_many_random_packets(&refs);
+}
+
+fn check_many_random_packets(scenes: &[(&str, &Scene)]) {
+    for &(name, scene) in scenes {
         let mut rng = SplitMix(99);
         let mut tally = Tally::default();
         for _ in 0..3000 {

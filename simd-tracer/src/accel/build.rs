@@ -1,8 +1,11 @@
 //! Building the tree: obvhs' PLOC build with the renderer's parameters,
 //! degenerate triangles left out, leaf order, fan pairs and the wide tree.
 
+use super::binned_build::{BuildItem, build_binned};
 use super::triangle::{DEGENERATE_SINE, PreparedTriangle, dot, fan_pairs};
-use super::{BlockTriangle, Bvh, BvhLayout, Traversal, WIDE_MIN_TRIANGLES, WideBvh, index_u32};
+use super::{
+    BlockTriangle, Bvh, BvhBuild, BvhLayout, Traversal, WIDE_MIN_TRIANGLES, WideBvh, index_u32,
+};
 use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
@@ -192,16 +195,26 @@ impl Bvh {
     /// Degenerate (zero-area or non-finite) triangles are skipped (never hit)
     /// and counted, see [`Bvh::skipped_triangles`].
     pub fn build(triangles: &[[Vec3; 3]]) -> Bvh {
-        Self::build_inner(triangles, None)
+        Self::build_inner(triangles, None, None)
     }
 
     /// Builds over `triangles` keeping the trees of `layout` whatever its
     /// size (tests compare the layouts on the same input).
     pub fn build_with_layout(triangles: &[[Vec3; 3]], layout: BvhLayout) -> Bvh {
-        Self::build_inner(triangles, Some(layout))
+        Self::build_inner(triangles, Some(layout), None)
     }
 
-    fn build_inner(triangles: &[[Vec3; 3]], layout: Option<BvhLayout>) -> Bvh {
+    /// Builds over `triangles` with `method` and the trees of `layout`
+    /// whatever its size (tests compare the builds on the same input).
+    pub fn build_with(triangles: &[[Vec3; 3]], layout: BvhLayout, method: BvhBuild) -> Bvh {
+        Self::build_inner(triangles, Some(layout), Some(method))
+    }
+
+    fn build_inner(
+        triangles: &[[Vec3; 3]],
+        layout: Option<BvhLayout>,
+        method: Option<BvhBuild>,
+    ) -> Bvh {
         // Input indices of the kept triangles, ascending.
         let kept: Vec<u32> = triangles
             .par_iter()
@@ -211,6 +224,7 @@ impl Bvh {
             .collect();
         let skipped = triangles.len() - kept.len();
         let layout = layout.unwrap_or_else(|| BvhLayout::for_triangles(kept.len()));
+        let method = method.unwrap_or_else(|| BvhBuild::for_triangles(kept.len()));
         let input = |kept_index: usize| {
             kept.get(kept_index)
                 .and_then(|&i| triangles.get(i as usize))
@@ -218,6 +232,16 @@ impl Bvh {
 
         let mut bvh2 = if kept.is_empty() {
             Bvh2::default()
+        } else if method == BvhBuild::Binned {
+            let mut items: Vec<BuildItem> = Vec::with_capacity(kept.len());
+            items.par_extend(kept.par_iter().enumerate().filter_map(|(k, &i)| {
+                let vertices = triangles.get(i as usize)?;
+                Some(BuildItem::new(&triangle_aabb(vertices), index_u32(k)))
+            }));
+            let mut bvh2 = build_binned(&mut items);
+            drop(items);
+            bvh2.max_depth = (tree_depth(&bvh2.nodes) + 1).max(DEFAULT_MAX_STACK_DEPTH);
+            bvh2
         } else {
             // Sized up front: a collect through `filter_map` grows by
             // doubling and held up to 16 bytes a triangle at the build's

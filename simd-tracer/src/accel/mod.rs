@@ -3,11 +3,13 @@
 //!
 //! # Construction
 //!
-//! The tree is an `obvhs` [`Bvh2`] (binary BVH, PLOC build with reinsertion
-//! and leaf collapsing, preset [`obvhs::BvhBuildParams::medium_build`] with
-//! more reinsertion and larger leaves allowed for scenes up to 2¹⁷ triangles,
-//! see `build_params`; no spatial splits, so every triangle sits in
-//! exactly one leaf). Degenerate triangles
+//! The tree is an `obvhs` [`Bvh2`] (binary BVH; no spatial splits, so every
+//! triangle sits in exactly one leaf). Up to [`WIDE_ONLY_MIN_TRIANGLES`]
+//! (2¹⁷) triangles it is obvhs' PLOC build with reinsertion and leaf
+//! collapsing (preset [`obvhs::BvhBuildParams::medium_build`] with more
+//! reinsertion and larger leaves allowed, see `build_params`); above, the
+//! binned surface-area-heuristic build of `binned_build.rs`
+//! ([`BvhBuild`]), which needs a fraction of PLOC's memory. Degenerate triangles
 //! (a non-finite vertex, or zero area: `|e1 × e2| ≤ 1e-7 |e1| |e2|` evaluated
 //! in `f64`, i.e. collinear to `f32` precision, or an `f32` edge cross product
 //! that overflows or whose squared length is below the smallest normal `f32`,
@@ -170,6 +172,7 @@ mod triangle;
 use triangle::{
     PreparedTriangle, ScalarHit, cross, dot, edge_weights, plane_terms, safe_inverse, sub3, weight,
 };
+mod binned_build;
 mod build;
 mod single_ray;
 mod validate;
@@ -244,6 +247,32 @@ pub enum BvhLayout {
 /// above it they are the largest part of a big scene's memory after the
 /// wide tree itself.
 pub const WIDE_ONLY_MIN_TRIANGLES: usize = build::THOROUGH_BUILD_MAX_TRIANGLES;
+
+/// How [`Bvh::build`] makes the binary tree the 8-wide tree is collapsed
+/// from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BvhBuild {
+    /// obvhs' PLOC build with reinsertion and leaf collapse (`build_params`):
+    /// one leaf per triangle before the collapse, and the tree the packet
+    /// traversal of small scenes is tuned on.
+    Ploc,
+    /// The binned surface-area-heuristic build of `binned_build.rs`: leaves
+    /// of up to [`WIDE_WIDTH`] triangles, built in place with a fraction of
+    /// PLOC's memory.
+    Binned,
+}
+
+impl BvhBuild {
+    /// The build [`Bvh::build`] chooses for `kept_triangles`
+    /// non-degenerate triangles: [`BvhBuild::Binned`] for the trees that
+    /// keep only the 8-wide tree ([`WIDE_ONLY_MIN_TRIANGLES`]).
+    pub fn for_triangles(kept_triangles: usize) -> Self {
+        match BvhLayout::for_triangles(kept_triangles) {
+            BvhLayout::WideOnly => Self::Binned,
+            BvhLayout::BinaryAndWide => Self::Ploc,
+        }
+    }
+}
 
 impl BvhLayout {
     /// The layout [`Bvh::build`] chooses for `kept_triangles`

@@ -710,7 +710,7 @@ impl WideBvh {
     pub(super) fn validate(
         &self,
         slots: usize,
-        prepared: impl Fn(usize) -> Option<PreparedTriangle>,
+        prepared: impl Fn(usize) -> Option<PreparedTriangle> + Sync,
         corners: impl Fn(usize) -> Option<[Vec3; 3]>,
     ) -> Result<(), String> {
         if slots == 0 {
@@ -805,9 +805,6 @@ impl WideBvh {
                             "wide node {index} child {k} does not bound triangle slot {slot}"
                         ));
                     }
-                    if Some(self.blocks[b].lane(t)) != prepared(slot as usize) {
-                        return Err(format!("block {b} lane {t}: stale triangle data"));
-                    }
                 }
             }
         }
@@ -824,7 +821,20 @@ impl WideBvh {
         if let Some(s) = slot_seen.iter().position(|&s| !s) {
             return Err(format!("triangle slot {s} is in no block"));
         }
-        Ok(())
+        // Every used lane holds its slot's record, bit for bit: the costly
+        // part (each record is derived again), on all threads, reporting
+        // the first stale lane in block order.
+        let stale = self
+            .blocks
+            .par_iter()
+            .enumerate()
+            .find_map_first(|(b, block)| {
+                (0..WIDTH)
+                    .filter(|&t| block.slot[t] != NO_SLOT)
+                    .find(|&t| Some(block.lane(t)) != prepared(block.slot[t] as usize))
+                    .map(|t| format!("block {b} lane {t}: stale triangle data"))
+            });
+        stale.map_or(Ok(()), Err)
     }
 }
 

@@ -174,21 +174,23 @@ pub struct LightSample {
 }
 
 impl LightSet {
-    /// Collects every triangle whose record emits with positive power and
-    /// fills in the records' [`Surface::light_pmf`] (power-proportional).
-    pub fn new(
-        triangles: &[[Vec3; 3]],
-        surfaces: &mut [Surface],
-        spectra: &[SceneSpectrum],
-    ) -> Self {
+    /// The lights among `candidates` (triangles of `triangle_count` whose
+    /// records emit, in ascending triangle order): those with positive
+    /// power, with [`Surface::light_pmf`] filled in (power-proportional).
+    /// [`LightSet::pmfs`] gives the probabilities to write back into the
+    /// scene's records.
+    pub fn new(triangle_count: usize, candidates: Vec<Light>, spectra: &[SceneSpectrum]) -> Self {
         let mut set = Self {
-            light_of_triangle: vec![NOT_A_LIGHT; surfaces.len()],
+            light_of_triangle: vec![NOT_A_LIGHT; triangle_count],
             ..Self::default()
         };
         let mut powers = Vec::new();
-        for (index, (vertices, surface)) in (0u32..).zip(triangles.iter().zip(surfaces.iter_mut()))
-        {
+        for mut light in candidates {
+            let surface = &mut light.surface;
             surface.light_pmf = 0.0;
+            let Some(slot) = set.light_of_triangle.get_mut(light.triangle as usize) else {
+                continue;
+            };
             if surface.emission.is_none() {
                 continue;
             }
@@ -198,12 +200,8 @@ impl LightSet {
             let sides = if surface.two_sided { 2.0 } else { 1.0 };
             let power = f64::from(surface.area) * PI as f64 * mean * sides;
             if power > 0.0 && power.is_finite() {
-                set.light_of_triangle[index as usize] = set.lights.len() as u32;
-                set.lights.push(Light {
-                    triangle: index,
-                    vertices: *vertices,
-                    surface: *surface,
-                });
+                *slot = set.lights.len() as u32;
+                set.lights.push(light);
                 powers.push(power);
             }
         }
@@ -213,17 +211,21 @@ impl LightSet {
         for (light, p) in set.lights.iter_mut().zip(&powers) {
             running += p;
             set.cdf.push((running / total) as f32);
-            let pmf = (p / total) as f32;
-            light.surface.light_pmf = pmf;
-            if let Some(surface) = surfaces.get_mut(light.triangle as usize) {
-                surface.light_pmf = pmf;
-            }
+            light.surface.light_pmf = (p / total) as f32;
         }
         if let Some(last) = set.cdf.last_mut() {
             *last = 1.0;
         }
         set.registers = LightRegisters::new(&set.lights, &set.cdf);
         set
+    }
+
+    /// Each light's triangle and selection probability, for the scene's
+    /// records (every other triangle's probability is 0).
+    pub fn pmfs(&self) -> impl Iterator<Item = (u32, f32)> + '_ {
+        self.lights
+            .iter()
+            .map(|light| (light.triangle, light.surface.light_pmf))
     }
 
     /// `Σ A π L̄` over the emissive triangles (doubled when two-sided).
@@ -233,15 +235,12 @@ impl LightSet {
 
     /// Multiplies every selection probability by `share`, the probability
     /// that next-event estimation samples a triangle at all
-    /// ([`crate::shading::light_sampler`]), in the lights, their registers
-    /// and the records `surfaces`. The CDF is left relative: the caller
-    /// rescales its light number.
-    pub fn scale_selection(&mut self, share: f32, surfaces: &mut [Surface]) {
+    /// ([`crate::shading::light_sampler`]), in the lights and their
+    /// registers ([`LightSet::pmfs`] then gives the scaled ones). The CDF is
+    /// left relative: the caller rescales its light number.
+    pub fn scale_selection(&mut self, share: f32) {
         for light in &mut self.lights {
             light.surface.light_pmf *= share;
-            if let Some(surface) = surfaces.get_mut(light.triangle as usize) {
-                surface.light_pmf = light.surface.light_pmf;
-            }
         }
         self.registers = LightRegisters::new(&self.lights, &self.cdf);
     }
@@ -420,7 +419,7 @@ mod tests {
             .zip(0..)
             .map(|(m, id)| Surface::new(Vec3::Z, 0.5, MaterialId(id), m))
             .collect();
-        let set = LightSet::new(&triangles, &mut surfaces, &spectra);
+        let set = light_set(&triangles, &mut surfaces, &spectra);
         (triangles, surfaces, set)
     }
 
@@ -484,7 +483,31 @@ mod tests {
                 &material,
             ));
         }
-        LightSet::new(&triangles, &mut surfaces, &spectra)
+        light_set(&triangles, &mut surfaces, &spectra)
+    }
+
+    /// The light set of `triangles` with records `surfaces`, as the scene
+    /// builds it: candidates are the emitting records, and the
+    /// probabilities are written back into the records.
+    fn light_set(
+        triangles: &[[Vec3; 3]],
+        surfaces: &mut [Surface],
+        spectra: &[SceneSpectrum],
+    ) -> LightSet {
+        let candidates = (0u32..)
+            .zip(triangles.iter().zip(surfaces.iter()))
+            .filter(|(_, (_, surface))| !surface.emission.is_none())
+            .map(|(triangle, (vertices, surface))| Light {
+                triangle,
+                vertices: *vertices,
+                surface: *surface,
+            })
+            .collect();
+        let set = LightSet::new(triangles.len(), candidates, spectra);
+        for (triangle, pmf) in set.pmfs() {
+            surfaces[triangle as usize].light_pmf = pmf;
+        }
+        set
     }
 
     /// Each lane of a packet sample equals the scalar sample drawn with the

@@ -27,6 +27,7 @@ use crate::shading::material::{Albedo, Bsdf, Material};
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
 use glam::Vec3;
+use rayon::prelude::*;
 use wide::bytemuck::cast;
 use wide::{f32x8, u32x8};
 
@@ -116,6 +117,9 @@ pub struct SurfacePacket {
 #[derive(Debug, Clone, Default)]
 pub struct PackedSurfaces(Vec<u32x8>);
 
+/// The word of a packed record holding [`Surface::light_pmf`].
+const LIGHT_PMF_WORD: usize = 5;
+
 /// The sides word of a packed record ([`PackedSurfaces`]).
 pub(crate) struct SideFlags;
 
@@ -159,6 +163,23 @@ impl PackedSurfaces {
         Self(surfaces.iter().map(Self::pack).collect())
     }
 
+    /// The packed form of the records `surfaces` yields, made in parallel
+    /// without a vector of the unpacked records (36 bytes a triangle more
+    /// at the peak of a large scene's build).
+    pub fn collect(surfaces: impl IndexedParallelIterator<Item = Surface>) -> Self {
+        Self(surfaces.map(|surface| Self::pack(&surface)).collect())
+    }
+
+    /// Sets the selection probability of record `index` (no change for an
+    /// index out of range).
+    pub fn set_light_pmf(&mut self, index: usize, light_pmf: f32) {
+        if let Some(words) = self.0.get_mut(index) {
+            let mut array = words.to_array();
+            array[LIGHT_PMF_WORD] = light_pmf.to_bits();
+            *words = u32x8::new(array);
+        }
+    }
+
     fn pack(surface: &Surface) -> u32x8 {
         u32x8::new([
             surface.normal.x.to_bits(),
@@ -166,7 +187,7 @@ impl PackedSurfaces {
             surface.normal.z.to_bits(),
             surface.emission.0,
             SideFlags::pack(surface),
-            surface.light_pmf.to_bits(),
+            surface.light_pmf.to_bits(), // LIGHT_PMF_WORD
             surface.area.to_bits(),
             surface.lambert_albedo.0,
         ])
