@@ -1555,7 +1555,10 @@ struct Parts {
     job_first_pass: u32,
     spp: u32,
     resume: Option<PartialFilm>,
-    identity: FrameIdentity,
+    /// Only for renders that read or write partial films: the scene's
+    /// fingerprint reads every triangle (in scenes whose tree holds the
+    /// only copy, one block read each), which a plain render need not pay.
+    identity: Option<FrameIdentity>,
 }
 
 /// What a part is checked against: the frame `fspec render` is asked for.
@@ -1618,7 +1621,7 @@ pub fn identity_difference(a: &FrameIdentity, b: &FrameIdentity) -> Option<Strin
 fn plan_parts(
     args: &RenderArgs,
     settings: &RenderSettings,
-    identity: FrameIdentity,
+    identity: Option<FrameIdentity>,
 ) -> Result<Parts, CliError> {
     let Some(path) = &args.resume else {
         let (first, spp) = match &args.passes {
@@ -1633,7 +1636,10 @@ fn plan_parts(
         });
     };
     let part = PartialFilm::read(path)?;
-    if let Some(difference) = identity_difference(&part.header.identity, &identity) {
+    let difference = identity
+        .as_ref()
+        .and_then(|identity| identity_difference(&part.header.identity, identity));
+    if let Some(difference) = difference {
         return Err(CliError::input(format!(
             "--resume {}: rendered with another {difference}",
             path.display()
@@ -1817,7 +1823,7 @@ pub fn render(
             kept,
             meshes,
             defaults.instances.copies as usize - kept,
-            scene.triangles().len(),
+            scene.triangle_count(),
             scene.memory_bytes() as f64 / f64::from(1 << 20),
         )));
     }
@@ -1843,7 +1849,7 @@ pub fn render(
     let colour_observer = Arc::new(observer_choice.observer()?);
     let (resolved, coefficient_note) = resolve_coeffs(args, &defaults, &scene, &colour_observer)?;
     let args = &resolved;
-    let identity = frame_identity(args, &settings, frame, &scene);
+    let identity = splitting.then(|| frame_identity(args, &settings, frame, &scene));
     let parts = plan_parts(args, &settings, identity)?;
     settings.spp = parts.spp;
     let wavelengths = spectral_wavelengths(&scene.range(), args.spectral_step_nm);
@@ -1890,7 +1896,11 @@ pub fn render(
     Ok(RenderedFrame {
         result,
         range: scene.range(),
-        partial: state.map(|state| PartialFilm::new(parts.identity, state, requested)),
+        // Films keep their state only when splitting, which computed the
+        // identity.
+        partial: state
+            .zip(parts.identity)
+            .map(|(state, identity)| PartialFilm::new(identity, state, requested)),
         memory,
     })
 }

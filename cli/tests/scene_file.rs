@@ -362,7 +362,7 @@ fn texture_coordinates_of_obj_faces_are_kept() -> TestResult {
     let scene = load_scene_file(&write(&dir, "scene.toml", &text)?)?
         .builder
         .build()?;
-    let uvs = (0..scene.triangles().len())
+    let uvs = (0..scene.triangle_count())
         .filter_map(|t| scene.uvs(t))
         .flatten()
         .map(|t| t.x + t.y)

@@ -251,7 +251,7 @@ pub fn obj(bytes: &[u8]) {
     }
     match builder.build() {
         Ok(scene) => {
-            assert!(scene.bvh().validate(scene.triangles()).is_ok());
+            assert!(scene.bvh().validate(&scene.triangles()).is_ok());
             assert!(scene.normals().all(|n| n.is_finite()));
             assert!(scene.validate_surfaces().is_ok());
         }

@@ -402,7 +402,7 @@ fn only_meshes_placed_several_times_without_emission_stay_instances() -> TestRes
     let scene = b.build()?;
     let instances = scene.instances().ok_or("instances")?;
     assert_eq!((instances.len(), instances.meshes().len()), (2, 1));
-    assert_eq!(scene.triangles().len(), 24, "the single use and the lamp");
+    assert_eq!(scene.triangle_count(), 24, "the single use and the lamp");
     assert_eq!(scene.lights().len(), 12);
     scene.validate_surfaces()?;
 
@@ -414,7 +414,7 @@ fn only_meshes_placed_several_times_without_emission_stay_instances() -> TestRes
     }
     let flat = b.build()?;
     assert!(flat.instances().is_none());
-    assert_eq!(flat.triangles().len(), 36);
+    assert_eq!(flat.triangle_count(), 36);
     // A mesh that does not exist is refused.
     let (mut b, _) = builder()?;
     assert!(
@@ -630,8 +630,8 @@ fn instanced_scene_renders_as_its_flattened_twin() -> TestResult {
     assert_eq!((kept.len(), kept.meshes().len()), (6, 2));
     assert!(flattened.instances().is_none());
     assert_eq!(
-        flattened.triangles().len(),
-        instanced.triangles().len() + kept.instanced_triangles()
+        flattened.triangle_count(),
+        instanced.triangle_count() + kept.instanced_triangles()
     );
     instanced.validate_surfaces()?;
     assert!(instanced.memory_bytes() < flattened.memory_bytes());

@@ -340,9 +340,9 @@ pub fn fuzz_scene_toml(bytes: &[u8]) {
     match loaded.builder.build() {
         Ok(scene) => {
             assert!(
-                scene.bvh().validate(scene.triangles()).is_ok(),
+                scene.bvh().validate(&scene.triangles()).is_ok(),
                 "{:?}",
-                scene.bvh().validate(scene.triangles())
+                scene.bvh().validate(&scene.triangles())
             );
             assert!(scene.normals().all(|n| n.is_finite()));
         }

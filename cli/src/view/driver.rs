@@ -268,7 +268,7 @@ fn build_scene(
         glam::Vec3::splat(f32::INFINITY),
         glam::Vec3::splat(f32::NEG_INFINITY),
     );
-    for triangle in scene.triangles() {
+    for triangle in scene.triangles().iter() {
         for v in triangle {
             lo = lo.min(*v);
             hi = hi.max(*v);

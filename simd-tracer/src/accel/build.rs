@@ -278,7 +278,16 @@ impl Bvh {
                 .collect(),
             BvhLayout::WideOnly => Vec::new(),
         };
-        let wide = WideBvh::build(&bvh2, slots, |slot| {
+        let bounds = bvh2
+            .nodes
+            .first()
+            .map(|root| (Vec3::from(root.aabb().min), Vec3::from(root.aabb().max)));
+        let staged = WideBvh::stage(&bvh2, slots);
+        if layout == BvhLayout::WideOnly {
+            // Not kept: freed before the blocks, the build's largest part.
+            bvh2 = Bvh2::default();
+        }
+        let wide = staged.fill(|slot| {
             let prepared = match triangles_prepared.get(slot) {
                 Some(&prepared) => prepared,
                 None => preparer.prepared(slot)?,
@@ -289,10 +298,6 @@ impl Bvh {
             })
         });
         drop(preparer);
-        let bounds = bvh2
-            .nodes
-            .first()
-            .map(|root| (Vec3::from(root.aabb().min), Vec3::from(root.aabb().max)));
         let mut flat_singles = Vec::new();
         let mut flat_pair_triangles = Vec::new();
         match layout {
@@ -308,10 +313,7 @@ impl Bvh {
                     flat_pair_triangles = pair_triangles(&flat_pairs, &triangles_prepared);
                 }
             }
-            BvhLayout::WideOnly => {
-                bvh2 = Bvh2::default();
-                flat_pairs = Vec::new();
-            }
+            BvhLayout::WideOnly => flat_pairs = Vec::new(),
         }
         let (bounce, shadow) = if slots > WIDE_MIN_TRIANGLES || layout == BvhLayout::WideOnly {
             (Traversal::Wide, Traversal::Wide)

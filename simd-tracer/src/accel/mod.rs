@@ -538,6 +538,50 @@ impl Bvh {
     pub fn kept_triangles(&self) -> usize {
         self.original.len()
     }
+
+    /// The kept triangles' input indices and vertices (bit for bit those
+    /// given to [`Bvh::build`]), read from the 8-wide tree's blocks in tree
+    /// order: how a scene that keeps no other copy of its triangles reads
+    /// them back.
+    pub fn kept_input_triangles(&self) -> impl Iterator<Item = (u32, [Vec3; 3])> + '_ {
+        self.wide
+            .slot_corners()
+            .filter_map(|(slot, corners)| Some((*self.original.get(slot as usize)?, corners)))
+    }
+
+    /// Each input triangle's lane in the 8-wide tree's blocks (block ×
+    /// 8 + lane in the block; `u32::MAX` for the triangles left out): 4
+    /// bytes a triangle, with which [`Bvh::lane_corners`] reads any
+    /// triangle back.
+    pub fn input_lanes(&self) -> Vec<u32> {
+        let mut lane_of = vec![u32::MAX; self.input_count];
+        for (slot, lane) in self.wide.slot_lanes() {
+            if let Some(&input) = self.original.get(slot as usize)
+                && let Some(at) = lane_of.get_mut(input as usize)
+            {
+                *at = index_u32(lane);
+            }
+        }
+        lane_of
+    }
+
+    /// The vertices in a block lane ([`Bvh::input_lanes`]), bit for bit
+    /// those given to [`Bvh::build`].
+    pub fn lane_corners(&self, lane: u32) -> Option<[Vec3; 3]> {
+        self.wide.lane_corners(lane as usize)
+    }
+
+    /// Whether input triangle `index` is in the tree, as a bit per input
+    /// triangle (the others were left out as degenerate).
+    pub fn kept_mask(&self) -> Vec<bool> {
+        let mut kept = vec![false; self.input_count];
+        for &index in &self.original {
+            if let Some(k) = kept.get_mut(index as usize) {
+                *k = true;
+            }
+        }
+        kept
+    }
 }
 
 impl Bvh {

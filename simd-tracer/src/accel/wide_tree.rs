@@ -225,6 +225,12 @@ impl TriangleBlock {
         }
     }
 
+    /// The vertices in `lane` as the block holds them (the input's bits).
+    fn corners_of(&self, lane: usize) -> [Vec3; 3] {
+        self.corners
+            .map(|vertex| Vec3::from_array(vertex.map(|axis| axis.to_array()[lane])))
+    }
+
     /// The bit mask of lanes holding a triangle.
     fn used_bits(&self) -> u32 {
         (0..WIDTH)
@@ -439,17 +445,41 @@ pub(super) fn collapse(
     nodes
 }
 
+/// A wide tree whose nodes are made and whose leaves' triangles have their
+/// block lanes, before the blocks are filled ([`StagedWideBvh::fill`]): the
+/// binary tree it was collapsed from is no longer needed then, so a build
+/// that does not keep it can free it first.
+pub(super) struct StagedWideBvh {
+    nodes: Vec<WideNode>,
+    staged: StagedBlocks,
+}
+
+impl StagedWideBvh {
+    /// The tree with its blocks made: `triangle(slot)` is the vertices and
+    /// record of a slot.
+    pub(super) fn fill(self, triangle: impl Fn(usize) -> Option<BlockTriangle> + Sync) -> WideBvh {
+        WideBvh {
+            nodes: self.nodes,
+            blocks: self
+                .staged
+                .blocks
+                .par_iter()
+                .map(|block| TriangleBlock::new(&triangle, &block.slots[..block.used]))
+                .collect(),
+        }
+    }
+}
+
 impl WideBvh {
     /// Collapses `bvh2` (whose leaves index `slots` triangle slots) into a
-    /// wide tree; `triangle(slot)` is the vertices and record of a slot.
-    pub(super) fn build(
-        bvh2: &Bvh2,
-        slots: usize,
-        triangle: impl Fn(usize) -> Option<BlockTriangle> + Sync,
-    ) -> Self {
+    /// wide tree's nodes and places the leaves' triangles in block lanes.
+    pub(super) fn stage(bvh2: &Bvh2, slots: usize) -> StagedWideBvh {
         let nodes2 = &bvh2.nodes;
         if nodes2.is_empty() || slots == 0 {
-            return Self::default();
+            return StagedWideBvh {
+                nodes: Vec::new(),
+                staged: StagedBlocks::default(),
+            };
         }
         // Triangles under every binary node, children before parents
         // (reversed pre-order; iterative: degenerate trees are deep).
@@ -473,7 +503,7 @@ impl WideBvh {
             };
         }
         let mut staged = StagedBlocks::default();
-        let nodes = collapse(
+        let mut nodes = collapse(
             nodes2,
             |index| !nodes2[index].is_leaf() && count[index] > WIDTH,
             |index| {
@@ -484,16 +514,11 @@ impl WideBvh {
                 )
             },
         );
-        let mut wide = Self {
-            nodes,
-            blocks: Vec::new(),
-        };
-        wide.blocks = staged
-            .blocks
-            .par_iter()
-            .map(|block| TriangleBlock::new(&triangle, &block.slots[..block.used]))
-            .collect();
-        wide
+        // The nodes grew by doubling: up to half the capacity is spare, which
+        // a large tree would keep as long as the scene (the copy, if any,
+        // comes before the blocks are made).
+        nodes.shrink_to_fit();
+        StagedWideBvh { nodes, staged }
     }
 
     /// The prepared records of `wanted` slots as the blocks hold them, in
@@ -518,6 +543,32 @@ impl WideBvh {
                 Some(self.blocks.get(at / WIDTH)?.lane(at % WIDTH))
             })
             .collect()
+    }
+
+    /// The vertices in `lane` (block × [`WIDTH`] + lane in the block), if
+    /// it holds a triangle.
+    pub(super) fn lane_corners(&self, lane: usize) -> Option<[Vec3; 3]> {
+        let block = self.blocks.get(lane / WIDTH)?;
+        (block.slot[lane % WIDTH] != NO_SLOT).then(|| block.corners_of(lane % WIDTH))
+    }
+
+    /// Every used lane (block × [`WIDTH`] + lane in the block) with its
+    /// slot.
+    pub(super) fn slot_lanes(&self) -> impl Iterator<Item = (u32, usize)> + '_ {
+        self.blocks.iter().enumerate().flat_map(|(b, block)| {
+            (0..WIDTH)
+                .filter(|&lane| block.slot[lane] != NO_SLOT)
+                .map(move |lane| (block.slot[lane], b * WIDTH + lane))
+        })
+    }
+
+    /// Every used lane's slot and vertices, block by block.
+    pub(super) fn slot_corners(&self) -> impl Iterator<Item = (u32, [Vec3; 3])> + '_ {
+        self.blocks.iter().flat_map(|block| {
+            (0..WIDTH)
+                .filter(|&lane| block.slot[lane] != NO_SLOT)
+                .map(|lane| (block.slot[lane], block.corners_of(lane)))
+        })
     }
 
     /// The triangle slots under binary node `index`, in leaf order.

@@ -17,7 +17,7 @@
 //! word, about 40 ms for a million triangles.
 
 use super::Scene;
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 
 /// FNV-1a's 64-bit offset basis.
 const FNV_OFFSET_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
@@ -69,21 +69,26 @@ impl Scene {
         hash.text(&format!("{:?}", self.materials()));
         hash.text(&format!("{:?}", self.camera()));
         hash.text(&format!("{:?}", self.environment()));
-        hash.size(self.triangles().len());
-        for (index, triangle) in self.triangles().iter().enumerate() {
+        let triangles = self.triangle_count();
+        hash.size(triangles);
+        // Read back by index where the tree holds the only copy, without a
+        // vector of them all (`triangle_store`).
+        let reader = self.triangles.reader(&self.bvh);
+        for (index, &material) in self.triangle_material().iter().enumerate() {
+            let triangle = reader.get(index).unwrap_or([Vec3::NAN; 3]);
             hash.floats(triangle.iter().flat_map(|v| v.to_array()));
-            hash.word(self.triangle_material()[index].index() as u32);
+            hash.word(material.index() as u32);
         }
         // Every triangle's coordinates once any has some (zeros for those
         // without), as when they were stored for every triangle: digests
         // of earlier partial files stay valid.
         if self.has_uvs() {
-            for index in 0..self.triangles().len() {
+            for index in 0..triangles {
                 let uv = self.uvs(index).copied().unwrap_or([Vec2::ZERO; 3]);
                 hash.floats(uv.iter().flat_map(|v| v.to_array()));
             }
         }
-        for index in 0..self.triangles().len() {
+        for index in 0..triangles {
             if let Some(normals) = self.vertex_normals(index) {
                 hash.floats(normals.iter().flat_map(|v| v.to_array()));
             }

@@ -19,6 +19,7 @@ mod relight;
 pub mod serialized;
 pub mod shapes;
 pub mod transform;
+mod triangle_store;
 
 use crate::accel::{Bvh, InstanceHit, TriangleSubset};
 use crate::ids::NO_INSTANCE;
@@ -32,6 +33,7 @@ use crate::scene::instances::{
 };
 use crate::scene::mesh::MeshData;
 use crate::scene::transform::Transform;
+use crate::scene::triangle_store::TriangleStore;
 use crate::shading::light::{Light, LightSet};
 use crate::shading::light_sampler::{DirectionalLight, LightSampler, PointLight, SceneLights};
 use crate::shading::material::{Bsdf, Material, MaterialTables, SceneFluorophore, tabulated_sides};
@@ -46,6 +48,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use spectral_core::fluorescence::FluorescentLayer;
 use spectral_core::{SpectralError, SpectralRange};
+use std::borrow::Cow;
 
 /// Why a scene could not be built.
 #[derive(Debug, Clone, PartialEq)]
@@ -113,8 +116,9 @@ pub struct Scene {
     materials: Vec<Material>,
     /// Fluorophores of fluorescent materials.
     fluorophores: Vec<SceneFluorophore>,
-    /// Triangle vertices (non-degenerate ones only).
-    triangles: Vec<[Vec3; 3]>,
+    /// Triangle vertices (non-degenerate ones only), in a vector or in the
+    /// BVH's 8-wide tree ([`triangle_store`]).
+    triangles: TriangleStore,
     /// Material of each triangle.
     triangle_material: Vec<MaterialId>,
     /// Texture coordinates of the triangles whose vertices have non-zero
@@ -192,9 +196,17 @@ impl Scene {
         &self.materials
     }
 
-    /// triangles
-    pub fn triangles(&self) -> &[[Vec3; 3]] {
-        &self.triangles
+    /// The triangles' vertices in the order they were added: borrowed, or
+    /// read back from the BVH in scenes whose 8-wide tree holds the only
+    /// copy (a pass over the tree and a vector of 36 bytes a triangle;
+    /// [`triangle_store`]).
+    pub fn triangles(&self) -> Cow<'_, [[Vec3; 3]]> {
+        self.triangles.all(&self.bvh)
+    }
+
+    /// Number of triangles (those of instanced meshes not included).
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
     }
 
     /// The unit geometric normal of triangle `index` (right-handed, CCW
@@ -489,9 +501,12 @@ impl Scene {
     /// coordinates' count and the spectrum registers against
     /// [`Scene::spectra`].
     pub fn validate_surfaces(&self) -> Result<(), String> {
+        self.triangles
+            .validate(&self.bvh)
+            .map_err(|e| format!("triangles: {e}"))?;
         validate_surface_records(
             &self.packed_surfaces,
-            &self.triangles,
+            &self.triangles(),
             &self.triangle_material,
             &self.materials,
             &self.lights,
@@ -542,7 +557,7 @@ impl Scene {
         fn vec_bytes<T>(v: &Vec<T>) -> usize {
             v.capacity() * size_of::<T>()
         }
-        let geometry = vec_bytes(&self.triangles)
+        let geometry = self.triangles.memory_bytes()
             + vec_bytes(&self.triangle_material)
             + self.uvs.memory_bytes()
             + self.vertex_normals.memory_bytes()
@@ -1307,17 +1322,23 @@ impl SceneBuilder {
                     )
                 })
         };
+        // In scenes whose tree holds the only copy of the triangles the
+        // vector is gone before the records are made (`triangle_store`), so
+        // the two are never held together at the build's peak.
+        let triangles = TriangleStore::new(self.triangles, &bvh);
+        let reader = triangles.reader(&bvh);
+        let vertices_of = |index: usize| reader.get(index).unwrap_or([Vec3::NAN; 3]);
         let mut packed_surfaces = PackedSurfaces::collect(
-            self.triangles
-                .par_iter()
+            (0..triangles.len())
+                .into_par_iter()
                 .zip(self.triangle_material.par_iter())
-                .map(|(vertices, &id)| record(vertices, id)),
+                .map(|(index, &id)| record(&vertices_of(index), id)),
         );
-        let candidates: Vec<Light> = (0..self.triangles.len())
+        let candidates: Vec<Light> = (0..triangles.len())
             .into_par_iter()
             .filter(|&index| packed_surfaces.emits(index))
             .filter_map(|index| {
-                let vertices = *self.triangles.get(index)?;
+                let vertices = vertices_of(index);
                 let id = *self.triangle_material.get(index)?;
                 Some(Light {
                     triangle: u32::try_from(index).ok()?,
@@ -1326,7 +1347,8 @@ impl SceneBuilder {
                 })
             })
             .collect();
-        let mut lights = LightSet::new(self.triangles.len(), candidates, &self.spectra);
+        drop(reader);
+        let mut lights = LightSet::new(triangles.len(), candidates, &self.spectra);
         let mut directional = self.directional_lights;
         for light in &mut directional {
             light.direction = light.direction.try_normalize().ok_or_else(|| {
@@ -1373,7 +1395,7 @@ impl SceneBuilder {
             textures: self.textures,
             materials: self.materials,
             fluorophores: self.fluorophores,
-            triangles: self.triangles,
+            triangles,
             triangle_material: self.triangle_material,
             uvs: self.uvs,
             vertex_normals: self.vertex_normals,
@@ -1437,7 +1459,7 @@ mod tests {
         };
         let (shared, each) = (scene_with(false)?, scene_with(true)?);
         assert_eq!(shared.triangles(), each.triangles());
-        for t in 0..shared.triangles().len() {
+        for t in 0..shared.triangle_count() {
             assert!(shared.vertex_normals(t).is_some(), "triangle {t} is flat");
             assert_eq!(
                 shared.vertex_normals(t),

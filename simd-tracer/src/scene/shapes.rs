@@ -136,7 +136,7 @@ mod tests {
         b.set_camera(Camera::look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 40.0).unwrap());
         let scene = b.build().unwrap();
         assert_eq!(scene.skipped_triangles(), 0);
-        assert_eq!(scene.triangles().len(), 12 + 2 * 12 * 24 - 2 * 24);
+        assert_eq!(scene.triangle_count(), 12 + 2 * 12 * 24 - 2 * 24);
         for (tri, n) in scene.triangles().iter().zip(scene.normals()) {
             let centroid = (tri[0] + tri[1] + tri[2]) / 3.0;
             let centre = if centroid.x > 2.5 {
@@ -150,7 +150,7 @@ mod tests {
         // sphere's polygonal area is a bit smaller).
         let box_area: f32 = (0..12).map(|i| scene.area(i)).sum();
         assert!((box_area - 24.0).abs() < 1e-4);
-        let sphere_area: f32 = (12..scene.triangles().len()).map(|i| scene.area(i)).sum();
+        let sphere_area: f32 = (12..scene.triangle_count()).map(|i| scene.area(i)).sum();
         assert!(
             sphere_area < 4.0 * PI && sphere_area > 0.95 * 4.0 * PI,
             "{sphere_area}"

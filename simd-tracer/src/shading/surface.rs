@@ -438,7 +438,7 @@ mod tests {
     fn records_match_their_sources() -> Result<(), Box<dyn std::error::Error>> {
         let scene = scene()?;
         scene.validate_surfaces()?;
-        let s: Vec<Surface> = (0..scene.triangles().len())
+        let s: Vec<Surface> = (0..scene.triangle_count())
             .filter_map(|index| scene.surface(index))
             .collect();
         assert_eq!(s.len(), 6);
@@ -477,7 +477,7 @@ mod tests {
         let check = |surfaces: &[Surface], materials: &[MaterialId]| {
             crate::scene::validate_surface_records(
                 &PackedSurfaces::new(surfaces),
-                scene.triangles(),
+                &scene.triangles(),
                 materials,
                 scene.materials(),
                 scene.lights(),

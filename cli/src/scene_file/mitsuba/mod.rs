@@ -103,9 +103,9 @@ pub fn fuzz_scene_xml(bytes: &[u8]) {
         }
         match loaded.builder.build() {
             Ok(scene) => assert!(
-                scene.bvh().validate(scene.triangles()).is_ok(),
+                scene.bvh().validate(&scene.triangles()).is_ok(),
                 "{:?}",
-                scene.bvh().validate(scene.triangles())
+                scene.bvh().validate(&scene.triangles())
             ),
             Err(simd_tracer::scene::SceneError::Bvh(message)) => {
                 panic!("BVH validation failed: {message}")
