@@ -199,7 +199,7 @@ impl Scene {
     /// The triangles' vertices in the order they were added: borrowed, or
     /// read back from the BVH in scenes whose 8-wide tree holds the only
     /// copy (a pass over the tree and a vector of 36 bytes a triangle;
-    /// [`triangle_store`]).
+    /// `scene/triangle_store.rs`).
     pub fn triangles(&self) -> Cow<'_, [[Vec3; 3]]> {
         self.triangles.all(&self.bvh)
     }
