@@ -5,6 +5,7 @@
 //! an instanced scene against its flattened twin, image for image.
 
 use glam::{DVec3, Vec3};
+use simd_tracer::accel::WIDE_ONLY_MIN_TRIANGLES;
 use simd_tracer::film::Buffer;
 use simd_tracer::film::FilmMode;
 use simd_tracer::film::filter::Filter;
@@ -457,16 +458,23 @@ fn row_of_spheres(segments: u32, count: usize, instancing: Instancing) -> TestRe
 /// Bytes of one instance's records: the shared mesh is counted once, so
 /// `N` instances cost `N` times a record whatever the mesh's size, where
 /// flattened copies cost their triangles (the negative control).
+/// The flattened rows stay below `WIDE_ONLY_MIN_TRIANGLES`: above it a tree
+/// keeps fewer bytes a triangle (no binary tree, no soup), so a growth
+/// measured across the bound would not be per triangle.
 #[test]
 fn memory_grows_per_instance_not_per_triangle() -> TestResult {
-    let (few, many) = (4usize, 36usize);
-    let growth = |segments: u32, instancing: Instancing| -> TestResult<f64> {
-        let small = row_of_spheres(segments, few, instancing)?.memory_bytes();
-        let large = row_of_spheres(segments, many, instancing)?.memory_bytes();
-        Ok((large as f64 - small as f64) / (many - few) as f64)
-    };
     let coarse_triangles = sphere_mesh(16).triangles.len();
     let fine_triangles = sphere_mesh(64).triangles.len();
+    // One sphere less than fills the bound, leaving room for the floor.
+    let (few, many) = (4usize, WIDE_ONLY_MIN_TRIANGLES / fine_triangles - 1);
+    assert!(many > 2 * few, "{many}");
+    let growth = |segments: u32, instancing: Instancing| -> TestResult<f64> {
+        let small = row_of_spheres(segments, few, instancing)?;
+        let large = row_of_spheres(segments, many, instancing)?;
+        assert_eq!(small.bvh().layout(), large.bvh().layout());
+        let (small, large) = (small.memory_bytes(), large.memory_bytes());
+        Ok((large as f64 - small as f64) / (many - few) as f64)
+    };
     let (coarse, fine) = (growth(16, Instancing::Auto)?, growth(64, Instancing::Auto)?);
     // A record (shading, placement, world map, top-level entry): a few
     // hundred bytes, the same for both meshes (vector growth aside).

@@ -1326,6 +1326,7 @@ impl SceneBuilder {
         // vector is gone before the records are made (`triangle_store`), so
         // the two are never held together at the build's peak.
         let triangles = TriangleStore::new(self.triangles, &bvh);
+        triangles.validate(&bvh).map_err(SceneError::Bvh)?;
         let reader = triangles.reader(&bvh);
         let vertices_of = |index: usize| reader.get(index).unwrap_or([Vec3::NAN; 3]);
         let mut packed_surfaces = PackedSurfaces::collect(
