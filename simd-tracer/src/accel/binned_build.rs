@@ -377,22 +377,21 @@ impl Pending {
     }
 }
 
-/// Builds the subtree of `root` (whose items are `items`, at global
-/// positions from `root.first`) into a fresh node list, root first,
-/// splitting every node of more than [`WIDTH`] triangles.
-fn build_subtree(items: &mut [BuildItem], root: &Pending) -> Vec<Bvh2Node> {
-    let offset = root.first;
+/// Splits `root` (node 0 of a fresh node list; its range indexes `items`)
+/// top-down until every range holds at most `max_len` items, handing each
+/// such range to `small` with the node list; returns the list, root first.
+fn split_down(
+    items: &mut [BuildItem],
+    root: Pending,
+    max_len: usize,
+    mut small: impl FnMut(&mut [Bvh2Node], Pending),
+) -> Vec<Bvh2Node> {
     let mut nodes = vec![Bvh2Node::default()];
     let mut bins = Bins::EMPTY;
-    let mut pending = vec![Pending {
-        node: 0,
-        first: 0,
-        len: items.len(),
-        bounds: root.bounds,
-    }];
+    let mut pending = vec![root];
     while let Some(top) = pending.pop() {
-        if top.len <= WIDTH {
-            nodes[top.node] = leaf(&top.bounds, offset + top.first, top.len);
+        if top.len <= max_len {
+            small(&mut nodes, top);
             continue;
         }
         let range = &mut items[top.first..top.first + top.len];
@@ -404,6 +403,22 @@ fn build_subtree(items: &mut [BuildItem], root: &Pending) -> Vec<Bvh2Node> {
     nodes
 }
 
+/// Builds the subtree of `root` (whose items are `items`, at global
+/// positions from `root.first`) into a fresh node list, root first,
+/// splitting every node of more than [`WIDTH`] triangles.
+fn build_subtree(items: &mut [BuildItem], root: &Pending) -> Vec<Bvh2Node> {
+    let offset = root.first;
+    let local = Pending {
+        node: 0,
+        first: 0,
+        len: items.len(),
+        bounds: root.bounds,
+    };
+    split_down(items, local, WIDTH, |nodes, top| {
+        nodes[top.node] = leaf(&top.bounds, offset + top.first, top.len);
+    })
+}
+
 /// The binary tree over `items` (which the build reorders): leaves of at
 /// most [`WIDTH`] triangles, `primitive_indices` the items' indices in leaf
 /// order. Empty input gives an empty tree.
@@ -413,26 +428,14 @@ pub(super) fn build_binned(items: &mut [BuildItem]) -> Bvh2 {
     }
     // The top levels, one node after the other; subtrees of at most
     // `TASK_MAX_TRIANGLES` wait as tasks.
-    let mut nodes = vec![Bvh2Node::default()];
-    let mut bins = Bins::EMPTY;
     let mut tasks: Vec<Pending> = Vec::new();
-    let mut pending = vec![Pending {
+    let root = Pending {
         node: 0,
         first: 0,
         len: items.len(),
         bounds: RangeBounds::of_range(items),
-    }];
-    while let Some(top) = pending.pop() {
-        if top.len <= TASK_MAX_TRIANGLES {
-            tasks.push(top);
-            continue;
-        }
-        let range = &mut items[top.first..top.first + top.len];
-        let (node, children) = top.split(range, nodes.len(), &mut bins);
-        nodes[top.node] = node;
-        nodes.extend([Bvh2Node::default(); 2]);
-        pending.extend(children);
-    }
+    };
+    let mut nodes = split_down(items, root, TASK_MAX_TRIANGLES, |_, top| tasks.push(top));
     // The tasks' ranges are disjoint: hand each its own slice.
     tasks.sort_unstable_by_key(|task| task.first);
     let mut slices = Vec::with_capacity(tasks.len());
