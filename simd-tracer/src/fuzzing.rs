@@ -9,6 +9,10 @@
 //!   the trees of both builds ([`BvhBuild`]).
 //! * [`obj`]: arbitrary OBJ and MTL text through the loader and the scene
 //!   build: `Err` or a valid scene, never a panic.
+//! * [`obj_parallel`]: arbitrary text through the parallel OBJ reader, in
+//!   chunks of a few bytes and whole: where it reads the text, both agree
+//!   and tobj reads the same meshes bit for bit (a differential check
+//!   against tobj as the oracle).
 //! * [`ply`]: arbitrary bytes through the PLY parser: `Err` or a mesh that
 //!   passes [`MeshData::validate`](crate::scene::mesh::MeshData::validate).
 //! * [`serialized`]: arbitrary bytes through the Mitsuba serialized parser,
@@ -20,7 +24,8 @@
 use crate::accel::{Bvh, BvhBuild, BvhLayout, Hit, WideStack};
 use crate::packet::{Ray, RayPacket};
 use crate::scene::camera::Camera;
-use crate::scene::obj::{ObjSource, load_obj};
+use crate::scene::obj::{ObjSource, load_obj, load_options};
+use crate::scene::obj_parallel::meshes_in_chunks;
 use crate::scene::ply::parse_ply;
 use crate::scene::serialized::{parse_serialized, serialized_shape_count};
 use crate::scene::{SceneBuilder, SceneError};
@@ -261,6 +266,57 @@ pub fn obj(bytes: &[u8]) {
         Err(SceneError::Bvh(message)) => panic!("BVH validation failed: {message}"),
         Err(_) => {}
     }
+}
+
+/// The first byte picks a chunk size of 1–64 bytes; the rest is the OBJ
+/// text.
+pub fn obj_parallel(bytes: &[u8]) {
+    let Some((&selector, text)) = bytes.split_first() else {
+        return;
+    };
+    let chunk_bytes = 1 + usize::from(selector % 64);
+    let small = meshes_in_chunks(text, chunk_bytes);
+    let whole = meshes_in_chunks(text, text.len().max(1));
+    let (Some(small), Some(whole)) = (small, whole) else {
+        assert!(
+            meshes_in_chunks(text, chunk_bytes).is_none()
+                && meshes_in_chunks(text, text.len().max(1)).is_none(),
+            "the grammar depends on the chunks"
+        );
+        return;
+    };
+    assert!(same_meshes(&small, &whole), "the chunks change the meshes");
+    match tobj_meshes_without_mtl(text) {
+        Ok(expected) => assert!(same_meshes(&small, &expected), "tobj reads other meshes"),
+        Err(e) => panic!("tobj refuses text the parallel reader read: {e}"),
+    }
+}
+
+/// tobj's meshes of `bytes` with [`load_options`] and no MTL (its loader
+/// fails), as Mitsuba's `obj` shape reads a file.
+pub(crate) fn tobj_meshes_without_mtl(bytes: &[u8]) -> Result<Vec<tobj::Mesh>, tobj::LoadError> {
+    let (models, _) =
+        tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &load_options(), |_| {
+            Err(tobj::LoadError::OpenFileFailed)
+        })?;
+    Ok(models.into_iter().map(|m| m.mesh).collect())
+}
+
+/// Meshes equal field by field, floats by their bits.
+pub(crate) fn same_meshes(a: &[tobj::Mesh], b: &[tobj::Mesh]) -> bool {
+    let bits = |values: &[f32]| values.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(a, b)| {
+            bits(&a.positions) == bits(&b.positions)
+                && bits(&a.normals) == bits(&b.normals)
+                && bits(&a.texcoords) == bits(&b.texcoords)
+                && bits(&a.vertex_color) == bits(&b.vertex_color)
+                && a.indices == b.indices
+                && a.face_arities == b.face_arities
+                && a.texcoord_indices == b.texcoord_indices
+                && a.normal_indices == b.normal_indices
+                && a.material_id == b.material_id
+        })
 }
 
 /// Arbitrary bytes as a PLY file.

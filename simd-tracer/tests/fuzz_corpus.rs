@@ -1,5 +1,5 @@
 //! Replays the committed fuzz corpora of this crate's targets
-//! (`fuzz/corpus/{traversal,obj,ply,serialized}`) through their bodies in
+//! (`fuzz/corpus/{traversal,obj,obj_parallel,ply,serialized}`) through their bodies in
 //! `simd_tracer::fuzzing`, so every seed and every regression input runs in
 //! CI on stable Rust. The walk is `test_support::replay_corpus`: every
 //! file, and an error if a corpus directory is missing or empty.
@@ -17,6 +17,12 @@ fn traversal_corpus() -> TestResult {
 #[test]
 fn obj_corpus() -> TestResult {
     assert!(replay_corpus("obj", simd_tracer::fuzzing::obj)? >= 3);
+    Ok(())
+}
+
+#[test]
+fn obj_parallel_corpus() -> TestResult {
+    assert!(replay_corpus("obj_parallel", simd_tracer::fuzzing::obj_parallel)? >= 5);
     Ok(())
 }
 

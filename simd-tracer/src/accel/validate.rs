@@ -9,6 +9,7 @@ use super::triangle::is_fan_pair;
 use super::{Bvh, BvhLayout};
 use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
+use rayon::prelude::*;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 /// Deepest tree handed to obvhs' recursive `Bvh2::validate` (one stack
@@ -259,11 +260,16 @@ impl Bvh {
             if std::mem::replace(flag, true) {
                 return Err(format!("input triangle {index} appears twice"));
             }
-            if input.get(index as usize).is_none_or(is_degenerate) {
-                return Err(format!("degenerate input triangle {index} is in the tree"));
-            }
         }
-        Ok(())
+        // The costly part, on all threads: the first degenerate one.
+        let degenerate = self
+            .original
+            .par_iter()
+            .find_first(|&&index| input.get(index as usize).is_none_or(is_degenerate));
+        match degenerate {
+            Some(index) => Err(format!("degenerate input triangle {index} is in the tree")),
+            None => Ok(()),
+        }
     }
 
     /// The scene box holds every kept triangle (and exists when one is

@@ -14,6 +14,7 @@ mod fingerprint;
 pub mod instances;
 pub mod mesh;
 pub mod obj;
+pub mod obj_parallel;
 pub mod ply;
 mod relight;
 pub mod serialized;
@@ -688,6 +689,67 @@ enum NormalEntries<'a> {
 /// count as the face normal.
 const FLAT_COSINE: f32 = 1.0 - 1e-6;
 
+/// Triangles of a mesh shaped together before they are stored in order
+/// ([`SceneBuilder::add_mesh_data`]): 2¹⁴ (about 2 MiB of shaped
+/// triangles) gives a 2-core machine tasks much longer than their
+/// scheduling and bounds the buffer.
+const MESH_BLOCK_TRIANGLES: usize = 1 << 14;
+
+/// A triangle as the scene keeps it: its vertices and texture coordinates
+/// (two swapped when its smooth normals point against its winding) and,
+/// when it shades smooth, its unit vertex normals in the input's corner
+/// order with the order of the stored corners.
+#[derive(Debug, Clone, Copy)]
+struct ShapedTriangle {
+    vertices: [Vec3; 3],
+    uvs: [Vec2; 3],
+    smooth: Option<([Vec3; 3], [usize; 3])>,
+}
+
+/// The pure part of adding a triangle: `None` when it is degenerate (zero
+/// area, or a non-finite vertex or texture coordinate).
+///
+/// A smooth triangle whose normals point, on average, against its winding
+/// is turned over (two vertices swapped): the front face is where the
+/// shading normals point, as Mitsuba flips the geometric normal to the
+/// shading normal's side. A triangle with a zero or non-finite vertex
+/// normal, or whose normals all equal its face normal, is shaded flat.
+fn shape_triangle(
+    vertices: [Vec3; 3],
+    uvs: [Vec2; 3],
+    normals: Option<[Vec3; 3]>,
+) -> Option<ShapedTriangle> {
+    let [a, b, c] = vertices;
+    let cross = (b - a).cross(c - a);
+    let area2 = cross.length_squared();
+    let finite = vertices.iter().all(|v| v.is_finite()) && uvs.iter().all(|t| t.is_finite());
+    if !(finite && area2.is_finite() && area2 > 0.0) {
+        return None;
+    }
+    let unit = normals.and_then(|[n0, n1, n2]| {
+        Some([
+            n0.try_normalize()?,
+            n1.try_normalize()?,
+            n2.try_normalize()?,
+        ])
+    });
+    // Vertex normals that all equal the face normal shade flat: no
+    // interpolation per hit.
+    let face = cross.normalize();
+    let unit = unit.filter(|n| n.iter().any(|n| n.dot(face) < FLAT_COSINE));
+    let (mut vertices, mut uvs, mut order) = (vertices, uvs, [0, 1, 2]);
+    if unit.is_some_and(|n| (n[0] + n[1] + n[2]).dot(cross) < 0.0) {
+        vertices.swap(1, 2);
+        uvs.swap(1, 2);
+        order = [0, 2, 1];
+    }
+    Some(ShapedTriangle {
+        vertices,
+        uvs,
+        smooth: unit.map(|n| (n, order)),
+    })
+}
+
 /// How [`SceneBuilder::add_mesh_data`] places a mesh.
 #[derive(Debug, Clone, Copy)]
 pub struct MeshPlacement<'a> {
@@ -954,39 +1016,32 @@ impl SceneBuilder {
         normals: Option<([Vec3; 3], NormalEntries<'_>)>,
         material: MaterialId,
     ) -> bool {
-        let [a, b, c] = vertices;
-        let cross = (b - a).cross(c - a);
-        let area2 = cross.length_squared();
-        let finite = vertices.iter().all(|v| v.is_finite()) && uvs.iter().all(|t| t.is_finite());
-        if !(finite && area2.is_finite() && area2 > 0.0) {
+        let (normals, source) = match normals {
+            Some((n, source)) => (Some(n), source),
+            None => (None, NormalEntries::New),
+        };
+        self.store_triangle(shape_triangle(vertices, uvs, normals), source, material)
+    }
+
+    /// Stores a triangle shaped by [`shape_triangle`] (its smooth normals'
+    /// table entries from `source`); returns whether it was kept.
+    fn store_triangle(
+        &mut self,
+        shape: Option<ShapedTriangle>,
+        source: NormalEntries<'_>,
+        material: MaterialId,
+    ) -> bool {
+        let Some(ShapedTriangle {
+            vertices,
+            uvs,
+            smooth,
+        }) = shape
+        else {
             self.skipped += 1;
             return false;
-        }
-        let unit = normals.and_then(|([n0, n1, n2], source)| {
-            Some((
-                [
-                    n0.try_normalize()?,
-                    n1.try_normalize()?,
-                    n2.try_normalize()?,
-                ],
-                source,
-            ))
-        });
-        // Vertex normals that all equal the face normal shade flat: no
-        // interpolation per hit.
-        let face = cross.normalize();
-        let unit = unit.filter(|(n, _)| n.iter().any(|n| n.dot(face) < FLAT_COSINE));
-        let (mut vertices, mut uvs, mut order) = (vertices, uvs, [0, 1, 2]);
-        if unit
-            .as_ref()
-            .is_some_and(|(n, _)| (n[0] + n[1] + n[2]).dot(cross) < 0.0)
-        {
-            vertices.swap(1, 2);
-            uvs.swap(1, 2);
-            order = [0, 2, 1];
-        }
+        };
         let triangle = self.triangles.len();
-        if let Some((n, source)) = unit {
+        if let Some((n, order)) = smooth {
             let entries = match source {
                 NormalEntries::New => n.map(|n| self.vertex_normals.push(n)),
                 NormalEntries::Mesh(vertex, slots) => {
@@ -1029,42 +1084,61 @@ impl SceneBuilder {
         self.triangles.reserve(mesh.triangles.len());
         self.triangle_material.reserve(mesh.triangles.len());
         let transform = placement.transform;
-        let positions: Vec<Vec3> = mesh.positions.iter().map(|&p| transform.point(p)).collect();
+        let positions: Vec<Vec3> = mesh
+            .positions
+            .par_iter()
+            .map(|&p| transform.point(p))
+            .collect();
         let smooth = !placement.face_normals && !mesh.normals.is_empty();
         let sign = if placement.flip_normals { -1.0 } else { 1.0 };
         let normals: Vec<Vec3> = if smooth {
             mesh.normals
-                .iter()
+                .par_iter()
                 .map(|&n| transform.normal(n).map_or(Vec3::ZERO, |n| sign * n))
                 .collect()
         } else {
             Vec::new()
         };
         let swap = transform.flips_handedness() != placement.flip_normals;
+        let corner_order = |[i0, i1, i2]: [u32; 3]| if swap { [i0, i2, i1] } else { [i0, i1, i2] };
         // The table entry of each mesh vertex's normal, once a smooth
         // triangle has added it.
         let mut slots = vec![NO_ID; normals.len()];
         let mut added = MeshAdded::default();
-        for &[i0, i1, i2] in &mesh.triangles {
-            let order = if swap { [i0, i2, i1] } else { [i0, i1, i2] };
-            let at = |list: &[Vec3]| order.map(|i| list.get(i as usize).copied());
-            let [Some(a), Some(b), Some(c)] = at(&positions) else {
-                return Err(SceneError::Mesh("an index out of range".into()));
-            };
-            let uvs = order.map(|i| mesh.uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO));
-            let vertex_normals = match at(&normals) {
-                [Some(n0), Some(n1), Some(n2)] => {
-                    Some(([n0, n1, n2], NormalEntries::Mesh(order, &mut slots)))
+        // Blocks of triangles are shaped in parallel (pure), then stored in
+        // order: the scene is the same as one triangle at a time.
+        let mut shaped: Vec<Option<Option<ShapedTriangle>>> =
+            Vec::with_capacity(MESH_BLOCK_TRIANGLES);
+        for block in mesh.triangles.chunks(MESH_BLOCK_TRIANGLES) {
+            block
+                .par_iter()
+                .map(|&triangle| {
+                    let order = corner_order(triangle);
+                    let at = |list: &[Vec3]| order.map(|i| list.get(i as usize).copied());
+                    let [Some(a), Some(b), Some(c)] = at(&positions) else {
+                        return None;
+                    };
+                    let uvs =
+                        order.map(|i| mesh.uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO));
+                    let vertex_normals = match at(&normals) {
+                        [Some(n0), Some(n1), Some(n2)] => Some([n0, n1, n2]),
+                        _ => None,
+                    };
+                    Some(shape_triangle([a, b, c], uvs, vertex_normals))
+                })
+                .collect_into_vec(&mut shaped);
+            for (&triangle, shape) in block.iter().zip(shaped.drain(..)) {
+                let shape =
+                    shape.ok_or_else(|| SceneError::Mesh("an index out of range".into()))?;
+                let source = NormalEntries::Mesh(corner_order(triangle), &mut slots);
+                if self.store_triangle(shape, source, placement.material) {
+                    added.triangles += 1;
+                    if self.vertex_normals.get(self.triangles.len() - 1).is_some() {
+                        added.smooth += 1;
+                    }
+                } else {
+                    added.degenerate += 1;
                 }
-                _ => None,
-            };
-            if self.add_triangle_normals([a, b, c], uvs, vertex_normals, placement.material) {
-                added.triangles += 1;
-                if self.vertex_normals.get(self.triangles.len() - 1).is_some() {
-                    added.smooth += 1;
-                }
-            } else {
-                added.degenerate += 1;
             }
         }
         Ok(added)

@@ -20,6 +20,7 @@ use simd_tracer::scene::mesh::MeshData;
 use simd_tracer::scene::obj::{
     ObjError, add_default_material, load_obj_file, load_options, mtl_material,
 };
+use simd_tracer::scene::obj_parallel::parallel_obj_meshes;
 use simd_tracer::scene::ply::parse_ply;
 use simd_tracer::scene::serialized::parse_serialized;
 use simd_tracer::scene::transform::Transform;
@@ -181,14 +182,22 @@ pub(crate) fn load_mesh_file(path: &Path, format: MeshFormat) -> Result<MeshData
 /// triangles with non-finite values are dropped (errors: `path: message`).
 fn merged_obj_mesh(path: &Path, bytes: &[u8]) -> Result<MeshData, String> {
     let shown = path.display();
-    // The MTL is not read: Mitsuba ignores it.
-    let (models, _) = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &load_options(), |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|e| format!("{shown}: {e} (OBJ syntax)"))?;
+    // The MTL is not read: Mitsuba ignores it. Text outside the parallel
+    // reader's grammar, errors included, goes to tobj (same meshes).
+    let meshes = match parallel_obj_meshes(bytes) {
+        Some(meshes) => meshes,
+        None => tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &load_options(), |_| {
+            Err(tobj::LoadError::OpenFileFailed)
+        })
+        .map_err(|e| format!("{shown}: {e} (OBJ syntax)"))?
+        .0
+        .into_iter()
+        .map(|model| model.mesh)
+        .collect(),
+    };
     let mut merged = MeshData::default();
-    for model in &models {
-        let (data, _dropped) = obj_mesh(&model.mesh).map_err(|e| format!("{shown}: {e}"))?;
+    for mesh in &meshes {
+        let (data, _dropped) = obj_mesh(mesh).map_err(|e| format!("{shown}: {e}"))?;
         let base = u32::try_from(merged.positions.len())
             .map_err(|_| format!("{shown}: too many vertices"))?;
         let with_normals = !data.normals.is_empty();
