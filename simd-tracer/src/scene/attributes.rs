@@ -2,82 +2,150 @@
 //! texture coordinates), stored sparsely.
 //!
 //! A [`SparseAttribute`] holds the values of the triangles that have one,
-//! in triangle order, and per triangle the position of its value or
-//! [`NO_ID`]:
+//! in triangle order, and finds a triangle's value through the runs of
+//! consecutive triangles that have one:
+//!
+//! ```text
+//! run = (first triangle f, first value v, length n):
+//!     value of triangle f + i is values[v + i] for i < n
+//! ```
+//!
+//! found by a binary search over the runs. The triangles of a mesh are
+//! added together, so a scene has about one run per mesh that carries the
+//! attribute: a few bytes for the whole scene, where a per-triangle index
+//! costs 4 bytes a triangle (5 MB for each attribute of the `icospheres`
+//! benchmark scene, whose walls carry texture coordinates and whose
+//! million-triangle mesh carries none). Only a scene of more than
+//! [`MAX_RUNS`] runs gets, when it is finished, the per-triangle index
 //!
 //! ```text
 //! index[t] = k      value of triangle t is values[k]
 //! index[t] = NO_ID  triangle t has none
 //! ```
 //!
-//! with `index` empty when no triangle has a value. The index costs 4
-//! bytes per triangle once any triangle has a value, against the value's
-//! own size for every triangle in a dense list: texture coordinates are
-//! 24 bytes, vertex normals 36. Why it matters: a Mitsuba scene whose
-//! walls are `rectangle`s (which carry texture coordinates) beside a
-//! million-triangle mesh without them stored 24 zero bytes for each of
-//! the mesh's triangles (31 MB in the `icospheres` benchmark scene), and
-//! a list grown by doubling kept up to half its capacity unused after the
-//! build until [`SparseAttribute::finish`] trims it.
+//! so that a lookup stays one read however the values are scattered.
+//! A dense list of the values would cost their own size for every
+//! triangle: texture coordinates are 24 bytes, vertex normals 36. Lists
+//! grown by doubling are trimmed by [`SparseAttribute::finish`].
 //!
 //! Vertex normals are shared by the triangles of a mesh: [`VertexNormals`]
 //! keeps each mesh vertex's unit normal once, in a table, and per smooth
 //! triangle the table entries of its three vertices (12 bytes, not the 36
 //! of three normals). A mesh whose vertices are shared by six triangles,
 //! as in a closed triangulated surface, needs about 2 bytes of table a
-//! triangle: 18 bytes in all instead of 36. Values are stored as given, so
+//! triangle: 14 bytes in all instead of 36. Values are stored as given, so
 //! a triangle reads back the same bits either way.
 
 use crate::ids::NO_ID;
 use glam::Vec3;
 
+/// Most runs searched by bisection (12 KiB of runs, ten steps); a finished
+/// attribute with more gets the per-triangle index.
+pub(crate) const MAX_RUNS: usize = 1024;
+
+/// Consecutive triangles with consecutive values (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Run {
+    first_triangle: u32,
+    first_value: u32,
+    len: u32,
+}
+
+impl Run {
+    fn end_triangle(&self) -> usize {
+        self.first_triangle as usize + self.len as usize
+    }
+}
+
 /// Values of the triangles that have one (module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct SparseAttribute<T> {
-    /// Per triangle, the position of its value or [`NO_ID`]; empty when no
-    /// triangle has one, else one entry per triangle after
-    /// [`SparseAttribute::finish`].
+    /// The runs, in triangle order; empty once the index is made.
+    runs: Vec<Run>,
+    /// Per triangle, the position of its value or [`NO_ID`]: made by
+    /// [`SparseAttribute::finish`] when there are more than [`MAX_RUNS`]
+    /// runs, else empty.
     index: Vec<u32>,
     /// The values, in triangle order.
     values: Vec<T>,
+    /// Triangles covered, as given to [`SparseAttribute::finish`].
+    triangles: usize,
 }
 
 impl<T> Default for SparseAttribute<T> {
     fn default() -> Self {
         Self {
+            runs: Vec::new(),
             index: Vec::new(),
             values: Vec::new(),
+            triangles: 0,
         }
     }
 }
 
 impl<T> SparseAttribute<T> {
     /// Gives triangle `triangle` the value `value`. Triangles must be given
-    /// in increasing order; those skipped have none.
+    /// in increasing order, before [`SparseAttribute::finish`]; those
+    /// skipped have none.
     pub(crate) fn set(&mut self, triangle: usize, value: T) {
-        debug_assert!(triangle >= self.index.len(), "triangles out of order");
-        self.index.resize(triangle, NO_ID);
+        debug_assert!(self.index.is_empty(), "set after finish");
+        debug_assert!(
+            self.runs
+                .last()
+                .is_none_or(|r| triangle >= r.end_triangle()),
+            "triangles out of order"
+        );
         // A scene holds fewer than 2³² − 1 triangles: 36 bytes of vertices
         // each would be 144 GiB.
-        self.index.push(self.values.len() as u32);
+        match self.runs.last_mut() {
+            Some(run) if run.end_triangle() == triangle => run.len += 1,
+            _ => self.runs.push(Run {
+                first_triangle: triangle as u32,
+                first_value: self.values.len() as u32,
+                len: 1,
+            }),
+        }
         self.values.push(value);
     }
 
-    /// Completes the index to `triangles` entries and trims the spare
-    /// capacity of both lists.
+    /// Ends the attribute at `triangles` triangles: the per-triangle index
+    /// if there are more than [`MAX_RUNS`] runs; the lists trimmed.
     pub(crate) fn finish(&mut self, triangles: usize) {
-        if !self.values.is_empty() {
-            self.index.resize(triangles, NO_ID);
+        self.triangles = triangles;
+        if self.runs.len() > MAX_RUNS {
+            let mut index = vec![NO_ID; triangles];
+            for run in &self.runs {
+                let slots = index.iter_mut().skip(run.first_triangle as usize);
+                for (slot, at) in slots.zip(run.first_value..run.first_value + run.len) {
+                    *slot = at;
+                }
+            }
+            self.index = index;
+            self.runs = Vec::new();
         }
-        self.index.shrink_to_fit();
+        self.runs.shrink_to_fit();
         self.values.shrink_to_fit();
+    }
+
+    /// The position of triangle `triangle`'s value, if it has one.
+    #[inline]
+    fn position(&self, triangle: usize) -> Option<usize> {
+        if !self.index.is_empty() {
+            let at = *self.index.get(triangle)?;
+            return (at != NO_ID).then_some(at as usize);
+        }
+        let after = self
+            .runs
+            .partition_point(|run| run.first_triangle as usize <= triangle);
+        let run = self.runs.get(after.checked_sub(1)?)?;
+        let offset = triangle - run.first_triangle as usize;
+        (offset < run.len as usize).then(|| run.first_value as usize + offset)
     }
 
     /// The value of triangle `triangle`, if it has one.
     #[inline]
     pub(crate) fn get(&self, triangle: usize) -> Option<&T> {
-        let at = *self.index.get(triangle)?;
-        self.values.get(at as usize)
+        self.values.get(self.position(triangle)?)
     }
 
     /// The values, in triangle order.
@@ -85,9 +153,16 @@ impl<T> SparseAttribute<T> {
         &self.values
     }
 
-    /// Per triangle, the position of its value or [`NO_ID`] (module docs).
-    pub(crate) fn index(&self) -> &[u32] {
-        &self.index
+    /// Per triangle of a finished attribute, the position of its value or
+    /// [`NO_ID`]; nothing when no triangle has a value (what the
+    /// per-triangle index holds, whichever form the attribute keeps).
+    pub(crate) fn index_entries(&self) -> impl Iterator<Item = u32> + '_ {
+        let len = if self.values.is_empty() {
+            0
+        } else {
+            self.triangles
+        };
+        (0..len).map(|t| self.position(t).map_or(NO_ID, |at| at as u32))
     }
 
     /// Whether no triangle has a value.
@@ -97,37 +172,63 @@ impl<T> SparseAttribute<T> {
 
     /// Bytes held (capacities).
     pub(crate) fn memory_bytes(&self) -> usize {
-        self.index.capacity() * size_of::<u32>() + self.values.capacity() * size_of::<T>()
+        self.runs.capacity() * size_of::<Run>()
+            + self.index.capacity() * size_of::<u32>()
+            + self.values.capacity() * size_of::<T>()
     }
 
-    /// Checks the invariants for a scene of `triangles` triangles: an empty
-    /// index without values, else one entry per triangle, and the entries
-    /// other than [`NO_ID`] are `0, 1, 2, …` up to the last value, each
-    /// value named once, in order.
+    /// Checks the invariants for a scene of `triangles` triangles: the
+    /// runs, or the index (never both), name the values `0, 1, 2, …` in
+    /// triangle order, each once, all within the triangles; there are runs
+    /// only up to [`MAX_RUNS`] and an index only beyond, of one entry per
+    /// triangle.
     pub(crate) fn validate(&self, triangles: usize) -> Result<(), String> {
-        if self.values.is_empty() {
-            if self.index.iter().any(|&at| at != NO_ID) {
-                return Err("an index entry names a value, but there are none".to_owned());
-            }
-            return Ok(());
-        }
-        if self.index.len() != triangles {
-            return Err(format!(
-                "{} index entries for {triangles} triangles",
-                self.index.len()
-            ));
+        if !self.runs.is_empty() && !self.index.is_empty() {
+            return Err("both runs and a per-triangle index".to_owned());
         }
         let mut next = 0u32;
-        for (triangle, &at) in self.index.iter().enumerate() {
-            if at == NO_ID {
-                continue;
+        if self.index.is_empty() {
+            if self.runs.len() > MAX_RUNS {
+                return Err(format!("{} runs without an index", self.runs.len()));
             }
-            if at != next {
+            let mut end = 0usize;
+            for run in &self.runs {
+                if run.len == 0 || (run.first_triangle as usize) < end {
+                    return Err(format!(
+                        "run at triangle {} is empty or overlaps the one before",
+                        run.first_triangle
+                    ));
+                }
+                if run.first_value != next {
+                    return Err(format!(
+                        "run at triangle {} names value {}, expected {next}",
+                        run.first_triangle, run.first_value
+                    ));
+                }
+                end = run.end_triangle();
+                next += run.len;
+            }
+            if end > triangles {
+                return Err(format!("runs reach triangle {end} of {triangles}"));
+            }
+        } else {
+            if self.index.len() != triangles {
                 return Err(format!(
-                    "triangle {triangle} names value {at}, expected {next}"
+                    "{} index entries for {triangles} triangles",
+                    self.index.len()
                 ));
             }
-            next += 1;
+            for (triangle, &at) in self.index.iter().enumerate() {
+                if at == NO_ID {
+                    continue;
+                }
+                if at != next {
+                    return Err(format!(
+                        "triangle {triangle} names value {at}, expected {next}"
+                    ));
+                }
+                next += 1;
+            }
         }
         if next as usize != self.values.len() {
             return Err(format!(
@@ -182,10 +283,10 @@ impl VertexNormals {
         Some([self.entry(e0)?, self.entry(e1)?, self.entry(e2)?])
     }
 
-    /// Per triangle, the position of its entries or [`NO_ID`] (the sparse
-    /// index, [`SparseAttribute::index`]).
-    pub(crate) fn index(&self) -> &[u32] {
-        self.corners.index()
+    /// Per triangle, the position of its entries or [`NO_ID`]
+    /// ([`SparseAttribute::index_entries`]).
+    pub(crate) fn index_entries(&self) -> impl Iterator<Item = u32> + '_ {
+        self.corners.index_entries()
     }
 
     /// See [`SparseAttribute::finish`]; also trims the table.
@@ -268,8 +369,70 @@ mod tests {
             ]
         );
         assert_eq!(attribute.validate(7), Ok(()));
-        assert!(attribute.validate(6).is_err());
-        assert_eq!(attribute.memory_bytes(), 7 * 4 + 3 * size_of::<char>());
+        assert!(attribute.validate(4).is_err());
+        // Two runs, no per-triangle index.
+        assert_eq!(
+            attribute.memory_bytes(),
+            2 * size_of::<Run>() + 3 * size_of::<char>()
+        );
+        assert_eq!(
+            attribute.index_entries().collect::<Vec<_>>(),
+            [NO_ID, 0, 1, NO_ID, NO_ID, 2, NO_ID]
+        );
+    }
+
+    /// Every other triangle of `triangles` has a value (its own number):
+    /// `triangles / 2` runs.
+    fn alternating(triangles: usize) -> SparseAttribute<usize> {
+        let mut attribute = SparseAttribute::default();
+        for t in (1..triangles).step_by(2) {
+            attribute.set(t, t);
+        }
+        attribute.finish(triangles);
+        attribute
+    }
+
+    #[test]
+    fn runs_and_the_index_find_the_same_values() {
+        for triangles in [2 * MAX_RUNS, 2 * MAX_RUNS + 2] {
+            let attribute = alternating(triangles);
+            // MAX_RUNS runs keep the runs; one more makes the index.
+            assert_eq!(attribute.index.is_empty(), triangles == 2 * MAX_RUNS);
+            assert_eq!(attribute.runs.is_empty(), triangles > 2 * MAX_RUNS);
+            assert_eq!(attribute.validate(triangles), Ok(()));
+            for t in 0..triangles + 1 {
+                let expected = (t % 2 == 1 && t < triangles).then_some(t);
+                assert_eq!(attribute.get(t).copied(), expected, "triangle {t}");
+            }
+            let entries: Vec<u32> = attribute.index_entries().collect();
+            let expected: Vec<u32> = (0..triangles)
+                .map(|t| if t % 2 == 1 { (t / 2) as u32 } else { NO_ID })
+                .collect();
+            assert_eq!(entries, expected);
+        }
+    }
+
+    #[test]
+    fn validation_finds_broken_runs() {
+        let attribute = alternating(8);
+        let mut overlapping = attribute.clone();
+        overlapping.runs[1].first_triangle = 0;
+        assert!(overlapping.validate(8).is_err());
+        let mut empty_run = attribute.clone();
+        empty_run.runs[0].len = 0;
+        assert!(empty_run.validate(8).is_err());
+        let mut too_many = alternating(2 * MAX_RUNS + 2);
+        too_many.runs = alternating(2 * MAX_RUNS).runs;
+        too_many.runs.push(Run {
+            first_triangle: (2 * MAX_RUNS + 1) as u32,
+            first_value: MAX_RUNS as u32,
+            len: 1,
+        });
+        too_many.index = Vec::new();
+        assert!(too_many.validate(2 * MAX_RUNS + 2).is_err());
+        let mut both = alternating(2 * MAX_RUNS + 2);
+        both.runs = alternating(2 * MAX_RUNS).runs;
+        assert!(both.validate(2 * MAX_RUNS + 2).is_err());
     }
 
     #[test]
@@ -292,8 +455,11 @@ mod tests {
         unnamed.push_unnamed(3.0);
         assert!(unnamed.validate(3).is_err());
         let mut misnamed = attribute.clone();
-        misnamed.index.swap(0, 2);
+        misnamed.runs[1].first_value = 0;
         assert!(misnamed.validate(3).is_err());
+        let mut misindexed = alternating(2 * MAX_RUNS + 2);
+        misindexed.index.swap(1, 3);
+        assert!(misindexed.validate(2 * MAX_RUNS + 2).is_err());
         let mut dangling = SparseAttribute::<f32>::default();
         dangling.index.push(0);
         assert!(dangling.validate(1).is_err());
@@ -311,7 +477,10 @@ mod tests {
         assert_eq!(normals.get(1), None);
         assert_eq!(normals.get(2), Some([Vec3::X, Vec3::Y, Vec3::X]));
         assert_eq!(normals.validate(3), Ok(()));
-        assert_eq!(normals.memory_bytes(), 3 * 4 + 2 * 12 + 2 * 12);
+        assert_eq!(
+            normals.memory_bytes(),
+            2 * size_of::<Run>() + 2 * 12 + 2 * 12
+        );
         let mut stretched = normals.clone();
         stretched.scale_table(1.01);
         assert!(stretched.validate(3).is_err());

@@ -439,7 +439,7 @@ impl InstancedMesh {
             .map(f32::to_bits);
         floats
             .chain(self.triangle_material.iter().map(|m| m.0))
-            .chain(self.vertex_normals.index().iter().copied())
+            .chain(self.vertex_normals.index_entries())
     }
 }
 

@@ -566,7 +566,6 @@ impl Scene {
         let bvh =
             self.bvh.memory_bytes() + self.instances.as_ref().map_or(0, Instances::memory_bytes);
         let lights = self.lights.len() * LIGHT_BYTES
-            + self.lights.index_memory_bytes()
             + self.emitters.memory_bytes()
             + self.light_sampler.memory_bytes()
             + self

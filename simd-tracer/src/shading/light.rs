@@ -22,9 +22,6 @@ use std::f32::consts::PI;
 use wide::bytemuck::cast;
 use wide::{f32x8, u32x8};
 
-/// No light on this triangle.
-const NOT_A_LIGHT: u32 = u32::MAX;
-
 /// One emissive triangle as light sampling reads it: its vertices and its
 /// shading record (normal, emission, sides, selection probability, area),
 /// in one place so a lane's sample is one record.
@@ -41,9 +38,13 @@ pub struct Light {
 /// The emissive triangles of a scene.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct LightSet {
+    /// In strictly ascending triangle order: a triangle's light is found
+    /// by bisection (no per-triangle index: 4 bytes a triangle for the few
+    /// that emit).
     lights: Vec<Light>,
     cdf: Vec<f32>,
-    light_of_triangle: Vec<u32>,
+    /// Triangles of the scene.
+    triangle_count: usize,
     /// The lights in registers, if there are 1 to [`LANES`] of them.
     registers: Option<LightRegisters>,
     /// `Σ A π L̄` (doubled when two-sided) over the lights.
@@ -181,16 +182,20 @@ impl LightSet {
     /// scene's records.
     pub fn new(triangle_count: usize, candidates: Vec<Light>, spectra: &[SceneSpectrum]) -> Self {
         let mut set = Self {
-            light_of_triangle: vec![NOT_A_LIGHT; triangle_count],
+            triangle_count,
             ..Self::default()
         };
         let mut powers = Vec::new();
         for mut light in candidates {
             let surface = &mut light.surface;
             surface.light_pmf = 0.0;
-            let Some(slot) = set.light_of_triangle.get_mut(light.triangle as usize) else {
+            let ascending = set
+                .lights
+                .last()
+                .is_none_or(|l| l.triangle < light.triangle);
+            if !ascending || light.triangle as usize >= triangle_count {
                 continue;
-            };
+            }
             if surface.emission.is_none() {
                 continue;
             }
@@ -200,7 +205,6 @@ impl LightSet {
             let sides = if surface.two_sided { 2.0 } else { 1.0 };
             let power = f64::from(surface.area) * PI as f64 * mean * sides;
             if power > 0.0 && power.is_finite() {
-                *slot = set.lights.len() as u32;
                 set.lights.push(light);
                 powers.push(power);
             }
@@ -246,8 +250,8 @@ impl LightSet {
     }
 
     /// Checks the invariants sampling relies on: one CDF entry per light,
-    /// non-decreasing, ending at 1; the triangle-to-light map inverting the
-    /// lights' triangles; the registers holding exactly the lights (present
+    /// non-decreasing, ending at 1; the lights' triangles in strictly
+    /// ascending order (their bisection) and within the scene; the registers holding exactly the lights (present
     /// for 1 to [`LANES`] lights).
     pub fn validate(&self) -> Result<(), String> {
         if self.cdf.len() != self.lights.len() {
@@ -263,31 +267,30 @@ impl LightSet {
         if self.cdf.last().is_some_and(|&last| last != 1.0) {
             return Err("the light CDF does not end at 1".to_owned());
         }
-        for (index, light) in (0u32..).zip(&self.lights) {
-            if self.light_of_triangle.get(light.triangle as usize) != Some(&index) {
-                return Err(format!("light {index} is not found from its triangle"));
-            }
-        }
-        let mapped = self
-            .light_of_triangle
-            .iter()
-            .filter(|&&l| l != NOT_A_LIGHT)
-            .count();
-        if mapped != self.lights.len() {
+        if let Some(pair) = self
+            .lights
+            .windows(2)
+            .find(|pair| pair[0].triangle >= pair[1].triangle)
+        {
             return Err(format!(
-                "{mapped} triangles map to lights, {} lights",
-                self.lights.len()
+                "light triangles {} and {} are not in ascending order",
+                pair[0].triangle, pair[1].triangle
+            ));
+        }
+        if let Some(light) = self
+            .lights
+            .last()
+            .filter(|l| l.triangle as usize >= self.triangle_count)
+        {
+            return Err(format!(
+                "light triangle {} of {} triangles",
+                light.triangle, self.triangle_count
             ));
         }
         if self.registers != LightRegisters::new(&self.lights, &self.cdf) {
             return Err("the light registers do not hold the lights".to_owned());
         }
         Ok(())
-    }
-
-    /// Bytes of the per-triangle index into the lights.
-    pub fn index_memory_bytes(&self) -> usize {
-        self.light_of_triangle.capacity() * size_of::<u32>()
     }
 
     /// Number of emissive triangles.
@@ -302,13 +305,11 @@ impl LightSet {
 
     /// Probability that next-event estimation picks triangle `triangle`.
     pub fn pmf_of_triangle(&self, triangle: u32) -> f32 {
-        match self.light_of_triangle.get(triangle as usize) {
-            Some(&light) if light != NOT_A_LIGHT => self
-                .lights
-                .get(light as usize)
-                .map_or(0.0, |l| l.surface.light_pmf),
-            _ => 0.0,
-        }
+        self.lights
+            .binary_search_by_key(&triangle, |l| l.triangle)
+            .ok()
+            .and_then(|at| self.lights.get(at))
+            .map_or(0.0, |l| l.surface.light_pmf)
     }
 
     /// The light `u_light` picks (inverting the CDF).
@@ -587,9 +588,13 @@ mod tests {
         let mut decreasing = set.clone();
         decreasing.cdf.swap(0, 1);
         assert!(decreasing.validate().is_err());
-        let mut unmapped = set;
-        unmapped.light_of_triangle[0] = NOT_A_LIGHT;
-        assert!(unmapped.validate().is_err());
+        let mut unordered = set.clone();
+        unordered.lights.swap(0, 1);
+        unordered.registers = LightRegisters::new(&unordered.lights, &unordered.cdf);
+        assert!(unordered.validate().is_err());
+        let mut outside = set;
+        outside.triangle_count = 0;
+        assert!(outside.validate().is_err());
     }
 
     #[test]
