@@ -34,6 +34,10 @@ impl<const N: usize> FourierFilm<N> {
         route: XyzRoute,
         observer: &Observer,
     ) -> Result<Self, SpectralError> {
+        // The XYZ buffer keeps its three sums in the pixel's first three.
+        if buffer == Buffer::Xyz && N < XYZ_SUMS {
+            return Err(SpectralError::InvalidParameter("buffer"));
+        }
         Ok(Self {
             converter: Box::new(XyzConverter::with_observer(
                 &FourierBasis::new(range),
@@ -69,12 +73,17 @@ pub struct FourierSample<const N: usize> {
     pub xyz: [f32; 3],
 }
 
-/// A Fourier pixel: coefficient sums, XYZ sums and the sample count (the
-/// weight sum when splatting).
+/// Sums of the XYZ buffer.
+const XYZ_SUMS: usize = 3;
+
+/// A Fourier pixel: the sums of the film's buffer and the sample count (the
+/// weight sum when splatting). The spectral buffer fills the `N`
+/// coefficient sums, the XYZ buffer the first three (X, Y, Z): one array,
+/// not one of each, so a pixel is `8 (N + 1)` bytes, the most traffic of a
+/// splat's every footprint pixel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FourierPixel<const N: usize> {
-    pub(super) coeffs: [f64; N],
-    pub(super) xyz: [f64; 3],
+    pub(super) sums: [f64; N],
     pub(super) count: f64,
 }
 
@@ -85,8 +94,7 @@ impl<const N: usize> Film for FourierFilm<N> {
 
     fn empty_pixel(&self) -> Self::Pixel {
         FourierPixel {
-            coeffs: [0.0; N],
-            xyz: [0.0; 3],
+            sums: [0.0; N],
             count: 0.0,
         }
     }
@@ -98,12 +106,12 @@ impl<const N: usize> Film for FourierFilm<N> {
     fn accumulate(&self, pixel: &mut Self::Pixel, sample: &Self::Sample) {
         match self.buffer {
             Buffer::Spectral => {
-                for (acc, &c) in pixel.coeffs.iter_mut().zip(&sample.coeffs) {
+                for (acc, &c) in pixel.sums.iter_mut().zip(&sample.coeffs) {
                     *acc += f64::from(c);
                 }
             }
             Buffer::Xyz => {
-                for (acc, &c) in pixel.xyz.iter_mut().zip(&sample.xyz) {
+                for (acc, &c) in pixel.sums.iter_mut().zip(&sample.xyz) {
                     *acc += f64::from(c);
                 }
             }
@@ -117,12 +125,12 @@ impl<const N: usize> Film for FourierFilm<N> {
         let weight = f64::from(weight);
         match self.buffer {
             Buffer::Spectral => {
-                for (acc, &c) in pixel.coeffs.iter_mut().zip(&sample.coeffs) {
+                for (acc, &c) in pixel.sums.iter_mut().zip(&sample.coeffs) {
                     *acc += weight * f64::from(c);
                 }
             }
             Buffer::Xyz => {
-                for (acc, &c) in pixel.xyz.iter_mut().zip(&sample.xyz) {
+                for (acc, &c) in pixel.sums.iter_mut().zip(&sample.xyz) {
                     *acc += weight * f64::from(c);
                 }
             }
@@ -131,11 +139,8 @@ impl<const N: usize> Film for FourierFilm<N> {
     }
 
     fn add_pixel(&self, into: &mut Self::Pixel, from: &Self::Pixel) {
-        let sums: (&mut [f64], &[f64]) = match self.buffer {
-            Buffer::Spectral => (&mut into.coeffs, &from.coeffs),
-            Buffer::Xyz => (&mut into.xyz, &from.xyz),
-        };
-        for (acc, &v) in sums.0.iter_mut().zip(sums.1) {
+        let len = self.sums_len();
+        for (acc, &v) in into.sums[..len].iter_mut().zip(&from.sums[..len]) {
             *acc += v;
         }
         into.count += from.count;
@@ -147,17 +152,17 @@ impl<const N: usize> Film for FourierFilm<N> {
         }
         match self.buffer {
             Buffer::Spectral => {
-                let mean = FourierSpectrum::from_coeffs(pixel.coeffs.map(|c| c / pixel.count));
+                let mean = FourierSpectrum::from_coeffs(pixel.sums.map(|c| c / pixel.count));
                 self.converter.convert(self.route, &mean)
             }
-            Buffer::Xyz => Xyz::from_array(pixel.xyz.map(|v| v / pixel.count)),
+            Buffer::Xyz => Xyz::from_array(core::array::from_fn(|k| pixel.sums[k] / pixel.count)),
         }
     }
 
     fn coefficients(&self, pixel: &Self::Pixel) -> Option<Vec<f64>> {
         match self.buffer {
             Buffer::Spectral if pixel.count > 0.0 => {
-                Some(pixel.coeffs.iter().map(|c| c / pixel.count).collect())
+                Some(pixel.sums.iter().map(|c| c / pixel.count).collect())
             }
             Buffer::Spectral => Some(vec![0.0; N]),
             Buffer::Xyz => None,
@@ -171,10 +176,7 @@ impl<const N: usize> Film for FourierFilm<N> {
     }
 
     fn save_state(&self, pixel: &Self::Pixel, out: &mut [f64]) {
-        let sums: &[f64] = match self.buffer {
-            Buffer::Spectral => &pixel.coeffs,
-            Buffer::Xyz => &pixel.xyz,
-        };
+        let sums = &pixel.sums[..self.sums_len()];
         debug_assert_eq!(out.len(), sums.len() + 1);
         for (slot, &value) in out.iter_mut().zip(sums.iter().chain([&pixel.count])) {
             *slot = value;
@@ -190,11 +192,7 @@ impl<const N: usize> Film for FourierFilm<N> {
             return None;
         }
         let mut pixel = self.empty_pixel();
-        let target: &mut [f64] = match self.buffer {
-            Buffer::Spectral => &mut pixel.coeffs,
-            Buffer::Xyz => &mut pixel.xyz,
-        };
-        target.copy_from_slice(sums);
+        pixel.sums[..sums.len()].copy_from_slice(sums);
         pixel.count = count;
         Some(pixel)
     }
@@ -205,7 +203,54 @@ impl<const N: usize> FourierFilm<N> {
     fn sums_len(&self) -> usize {
         match self.buffer {
             Buffer::Spectral => N,
-            Buffer::Xyz => 3,
+            Buffer::Xyz => XYZ_SUMS,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn film<const N: usize>(buffer: Buffer) -> Result<FourierFilm<N>, SpectralError> {
+        FourierFilm::new(SpectralRange::VISIBLE, buffer, XyzRoute::Zeroth)
+    }
+
+    #[test]
+    fn a_pixel_is_its_sums_and_its_count() {
+        assert_eq!(size_of::<FourierPixel<16>>(), 8 * (16 + 1));
+        // The XYZ buffer needs three sums in the pixel.
+        assert!(film::<2>(Buffer::Xyz).is_err());
+        assert!(film::<2>(Buffer::Spectral).is_ok());
+        assert!(film::<3>(Buffer::Xyz).is_ok());
+    }
+
+    #[test]
+    fn the_xyz_buffer_sums_in_the_first_three_and_keeps_them_through_its_state() {
+        let film = film::<8>(Buffer::Xyz).expect("film");
+        let mut pixel = film.empty_pixel();
+        let samples = [[1.0f32, 2.0, 3.0], [3.0, 0.5, 1.0]];
+        for xyz in samples {
+            let sample = FourierSample {
+                coeffs: [7.0; 8],
+                xyz,
+            };
+            film.accumulate_weighted(&mut pixel, &sample, 0.5);
+        }
+        assert_eq!(
+            &pixel.sums[3..],
+            &[0.0; 5],
+            "the coefficients are not summed"
+        );
+        assert_eq!(film.resolve(&pixel).to_array(), [2.0, 1.25, 2.0]);
+        let mut state = vec![0.0; film.state_len().expect("a state")];
+        film.save_state(&pixel, &mut state);
+        assert_eq!(state, [2.0, 1.25, 2.0, 1.0]);
+        let loaded = film.load_state(&state, FilmMode::Splat, 2.0);
+        assert_eq!(loaded.as_ref(), Some(&pixel));
+        let mut doubled = pixel.clone();
+        film.add_pixel(&mut doubled, &pixel);
+        assert_eq!(film.resolve(&doubled).to_array(), [2.0, 1.25, 2.0]);
+        assert_eq!(doubled.count, 2.0);
     }
 }
