@@ -166,6 +166,50 @@ fn malformed_files_name_their_line() -> TestResult {
     Ok(())
 }
 
+/// An `obj` shape's file is read in parallel when its text is in the
+/// parallel reader's grammar and by tobj otherwise: valid text loads either
+/// way, and malformed text gets tobj's message on the shape's line.
+#[test]
+fn obj_files_load_or_are_refused_by_either_reader() -> TestResult {
+    let triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    let shape = "    <shape type=\"obj\"><string name=\"filename\" value=\"m.obj\"/></shape>\n    <emitter type=\"constant\"/>";
+    let cases: [(&str, String, Option<&str>); 4] = [
+        // Inside the grammar: the parallel reader.
+        ("plain", format!("{triangle}f 1 2 3\n"), None),
+        // A line (`l`) is outside it, and valid: tobj reads it.
+        ("line", format!("{triangle}l 1 2\nf 1 2 3\n"), None),
+        (
+            "short-vertex",
+            "v 0 0\nf 1 2 3\n".to_string(),
+            Some("position parse error"),
+        ),
+        (
+            "index",
+            format!("{triangle}f 1 2 9\n"),
+            Some("face vertex index out of bounds"),
+        ),
+    ];
+    for (name, obj, error) in cases {
+        let dir = test_dir(&format!("obj-{name}"))?;
+        write(&dir, "m.obj", &obj)?;
+        let path = write(&dir, "s.xml", &scene(shape))?;
+        match (load(&path, &[], false), error) {
+            (Ok(_), None) => {}
+            (Err(message), Some(needle)) => {
+                let prefix = format!("{}:8:", path.display());
+                assert!(message.starts_with(&prefix), "{name}: {message:?}");
+                assert!(
+                    message.contains(needle) && message.contains("(OBJ syntax)"),
+                    "{name}: {message:?}"
+                );
+            }
+            (Ok(_), Some(needle)) => return Err(format!("{name}: accepted, not {needle}").into()),
+            (Err(message), None) => return Err(format!("{name}: refused: {message}").into()),
+        }
+    }
+    Ok(())
+}
+
 #[test]
 fn includes_defaults_and_defines() -> TestResult {
     let dir = test_dir("include")?;
