@@ -345,8 +345,6 @@ fn number_vertices(chunks: &[ParsedChunk], totals: Counts) -> Option<Vec<tobj::M
             indices: Vec::with_capacity(3 * (span.end - span.first)),
             ..Default::default()
         };
-        let with_texcoords = span.counts.texcoords > 0;
-        let with_normals = span.counts.normals > 0;
         let mut next_vertex = 0u32;
         for _ in 3 * span.first..3 * span.end {
             let corner = walker.next()?;
@@ -369,21 +367,13 @@ fn number_vertices(chunks: &[ParsedChunk], totals: Counts) -> Option<Vec<tobj::M
             // A new vertex: tobj checks its indices and copies its values.
             mesh.positions
                 .extend_from_slice(&positions[3 * v..3 * v + 3]);
-            if with_texcoords && corner.vt != MISSING {
-                let t = corner.vt as usize;
-                if t >= span.counts.texcoords {
-                    return None;
-                }
-                mesh.texcoords
-                    .extend_from_slice(&texcoords[2 * t..2 * t + 2]);
-            }
-            if with_normals && corner.vn != MISSING {
-                let n = corner.vn as usize;
-                if n >= span.counts.normals {
-                    return None;
-                }
-                mesh.normals.extend_from_slice(&normals[3 * n..3 * n + 3]);
-            }
+            copy_value::<2>(
+                &texcoords,
+                span.counts.texcoords,
+                corner.vt,
+                &mut mesh.texcoords,
+            )?;
+            copy_value::<3>(&normals, span.counts.normals, corner.vn, &mut mesh.normals)?;
             if slot.model == model {
                 others.insert(corner, next_vertex);
             } else {
@@ -400,6 +390,27 @@ fn number_vertices(chunks: &[ParsedChunk], totals: Counts) -> Option<Vec<tobj::M
         meshes.push(mesh);
     }
     Some(meshes)
+}
+
+/// Copies value `index` of `values` (texture coordinates or normals, of
+/// which `count` are defined when the model ends) onto a new vertex's list
+/// as tobj does: nothing when the file has none of them so far or the
+/// corner names none; `None` for an index out of range.
+fn copy_value<const WIDTH: usize>(
+    values: &[f32],
+    count: usize,
+    index: u32,
+    to: &mut Vec<f32>,
+) -> Option<()> {
+    if count == 0 || index == MISSING {
+        return Some(());
+    }
+    let i = index as usize;
+    if i >= count {
+        return None;
+    }
+    to.extend_from_slice(values.get(WIDTH * i..WIDTH * (i + 1))?);
+    Some(())
 }
 
 /// The corners of every chunk in file order.
