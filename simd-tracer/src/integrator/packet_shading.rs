@@ -148,6 +148,51 @@ impl<'a> Shading<'a> {
         }
     }
 
+    /// The lanes of `lanes` whose sample with lobe numbers `u_lobe` takes a
+    /// direction that depends on wavelength
+    /// ([`Bsdf::direction_depends_on_wavelength`], from the same shading
+    /// points and `wo` as [`Self::sample`]).
+    pub(super) fn wavelength_dependent(
+        &self,
+        scene: &Scene,
+        lanes: LaneMask,
+        wo: Vec3x8,
+        u_lobe: &[f32; LANES],
+    ) -> LaneMask {
+        let Self::General { bsdfs, points } = self else {
+            return LaneMask::NONE;
+        };
+        let (tables, wo) = (scene.material_tables(), wo.to_lanes());
+        lanes
+            .iter()
+            .filter(|&lane| {
+                bsdfs[lane].is_some_and(|b| {
+                    b.direction_depends_on_wavelength(
+                        &tables,
+                        &points[lane],
+                        wo[lane],
+                        u_lobe[lane],
+                    )
+                })
+            })
+            .fold(LaneMask::NONE, LaneMask::with)
+    }
+
+    /// Gives the shading points of `lanes` their hero wavelengths (lanes
+    /// that have just split, [`Transport::split`]).
+    pub(super) fn place_heroes<T: Transport>(
+        &mut self,
+        transport: &T,
+        wavelengths: &T::Wavelengths,
+        lanes: LaneMask,
+    ) {
+        if let Self::General { points, .. } = self {
+            for lane in lanes.iter() {
+                points[lane].hero_nm = transport.hero_wavelength(wavelengths, lane);
+            }
+        }
+    }
+
     /// [`Bsdf::sample_packet`] for the lanes in `active`.
     pub(super) fn sample(
         &self,

@@ -29,8 +29,10 @@ fn departure(direction: Vec3x8, normal: Vec3x8, above: Vec3x8, below: Vec3x8) ->
     Vec3x8::select(direction.dot(normal).simd_lt(f32x8::ZERO), below, above)
 }
 
-/// The lanes of `active` whose hit material's directions depend on
-/// wavelength ([`crate::shading::material::Bsdf::disperses`]).
+/// The lanes of `active` whose hit material's directions may depend on
+/// wavelength ([`crate::shading::material::Bsdf::disperses`]; which of them
+/// do is decided with their lobe numbers,
+/// [`crate::shading::material::Bsdf::direction_depends_on_wavelength`]).
 fn dispersive_lanes(scene: &Scene, hit: &PacketHit, active: LaneMask) -> LaneMask {
     active
         .iter()
@@ -363,22 +365,17 @@ impl<S: Copy> PathState<S> {
         } else {
             normal
         };
+        let dimensions = BounceDimensions::of(depth);
+        // The lobe numbers of lanes at a dispersive surface are drawn
+        // before their split, which depends on the lobe they take.
+        let mut early_lobe = None;
         let shading = if surface.all_lambert(active) {
             Shading::Lambert {
                 albedo: surface.lambert_albedo,
                 lanes: active,
             }
         } else {
-            if T::SPLITS_AT_DISPERSION {
-                let lanes = SplitLanes {
-                    lanes: dispersive_lanes(scene, hit, active),
-                    past_event: self.fluorescence.shifted,
-                };
-                if !lanes.lanes.is_empty() {
-                    transport.split(&mut self.throughput, wavelengths, lanes, rngs);
-                }
-            }
-            Shading::general(
+            let mut shading = Shading::general(
                 scene,
                 transport,
                 wavelengths,
@@ -386,14 +383,29 @@ impl<S: Copy> PathState<S> {
                 active,
                 shading_normal,
                 front,
-            )
+            );
+            if T::SPLITS_AT_DISPERSION {
+                let dispersive = dispersive_lanes(scene, hit, active);
+                if !dispersive.is_empty() {
+                    let u_lobe = uniforms(rngs, dimensions.bsdf_lobe, active).to_array();
+                    let lanes = SplitLanes {
+                        lanes: shading.wavelength_dependent(scene, dispersive, wo, &u_lobe),
+                        past_event: self.fluorescence.shifted,
+                    };
+                    if !lanes.lanes.is_empty() {
+                        transport.split(&mut self.throughput, wavelengths, lanes, rngs);
+                        shading.place_heroes(transport, wavelengths, lanes.lanes);
+                    }
+                    early_lobe = Some(u_lobe);
+                }
+            }
+            shading
         };
 
         // Next-event estimation: one light sample per lane, one shadow
         // packet. A lane samples the emissive triangles with probability
         // `P_tri` (1 without other lights), else a point, directional or
         // environment light (`shading::light_sampler`).
-        let dimensions = BounceDimensions::of(depth);
         let mut u_light = uniforms(rngs, dimensions.light_select, active).to_array();
         let (u, v) = (
             uniforms(rngs, dimensions.light_point, active),
@@ -496,7 +508,8 @@ impl<S: Copy> PathState<S> {
             uniforms(rngs, dimensions.bsdf_direction, active),
             uniforms(rngs, dimensions.bsdf_direction + 1, active),
         );
-        let u_lobe = uniforms(rngs, dimensions.bsdf_lobe, active).to_array();
+        let u_lobe =
+            early_lobe.unwrap_or_else(|| uniforms(rngs, dimensions.bsdf_lobe, active).to_array());
         let uniforms = SampleUniforms {
             lobe: &u_lobe,
             u,

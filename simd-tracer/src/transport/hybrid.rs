@@ -1,7 +1,8 @@
 //! [`HybridTransport<N, C>`]: a path carries `N` Fourier coefficients until
-//! it meets a surface whose directions depend on wavelength (a dispersive
-//! dielectric, smooth or rough); there it draws `C` wavelengths and goes on
-//! as a sampled path. Paths that never meet dispersion stay Fourier to the
+//! it takes a direction that depends on wavelength (any sample of a rough
+//! dispersive dielectric, the refraction of a smooth one:
+//! `Bsdf::direction_depends_on_wavelength`); there it draws `C`
+//! wavelengths and goes on as a sampled path. Paths that never meet dispersion stay Fourier to the
 //! end, so they keep the Fourier transport's low colour noise, while
 //! dispersion is followed exactly where the Fourier transport can only bend
 //! every wavelength along the 550 nm direction.
@@ -44,7 +45,11 @@
 //! ```
 //!
 //! **Unbiasedness.** Whether and where a path splits depends only on its
-//! prefix (the material hit), not on any wavelength. Given the prefix,
+//! prefix (the material hit) and the hit's lobe number `u` (at a smooth
+//! dispersive dielectric it splits when `u ≥ c_0(R)`, the refraction, whose
+//! probability no wavelength enters; its reflection, with weight
+//! `R(λ)/c_0(R)`, goes the same way at every wavelength and stays a
+//! Fourier path), not on any wavelength. Given the prefix,
 //! `E[R̂ | prefix] = (1/C) Σ_i ∫ x̄(λ) T_N(λ) L_k(λ) p(λ)/p(λ) dλ =
 //! ∫ x̄ T_N L_k dλ`, for every `i` because each `λ_i` has density `p` (with
 //! termination only `i = 1` is left, with weight `C/p`, the same

@@ -77,41 +77,46 @@ pub(super) fn sample_smooth_interface(
     } = *interface;
     let p_reflect = reflect_probability(tables, r, t, cos_o, thickness);
     let reflectance = angular_ref(r, cos_o, thickness);
-    let refracted = if u_lobe < p_reflect {
-        None
-    } else {
-        microfacet::refract(wo, n, eta)
-    };
-    match (refracted, t) {
-        (None, _) => {
-            // Reflection (also where a rounding of p_reflect meets total
-            // internal reflection: then R = 1 and the weight stays right).
-            let p = if u_lobe < p_reflect { p_reflect } else { 1.0 };
-            (p > 0.0).then(|| BsdfSample {
-                wi: microfacet::reflect(wo, n),
-                pdf: 0.0,
-                weight: 1.0 / p,
-                spectrum: LaneSpectrum::of(reflectance),
-                terminate_secondary: false,
-                fluorophore: None,
-            })
-        }
-        (Some(wi), transmittance) => {
-            let p_transmit = 1.0 - p_reflect;
-            let spectrum = match transmittance {
-                Some(t) => LaneSpectrum::of(angular_ref(t, cos_o, thickness)),
-                None => LaneSpectrum::complement(reflectance),
-            };
-            Some(BsdfSample {
-                wi,
-                pdf: 0.0,
-                weight: 1.0 / (p_transmit * eta * eta),
-                spectrum,
-                terminate_secondary: dispersed,
-                fluorophore: None,
-            })
-        }
+    if u_lobe < p_reflect {
+        return Some(BsdfSample {
+            wi: microfacet::reflect(wo, n),
+            pdf: 0.0,
+            weight: 1.0 / p_reflect,
+            spectrum: LaneSpectrum::of(reflectance),
+            terminate_secondary: false,
+            fluorophore: None,
+        });
     }
+    // `u_lobe < 1`, so the transmitted lobe's probability is above 0.
+    let p_transmit = 1.0 - p_reflect;
+    let spectrum = match t {
+        Some(t) => LaneSpectrum::of(angular_ref(t, cos_o, thickness)),
+        None => LaneSpectrum::complement(reflectance),
+    };
+    Some(match microfacet::refract(wo, n, eta) {
+        Some(wi) => BsdfSample {
+            wi,
+            pdf: 0.0,
+            weight: 1.0 / (p_transmit * eta * eta),
+            spectrum,
+            terminate_secondary: dispersed,
+            fluorophore: None,
+        },
+        // Total internal reflection at `eta`: the share the refraction
+        // would carry, `1 − R` (or `T`), is reflected, so at a wavelength
+        // that reflects totally the lobes add up to `R + (1 − R) = 1`
+        // whatever `R` the table holds there (a dispersive glass reflects
+        // some wavelengths totally while `c_0(R) < 1`). Whether this
+        // happens depends on the hero's index, so the secondaries end.
+        None => BsdfSample {
+            wi: microfacet::reflect(wo, n),
+            pdf: 0.0,
+            weight: 1.0 / p_transmit,
+            spectrum,
+            terminate_secondary: dispersed,
+            fluorophore: None,
+        },
+    })
 }
 
 /// Rough dielectric `f cos θ_i` and pdf (Walter et al. 2007, pbrt-v4's

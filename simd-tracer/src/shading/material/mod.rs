@@ -11,7 +11,7 @@
 //! | --- | --- |
 //! | Lambert | `f = ρ/π`, cosine sampling (Shirley–Chiu), weight `ρ` |
 //! | Conductor | GGX or Beckmann (see [`crate::shading::microfacet`]) with visible-normal sampling, `f = D G2 F/(4 cos θo cos θi)`, weight `F G2/G1`; `α < 10⁻³` is a mirror (delta); `F` from an angular spectrum (Fourier table / exact) |
-//! | Dielectric | smooth (delta) or microfacet (Walter et al. 2007) reflection and transmission; the lobe is chosen with the mean Fresnel `c_0` of the table (Fourier mode, and sampled mode without dispersion) and the throughput carries the spectral `F` or `1 − F`; transmitted radiance is scaled by `1/η²`; with a dispersive IOR and a hero wavelength, refraction follows the hero's IOR and terminates the secondary wavelengths |
+//! | Dielectric | smooth (delta) or microfacet (Walter et al. 2007) reflection and transmission; the lobe is chosen with the mean Fresnel `c_0` of the table (Fourier mode, and sampled mode without dispersion) and the throughput carries the spectral `F` or `1 − F`; transmitted radiance is scaled by `1/η²`; with a dispersive IOR and a hero wavelength, refraction follows the hero's IOR and terminates the secondary wavelengths; where the chosen refraction does not exist (total internal reflection at that IOR) the refracted share `1 − F` is reflected instead, so each wavelength keeps `F + (1 − F) = 1` |
 //! | Coated | a smooth or rough dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic and roughplastic): specular `s F(θo)` plus diffuse `ρ T_i T_o/(π η² (1 − F_dr,int))` with the coat's transmittances `T` (flat `1 − F`, or tabulated for a rough coat) and optionally Mitsuba's nonlinear internal scattering; for the smooth coat and `ρ = 1` energy is conserved exactly (the coat's Fresnel is achromatic, so it rides in the scalar part); formulas in `coated.rs` |
 //! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
 //! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1; achromatic, delta, the same from both faces |
@@ -265,7 +265,8 @@ impl Bsdf {
     /// Whether the directions it samples depend on wavelength: a dielectric
     /// with a dispersive index (its refraction follows the hero
     /// wavelength). Where this holds the hybrid transport leaves Fourier
-    /// coefficients for sampled wavelengths.
+    /// coefficients for sampled wavelengths if the sample does take such a
+    /// direction ([`Bsdf::direction_depends_on_wavelength`]).
     pub fn disperses(&self) -> bool {
         matches!(self, Self::Dielectric { ior, .. } if ior.is_dispersive())
     }

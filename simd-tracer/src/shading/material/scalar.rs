@@ -233,6 +233,45 @@ impl Bsdf {
         }
     }
 
+    /// Whether [`Bsdf::sample`] with lobe number `u_lobe` would take a
+    /// direction that depends on the hero wavelength: the refraction (or the
+    /// total internal reflection in its place) of a smooth dispersive
+    /// dielectric, and any sample of a rough one (its refractions, and its
+    /// light samples' evaluation, follow the hero's index). The reflection
+    /// lobe of a smooth dispersive dielectric is chosen with the table's
+    /// mean Fresnel `c_0(R)`, which no wavelength enters, and goes the same
+    /// way for every wavelength, so a path that takes it needs no
+    /// wavelengths: the hybrid transport keeps it Fourier
+    /// (`transport/hybrid.rs`). Computed from the same `p`, `wo` and
+    /// `u_lobe` as the sample, so the two agree lane for lane.
+    pub fn direction_depends_on_wavelength(
+        &self,
+        tables: &MaterialTables<'_>,
+        p: &ShadingPoint,
+        wo: Vec3,
+        u_lobe: f32,
+    ) -> bool {
+        let Self::Dielectric {
+            outside,
+            inside,
+            ior,
+            microfacet: model,
+        } = self
+        else {
+            return false;
+        };
+        if !ior.is_dispersive() {
+            return false;
+        }
+        if !model.is_smooth() {
+            return true;
+        }
+        let cos_o = Frame::new(p.n).to_local(wo).z;
+        let table = if p.front { *outside } else { *inside };
+        // Below the surface the sample is `None`: no direction at all.
+        cos_o > 0.0 && u_lobe >= reflect_probability(tables, table, None, cos_o, 0.0)
+    }
+
     /// `f cos θ_i` and the sampling pdf for `wi`.
     pub fn eval(
         &self,
