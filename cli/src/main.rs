@@ -90,6 +90,10 @@ fn render(args: &RenderArgs) -> Result<ExitCode, CliError> {
 }
 
 fn main() -> ExitCode {
+    // Large temporaries of a scene load go back to the system when freed
+    // (`heap-tuning`'s docs); the result only says whether glibc is the
+    // allocator.
+    heap_tuning::return_large_blocks_to_the_system();
     let cli = Cli::parse();
     match run(&cli) {
         Ok(code) => code,

@@ -596,9 +596,11 @@ pub const PROCESS_BASELINE_BYTES: u64 = 16 << 20;
 
 /// The peak memory of a render, predicted before it starts (bytes, by
 /// phase). The render holds the scene throughout; the film accumulators,
-/// the resolved XYZ image and the coefficient planes coexist at the end of
-/// the render; the film is then freed and the outputs are written one at a
-/// time from the resolved image. Loading the scene happens before and is
+/// the resolved XYZ image and the coefficient planes (made only for spectral
+/// outputs) coexist at the end of the render; the film is then freed and the
+/// outputs are written one at a time from the resolved image. The splat
+/// rings are counted with the film, an upper bound: they are freed before
+/// the resolve. Loading the scene happens before and is
 /// bounded by the loaders' own limits (texture size, file size).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct MemoryPrediction {
@@ -670,7 +672,9 @@ pub fn predict_memory(
     let coefficients = args.coeff_count() as u64;
     let spectral_buffer =
         args.transport_kind() == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
-    let planes = if spectral_buffer {
+    // Resolved only for the outputs that read them (`PassJob::xyz_only`).
+    let spectral_outputs = args.spectral_exr.is_some() || args.coefficients_exr.is_some();
+    let planes = if spectral_buffer && spectral_outputs {
         per_pixel(coefficients * F32_BYTES)
     } else {
         0
@@ -1398,6 +1402,12 @@ impl OutputOptions {
         }
     }
 
+    /// Whether a spectral or coefficient EXR is among the outputs (the only
+    /// ones that read the coefficient planes).
+    pub fn writes_spectra(&self) -> bool {
+        self.spectral_exr.is_some() || self.coefficients_exr.is_some()
+    }
+
     /// Whether a partial film is among the outputs.
     pub fn keeps_state(&self) -> bool {
         self.outputs
@@ -1878,6 +1888,7 @@ pub fn render(
             first_pass: parts.job_first_pass,
             resume: parts.resume.as_ref().map(|part| &part.state),
             keep_state: output.keeps_state(),
+            xyz_only: !output.writes_spectra(),
         },
         coefficient_note,
     };

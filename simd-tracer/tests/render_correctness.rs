@@ -375,9 +375,10 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
     let lamp = b.add_material(lamp);
     let scene_template = simd_tracer::scene::builtin::cornell_box(range)?;
     for (i, tri) in scene_template.triangles().iter().enumerate() {
-        let is_light = scene_template.materials()[scene_template.triangle_material()[i].index()]
-            .emission
-            .is_some();
+        let is_light = scene_template
+            .material_of(i)
+            .and_then(|m| scene_template.materials().get(m.index()))
+            .is_some_and(|m| m.emission.is_some());
         let m = if is_light {
             lamp
         } else if tri[0].x > 0.99 {

@@ -69,6 +69,7 @@ fn part<T: Transport>(
         first_pass: first,
         resume: None,
         keep_state: true,
+        xyz_only: false,
     };
     let (result, state) = render_passes(
         transport,
@@ -160,6 +161,7 @@ fn resume_is_exact<T: Transport>(
             first_pass: 0,
             resume: Some(&first),
             keep_state: true,
+            xyz_only: false,
         };
         let (result, state) = render_passes(
             transport,
@@ -366,6 +368,7 @@ fn a_part_with_another_seed_does_not_merge_into_the_render() -> TestResult {
         first_pass: 2,
         resume: None,
         keep_state: true,
+        xyz_only: false,
     };
     let (_, second) = render_passes(&transport, &scene, &other_seed, &job, &mut |_| true)?;
     first.add(&second.ok_or("no state kept")?)?;
@@ -396,11 +399,13 @@ fn control_variates_refuse_to_split() -> TestResult {
             first_pass: 1,
             resume: None,
             keep_state: false,
+            xyz_only: false,
         },
         PassJob {
             first_pass: 0,
             resume: None,
             keep_state: true,
+            xyz_only: false,
         },
     ] {
         let result = render_passes(
@@ -435,6 +440,7 @@ fn states_that_do_not_fit_are_refused() -> TestResult {
             first_pass: first,
             resume: Some(state),
             keep_state: false,
+            xyz_only: false,
         };
         render_passes(
             &transport,

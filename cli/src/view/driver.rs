@@ -684,6 +684,7 @@ impl TransportTask for TurnTask<'_> {
             first_pass: 0,
             resume: self.resume,
             keep_state: true,
+            xyz_only: false,
         };
         let (result, state) = simd_tracer::render::render_observed(
             transport,

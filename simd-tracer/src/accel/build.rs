@@ -260,11 +260,14 @@ impl Bvh {
         };
 
         // Leaf order, so that leaves index the triangles directly.
-        let original: Vec<u32> = bvh2
+        let mut original: Vec<u32> = bvh2
             .primitive_indices
             .iter()
             .filter_map(|&k| kept.get(k as usize).copied())
             .collect();
+        // Kept for the scene's life: without the room a filtered collect
+        // grows (up to twice the slots).
+        original.shrink_to_fit();
         drop(kept);
         // Fan pairs (consecutive in the input): the second takes the
         // first's plane.

@@ -860,6 +860,10 @@ pub struct PassJob<'a> {
     pub resume: Option<&'a FilmState>,
     /// Return the film's state with the result.
     pub keep_state: bool,
+    /// Resolve the XYZ image only, without the coefficient planes a
+    /// spectral film would return too ([`RenderResult::coefficients`]
+    /// `None`): `N` floats a pixel that only spectral outputs read.
+    pub xyz_only: bool,
 }
 
 /// Renders `scene` with `transport`. `progress` runs after every batch of
@@ -1106,7 +1110,7 @@ pub fn render_observed<T: Transport>(
                 .iter()
                 .flat_map(|tile| tile.window_pixels(&window))
                 .map(|((x, y), pixel)| (window_index(&window, x, y), pixel));
-            let (xyz, coefficients) = resolve_pixels(film, &window, pixels);
+            let (xyz, coefficients) = resolve_pixels(film, &window, pixels, !job.xyz_only);
             PartialImage {
                 width: window.width,
                 height: window.height,
@@ -1134,6 +1138,11 @@ pub fn render_observed<T: Transport>(
             );
         }
     }
+    // The splat rings are spent: freed before the resolve's buffers are
+    // made, so the two never coexist at the end of a render.
+    for tile in &mut tiles {
+        tile.ring = Vec::new();
+    }
     let mut rejected = resumed_rejected;
     let mut rays = RayCounts::default();
     for tile in &tiles {
@@ -1144,7 +1153,7 @@ pub fn render_observed<T: Transport>(
         .iter()
         .flat_map(|tile| tile.window_pixels(&window))
         .map(|((x, y), pixel)| (window_index(&window, x, y), pixel));
-    let (xyz, coefficients) = resolve_pixels(film, &window, pixels);
+    let (xyz, coefficients) = resolve_pixels(film, &window, pixels, !job.xyz_only);
     let state = match (job.keep_state, state_len) {
         (true, Some(values_per_pixel)) => {
             let mut state =
@@ -1180,12 +1189,14 @@ fn window_index(window: &PixelWindow, x: u32, y: u32) -> usize {
     ((y - window.y) * window.width + x - window.x) as usize
 }
 
-/// XYZ and, if the film keeps them, the mean coefficients of `window`'s
-/// pixels, given with their row-major indices in the window.
+/// XYZ and, if the film keeps them and `with_coefficients`, the mean
+/// coefficients of `window`'s pixels, given with their row-major indices in
+/// the window.
 fn resolve_pixels<'a, F: Film>(
     film: &F,
     window: &PixelWindow,
     pixels: impl Iterator<Item = (usize, &'a F::Pixel)>,
+    with_coefficients: bool,
 ) -> (Vec<Xyz>, Option<(usize, Vec<f32>)>)
 where
     F::Pixel: 'a,
@@ -1195,7 +1206,7 @@ where
     let mut planes: Option<(usize, Vec<f32>)> = None;
     for (index, pixel) in pixels {
         xyz[index] = film.resolve(pixel);
-        if let Some(c) = film.coefficients(pixel) {
+        if let Some(c) = film.coefficients(pixel).filter(|_| with_coefficients) {
             let (n, data) =
                 planes.get_or_insert_with(|| (c.len(), vec![0.0; pixel_count * c.len()]));
             for (j, &v) in c.iter().enumerate().take(*n) {
@@ -1218,7 +1229,7 @@ pub fn resolve_state<T: Transport>(
         return Err(RenderError::NotSplittable);
     }
     let pixels = state.load(film)?;
-    let (xyz, coefficients) = resolve_pixels(film, &state.window, pixels.iter().enumerate());
+    let (xyz, coefficients) = resolve_pixels(film, &state.window, pixels.iter().enumerate(), true);
     let passes = state.passes.end - state.passes.start;
     Ok(RenderResult {
         width: state.window.width,

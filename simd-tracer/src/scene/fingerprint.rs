@@ -17,6 +17,7 @@
 //! word, about 40 ms for a million triangles.
 
 use super::Scene;
+use crate::ids::MaterialId;
 use glam::{Vec2, Vec3};
 
 /// FNV-1a's 64-bit offset basis.
@@ -74,9 +75,10 @@ impl Scene {
         // Read back by index where the tree holds the only copy, without a
         // vector of them all (`triangle_store`).
         let reader = self.triangles.reader(&self.bvh);
-        for (index, &material) in self.triangle_material().iter().enumerate() {
+        for index in 0..triangles {
             let triangle = reader.get(index).unwrap_or([Vec3::NAN; 3]);
             hash.floats(triangle.iter().flat_map(|v| v.to_array()));
+            let material = self.material_of(index).unwrap_or(MaterialId::NONE);
             hash.word(material.index() as u32);
         }
         // Every triangle's coordinates once any has some (zeros for those

@@ -60,6 +60,9 @@ pub enum SceneError {
     Reference(String, &'static str, u32),
     /// A triangle refers to a material that does not exist.
     UnknownMaterial(MaterialId),
+    /// More materials than a shading record can name
+    /// ([`crate::shading::surface::MAX_PACKED_MATERIALS`]).
+    TooManyMaterials(usize),
     /// A mesh index refers to a vertex that does not exist.
     IndexOutOfRange {
         /// The index.
@@ -88,6 +91,11 @@ impl core::fmt::Display for SceneError {
                 "material `{name}` refers to {kind} {id}, which does not exist"
             ),
             Self::UnknownMaterial(id) => write!(f, "material {id} does not exist"),
+            Self::TooManyMaterials(count) => write!(
+                f,
+                "{count} materials: a scene holds at most {}",
+                crate::shading::surface::MAX_PACKED_MATERIALS
+            ),
             Self::IndexOutOfRange { index, vertices } => {
                 write!(f, "vertex index {index} out of range ({vertices} vertices)")
             }
@@ -120,8 +128,6 @@ pub struct Scene {
     /// Triangle vertices (non-degenerate ones only), in a vector or in the
     /// BVH's 8-wide tree ([`triangle_store`]).
     triangles: TriangleStore,
-    /// Material of each triangle.
-    triangle_material: Vec<MaterialId>,
     /// Texture coordinates of the triangles whose vertices have non-zero
     /// ones (the others' are zero).
     uvs: SparseAttribute<[Vec2; 3]>,
@@ -219,12 +225,14 @@ impl Scene {
 
     /// Every triangle's unit geometric normal, in order.
     pub fn normals(&self) -> impl Iterator<Item = Vec3> + '_ {
-        (0..self.triangle_material.len()).filter_map(|index| self.normal(index))
+        (0..self.packed_surfaces.len()).filter_map(|index| self.normal(index))
     }
 
-    /// triangle_material
-    pub fn triangle_material(&self) -> &[MaterialId] {
-        &self.triangle_material
+    /// The material of triangle `index` (kept in its shading record,
+    /// [`PackedSurfaces::material`]).
+    #[inline]
+    pub fn material_of(&self, index: usize) -> Option<MaterialId> {
+        self.packed_surfaces.material(index)
     }
 
     /// The texture coordinates of triangle `index`'s vertices; `None` when
@@ -430,7 +438,7 @@ impl Scene {
     #[inline]
     pub fn hit_material(&self, triangle: u32, instance: u32) -> Option<MaterialId> {
         if instance == NO_INSTANCE {
-            return self.triangle_material.get(triangle as usize).copied();
+            return self.packed_surfaces.material(triangle as usize);
         }
         self.instances.as_ref()?.material(triangle, instance)
     }
@@ -470,8 +478,7 @@ impl Scene {
 
     /// The shading record of triangle `index`.
     pub fn surface(&self, index: usize) -> Option<Surface> {
-        let material = *self.triangle_material.get(index)?;
-        self.packed_surfaces.unpack(index, material)
+        self.packed_surfaces.unpack(index)
     }
 
     /// emitters
@@ -508,7 +515,6 @@ impl Scene {
         validate_surface_records(
             &self.packed_surfaces,
             &self.triangles(),
-            &self.triangle_material,
             &self.materials,
             &self.lights,
         )?;
@@ -555,11 +561,7 @@ impl Scene {
     /// ([`Instances::memory_bytes`]); the light set is counted per light
     /// ([`LIGHT_BYTES`]).
     pub fn memory_bytes(&self) -> usize {
-        fn vec_bytes<T>(v: &Vec<T>) -> usize {
-            v.capacity() * size_of::<T>()
-        }
         let geometry = self.triangles.memory_bytes()
-            + vec_bytes(&self.triangle_material)
             + self.uvs.memory_bytes()
             + self.vertex_normals.memory_bytes()
             + self.packed_surfaces.memory_bytes();
@@ -602,30 +604,38 @@ impl Scene {
 }
 
 /// Checks the packed records against their sources: one record per
-/// triangle, each equal to [`Surface::new`] of its triangle (the normal as
-/// [`SceneBuilder::build`] computes it) with the light set's selection
+/// triangle, each naming a material of the scene and equal to
+/// [`Surface::new`] of its triangle (the normal as [`SceneBuilder::build`]
+/// computes it) and that material, with the light set's selection
 /// probability.
 pub(crate) fn validate_surface_records(
     surfaces: &PackedSurfaces,
     triangles: &[[Vec3; 3]],
-    triangle_material: &[MaterialId],
     materials: &[Material],
     lights: &LightSet,
 ) -> Result<(), String> {
-    if surfaces.len() != triangles.len() || triangle_material.len() != triangles.len() {
+    if surfaces.len() != triangles.len() {
         return Err(format!(
-            "{} surface records and {} materials for {} triangles",
+            "{} surface records for {} triangles",
             surfaces.len(),
-            triangle_material.len(),
             triangles.len()
         ));
     }
-    for (index, (vertices, &id)) in triangles.iter().zip(triangle_material).enumerate() {
-        let expected = materials.get(id.index()).map(|m| Surface {
-            light_pmf: lights.pmf_of_triangle(index as u32),
-            ..Surface::new(geometric_normal(vertices), triangle_area(vertices), id, m)
+    for (index, vertices) in triangles.iter().enumerate() {
+        let record = surfaces.unpack(index);
+        let expected = record.and_then(|r| {
+            let m = materials.get(r.material.index())?;
+            Some(Surface {
+                light_pmf: lights.pmf_of_triangle(index as u32),
+                ..Surface::new(
+                    geometric_normal(vertices),
+                    triangle_area(vertices),
+                    r.material,
+                    m,
+                )
+            })
         });
-        if expected.is_none() || expected != surfaces.unpack(index, id) {
+        if expected.is_none() || expected != record {
             return Err(format!(
                 "surface record {index} does not match its triangle"
             ));
@@ -1327,6 +1337,9 @@ impl SceneBuilder {
         if self.triangles.is_empty() && instances.is_none() {
             return Err(SceneError::Empty);
         }
+        if self.materials.len() > crate::shading::surface::MAX_PACKED_MATERIALS {
+            return Err(SceneError::TooManyMaterials(self.materials.len()));
+        }
         if let Some(&bad) = self
             .triangle_material
             .iter()
@@ -1422,6 +1435,8 @@ impl SceneBuilder {
             })
             .collect();
         drop(reader);
+        // The records hold the materials from here on.
+        drop(std::mem::take(&mut self.triangle_material));
         let mut lights = LightSet::new(triangles.len(), candidates, &self.spectra);
         let mut directional = self.directional_lights;
         for light in &mut directional {
@@ -1470,7 +1485,6 @@ impl SceneBuilder {
             materials: self.materials,
             fluorophores: self.fluorophores,
             triangles,
-            triangle_material: self.triangle_material,
             uvs: self.uvs,
             vertex_normals: self.vertex_normals,
             camera,
@@ -1491,6 +1505,7 @@ impl SceneBuilder {
 #[cfg(test)]
 mod tests {
     use super::builtin::cornell_box;
+    use crate::shading::surface::{PackedSurfaces, Surface};
     use spectral_core::SpectralRange;
 
     #[test]
@@ -1584,7 +1599,23 @@ mod tests {
         stale.emitters = scene.bvh.subset(&[0, 1]);
         assert!(stale.validate_surfaces().is_err());
         let mut stale = cornell_box(SpectralRange::VISIBLE)?;
-        stale.triangle_material.swap(0, 8);
+        stale.packed_surfaces = PackedSurfaces::new(
+            &(0..stale.triangle_count())
+                .filter_map(|index| {
+                    let record = stale.surface(index)?;
+                    // Triangles 0 and 8 exchange their materials.
+                    let other = stale.material_of(if index == 0 { 8 } else { 0 })?;
+                    Some(if index == 0 || index == 8 {
+                        Surface {
+                            material: other,
+                            ..record
+                        }
+                    } else {
+                        record
+                    })
+                })
+                .collect::<Vec<_>>(),
+        );
         assert!(stale.validate_surfaces().is_err());
         let mut stale = cornell_box(SpectralRange::VISIBLE)?;
         stale.uvs.push_unnamed([glam::Vec2::ZERO; 3]);

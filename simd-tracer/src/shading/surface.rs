@@ -109,18 +109,26 @@ pub struct SurfacePacket {
 }
 
 /// The shading records as eight 32-bit words each, in the order of
-/// [`SurfacePacket`]'s fields: normal x, y, z, emission, the sides (bit 31,
-/// the sign bit that lane masks read: two-sided emission; bit 0: front-only
-/// scattering), light-selection probability, area, Lambert
-/// albedo (ids as their integer bits). The material is not packed: packets
-/// read it from [`crate::scene::Scene::triangle_material`].
+/// [`SurfacePacket`]'s fields: normal x, y, z, emission, the sides and the
+/// material (bit 31, the sign bit that lane masks read: two-sided emission;
+/// bit 0: front-only scattering; bits 1–30: the material,
+/// [`MAX_PACKED_MATERIALS`]), light-selection probability, area, Lambert
+/// albedo (ids as their integer bits). The records are the scene's only
+/// per-triangle store of the material ([`PackedSurfaces::material`]).
 #[derive(Debug, Clone, Default)]
 pub struct PackedSurfaces(Vec<u32x8>);
 
+/// The word of a packed record holding the sides and the material.
+const SIDES_WORD: usize = 4;
 /// The word of a packed record holding [`Surface::light_pmf`].
 const LIGHT_PMF_WORD: usize = 5;
 
-/// The sides word of a packed record ([`PackedSurfaces`]).
+/// The materials a packed record can name: the 30 bits between the two
+/// side flags, all ones kept for [`MaterialId::NONE`].
+pub const MAX_PACKED_MATERIALS: usize =
+    (SideFlags::MATERIAL_MASK >> SideFlags::MATERIAL_SHIFT) as usize;
+
+/// The sides-and-material word of a packed record ([`PackedSurfaces`]).
 pub(crate) struct SideFlags;
 
 impl SideFlags {
@@ -128,6 +136,31 @@ impl SideFlags {
     const TWO_SIDED: u32 = 1 << 31;
     /// Front-only scattering.
     const FRONT_ONLY: u32 = 1;
+    /// Where the material's index starts.
+    const MATERIAL_SHIFT: u32 = 1;
+    /// The material's bits (1–30).
+    const MATERIAL_MASK: u32 = !(Self::TWO_SIDED | Self::FRONT_ONLY);
+
+    /// The material's bits of a record ([`MaterialId::NONE`] and indices
+    /// from [`MAX_PACKED_MATERIALS`] on as all ones; the scene refuses that
+    /// many materials).
+    fn pack_material(material: MaterialId) -> u32 {
+        debug_assert!(material.is_none() || material.index() < MAX_PACKED_MATERIALS);
+        (material.0 << Self::MATERIAL_SHIFT) & Self::MATERIAL_MASK
+            | if material.index() >= MAX_PACKED_MATERIALS {
+                Self::MATERIAL_MASK
+            } else {
+                0
+            }
+    }
+
+    /// The material of a record's word.
+    fn material(word: u32) -> MaterialId {
+        match word & Self::MATERIAL_MASK {
+            Self::MATERIAL_MASK => MaterialId::NONE,
+            bits => MaterialId(bits >> Self::MATERIAL_SHIFT),
+        }
+    }
 
     /// The word of a record.
     pub(crate) fn pack(surface: &Surface) -> u32 {
@@ -141,7 +174,7 @@ impl SideFlags {
         } else {
             0
         };
-        two_sided | front_only
+        two_sided | front_only | Self::pack_material(surface.material)
     }
 
     /// The lanes with two-sided emission and the lanes with front-only
@@ -186,7 +219,7 @@ impl PackedSurfaces {
             surface.normal.y.to_bits(),
             surface.normal.z.to_bits(),
             surface.emission.0,
-            SideFlags::pack(surface),
+            SideFlags::pack(surface),    // SIDES_WORD
             surface.light_pmf.to_bits(), // LIGHT_PMF_WORD
             surface.area.to_bits(),
             surface.lambert_albedo.0,
@@ -203,14 +236,13 @@ impl PackedSurfaces {
         self.0.is_empty()
     }
 
-    /// The record of triangle `index`, whose material (not packed) is
-    /// `material`: the packed words bit for bit.
-    pub fn unpack(&self, index: usize, material: MaterialId) -> Option<Surface> {
+    /// The record of triangle `index`: the packed words bit for bit.
+    pub fn unpack(&self, index: usize) -> Option<Surface> {
         let [x, y, z, emission, sides, light_pmf, area, lambert_albedo] =
             self.0.get(index)?.to_array();
         Some(Surface {
             normal: Vec3::new(f32::from_bits(x), f32::from_bits(y), f32::from_bits(z)),
-            material,
+            material: SideFlags::material(sides),
             emission: SpectrumId(emission),
             two_sided: sides & SideFlags::TWO_SIDED != 0,
             front_only: sides & SideFlags::FRONT_ONLY != 0,
@@ -229,6 +261,14 @@ impl PackedSurfaces {
             f32::from_bits(words[1]),
             f32::from_bits(words[2]),
         ))
+    }
+
+    /// The material of record `index`.
+    #[inline]
+    pub fn material(&self, index: usize) -> Option<MaterialId> {
+        self.0
+            .get(index)
+            .map(|words| SideFlags::material(words.to_array()[SIDES_WORD]))
     }
 
     /// The area of record `index`.
@@ -461,7 +501,7 @@ mod tests {
             assert_eq!(Some(surface.normal), scene.normal(index));
             assert_eq!(surface.area, triangle_area(&scene.triangles()[index]));
             assert_eq!(scene.area(index), surface.area);
-            assert_eq!(surface.material, scene.triangle_material()[index]);
+            assert_eq!(Some(surface.material), scene.material_of(index));
             assert_eq!(
                 surface.light_pmf,
                 scene.lights().pmf_of_triangle(index as u32)
@@ -472,19 +512,18 @@ mod tests {
         // The emitter subset: triangles 0, 1 and 4; a stale one is caught.
         assert_eq!(scene.emitters(), &scene.bvh().subset(&[0, 1, 4]));
 
-        // Each kind of corruption is caught (the material is not packed:
-        // a record with another one is the triangle's material changed).
-        let check = |surfaces: &[Surface], materials: &[MaterialId]| {
+        // Each kind of corruption is caught (a record with another material
+        // whose derived fields were not remade among them).
+        let check = |surfaces: &[Surface]| {
             crate::scene::validate_surface_records(
                 &PackedSurfaces::new(surfaces),
                 &scene.triangles(),
-                materials,
                 scene.materials(),
                 scene.lights(),
             )
         };
-        check(&s, scene.triangle_material())?;
-        assert!(check(&s[..4], scene.triangle_material()).is_err());
+        check(&s)?;
+        assert!(check(&s[..4]).is_err());
         let corruptions: [fn(&mut Surface); 8] = [
             |r| r.normal = -r.normal,
             |r| r.material = MaterialId(3),
@@ -498,13 +537,40 @@ mod tests {
         for corrupt in corruptions {
             let mut bad = s.clone();
             corrupt(&mut bad[0]);
-            let materials: Vec<MaterialId> = bad.iter().map(|r| r.material).collect();
-            assert!(check(&bad, &materials).is_err());
+            assert!(check(&bad).is_err());
             // The packed words round-trip bit for bit.
             let packed = PackedSurfaces::new(&bad);
-            assert_eq!(packed.unpack(0, bad[0].material), Some(bad[0]));
+            assert_eq!(packed.unpack(0), Some(bad[0]));
         }
         Ok(())
+    }
+
+    /// The sides word keeps both flags and the material apart: every flag
+    /// pair with the first, a middle and the last material a record can
+    /// name, and none; the lane masks read only their flags.
+    #[test]
+    fn the_sides_word_round_trips_flags_and_material() {
+        let last = MaterialId((MAX_PACKED_MATERIALS - 1) as u32);
+        for material in [MaterialId(0), MaterialId(12_345), last, MaterialId::NONE] {
+            for (two_sided, front_only) in
+                [(false, false), (true, false), (false, true), (true, true)]
+            {
+                let surface = Surface {
+                    material,
+                    two_sided,
+                    front_only,
+                    ..Surface::NONE
+                };
+                let word = SideFlags::pack(&surface);
+                assert_eq!(SideFlags::material(word), material);
+                let (sides, front) = SideFlags::unpack(u32x8::splat(word));
+                assert_eq!(sides == LaneMask::ALL, two_sided, "{word:#x}");
+                assert_eq!(front == LaneMask::ALL, front_only, "{word:#x}");
+                let packed = PackedSurfaces::new(&[surface]);
+                assert_eq!(packed.unpack(0), Some(surface));
+                assert_eq!(packed.material(0), Some(material));
+            }
+        }
     }
 
     /// The packet's records, masks and pdfs equal the scalar code's, lane by
