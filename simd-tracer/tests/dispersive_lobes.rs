@@ -10,6 +10,7 @@
 //!   refraction does not exist).
 
 use glam::{Vec2, Vec3};
+use simd_tracer::sampling::rng::Rng;
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::shading::material::{Bsdf, LaneSpectrum, Material, ShadingPoint, SpectralRef};
@@ -77,21 +78,10 @@ fn value_at(scene: &Scene, s: &LaneSpectrum, lambda_nm: f32) -> f64 {
     f64::from(s.constant) + f64::from(s.scale) * x
 }
 
-/// xorshift64*.
-struct Rng(u64);
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32) / (1u64 << 24) as f32
-    }
-}
-
 /// A direction above `Vec3::Z` with `cos θ ≥ 0.01`.
 fn above(rng: &mut Rng) -> Vec3 {
-    let z = 0.01 + 0.99 * rng.f();
-    let phi = std::f32::consts::TAU * rng.f();
+    let z = 0.01 + 0.99 * rng.next_f32();
+    let phi = std::f32::consts::TAU * rng.next_f32();
     let r = (1.0 - z * z).max(0.0).sqrt();
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
@@ -100,10 +90,10 @@ fn above(rng: &mut Rng) -> Vec3 {
 fn samples_that_need_no_wavelength_are_the_same_at_every_wavelength() -> TestResult {
     let (scene, smooth, rough, plain) = fixture()?;
     let tables = scene.material_tables();
-    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut rng = Rng::new(0x9e37_79b9, 11);
     let (mut free, mut bound, mut bent) = (0, 0, 0);
     for _ in 0..20_000 {
-        let (wo, front, u_lobe) = (above(&mut rng), rng.f() < 0.5, rng.f());
+        let (wo, front, u_lobe) = (above(&mut rng), rng.next_f32() < 0.5, rng.next_f32());
         let fourier = point(front, None);
         let fourier_sample = smooth.sample(&tables, &fourier, wo, u_lobe, 0.5, 0.5);
         let depends = smooth.direction_depends_on_wavelength(&tables, &fourier, wo, u_lobe);
