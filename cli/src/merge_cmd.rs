@@ -195,6 +195,7 @@ pub fn run(args: &MergeArgs) -> Result<MergeSummary, CliError> {
         spectral_exr: args.spectral_exr.clone(),
         spectral_step_nm: args.spectral_step_nm,
         coefficients_exr: args.coefficients_exr.clone(),
+        keep_coefficients: false,
         exposure: Exposure {
             stops: args.exposure,
         },

@@ -653,13 +653,13 @@ fn spectral_wavelengths(range: &SpectralRange, step_nm: f64) -> Vec<f64> {
 }
 
 /// Predicts the peak memory of rendering `settings` with `args` into
-/// `outputs`, for a transport whose pixel takes `film_pixel_bytes` and whose
+/// `output`, for a transport whose pixel takes `film_pixel_bytes` and whose
 /// tables take `transport_bytes`, over a scene of `scene_bytes` with
 /// `spectral_wavelengths` channels in the spectral EXR.
 pub fn predict_memory(
     args: &RenderArgs,
     settings: &RenderSettings,
-    outputs: &[PathBuf],
+    output: &OutputOptions,
     film_pixel_bytes: u64,
     transport_bytes: u64,
     scene_bytes: u64,
@@ -672,9 +672,8 @@ pub fn predict_memory(
     let coefficients = args.coeff_count() as u64;
     let spectral_buffer =
         args.transport_kind() == TransportKind::Fourier && args.buffer == BufferKind::Spectral;
-    // Resolved only for the outputs that read them (`PassJob::xyz_only`).
-    let spectral_outputs = args.spectral_exr.is_some() || args.coefficients_exr.is_some();
-    let planes = if spectral_buffer && spectral_outputs {
+    // Resolved only when something reads them (`PassJob::xyz_only`).
+    let planes = if spectral_buffer && output.reads_coefficients() {
         per_pixel(coefficients * F32_BYTES)
     } else {
         0
@@ -700,7 +699,7 @@ pub fn predict_memory(
             .saturating_add(pixels_in_flight.saturating_mul(bytes_per_pixel * EXR_BLOCK_COPIES))
     };
     let mut writer = 0;
-    for path in outputs {
+    for path in &output.outputs {
         let bytes = match output_format(path) {
             Some(OutputFormat::Png) => per_pixel(PNG_BYTES_PER_PIXEL * PNG_COPIES),
             Some(OutputFormat::Exr) => exr(exr_channels),
@@ -710,10 +709,10 @@ pub fn predict_memory(
         writer = writer.max(bytes);
     }
     if spectral_buffer {
-        if args.coefficients_exr.is_some() {
+        if output.coefficients_exr.is_some() {
             writer = writer.max(exr(coefficients));
         }
-        if args.spectral_exr.is_some() {
+        if output.spectral_exr.is_some() {
             // The radiance at every wavelength, then its channel planes.
             let radiance = per_pixel(spectral_wavelengths * F32_BYTES);
             writer =
@@ -1375,6 +1374,10 @@ pub struct OutputOptions {
     pub spectral_step_nm: f64,
     /// The coefficient EXR, if asked for.
     pub coefficients_exr: Option<PathBuf>,
+    /// The caller reads the result's coefficient planes itself (Python's
+    /// `coefficients=True`); otherwise they are made only for the spectral
+    /// and coefficient EXRs.
+    pub keep_coefficients: bool,
     /// PNG exposure.
     pub exposure: Exposure,
     /// PNG tone mapping.
@@ -1395,6 +1398,7 @@ impl OutputOptions {
             spectral_exr: args.spectral_exr.clone(),
             spectral_step_nm: args.spectral_step_nm,
             coefficients_exr: args.coefficients_exr.clone(),
+            keep_coefficients: false,
             exposure: Exposure {
                 stops: args.exposure,
             },
@@ -1402,10 +1406,10 @@ impl OutputOptions {
         }
     }
 
-    /// Whether a spectral or coefficient EXR is among the outputs (the only
-    /// ones that read the coefficient planes).
-    pub fn writes_spectra(&self) -> bool {
-        self.spectral_exr.is_some() || self.coefficients_exr.is_some()
+    /// Whether anything reads the coefficient planes: a spectral or
+    /// coefficient EXR, or the caller ([`OutputOptions::keep_coefficients`]).
+    pub fn reads_coefficients(&self) -> bool {
+        self.keep_coefficients || self.spectral_exr.is_some() || self.coefficients_exr.is_some()
     }
 
     /// Whether a partial film is among the outputs.
@@ -1869,7 +1873,7 @@ pub fn render(
         let prediction = predict_memory(
             args,
             &settings,
-            &output.outputs,
+            output,
             film_pixel_bytes,
             transport_bytes,
             scene_bytes,
@@ -1888,7 +1892,7 @@ pub fn render(
             first_pass: parts.job_first_pass,
             resume: parts.resume.as_ref().map(|part| &part.state),
             keep_state: output.keeps_state(),
-            xyz_only: !output.writes_spectra(),
+            xyz_only: !output.reads_coefficients(),
         },
         coefficient_note,
     };

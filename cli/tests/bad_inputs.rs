@@ -10,7 +10,7 @@ mod common;
 use assert_cmd::Command;
 use clap::Parser;
 use common::{TestResult, entries};
-use fspec_cli::render_cmd::{RenderArgs, check_memory, predict_memory};
+use fspec_cli::render_cmd::{OutputOptions, RenderArgs, check_memory, predict_memory};
 use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::RenderSettings;
@@ -424,19 +424,20 @@ fn memory_prediction_counts_film_outputs_and_scene() -> TestResult {
     let (width, height) = (1000, 500);
     let pixels = u64::from(width) * u64::from(height);
     let s = settings(width, height);
-    let png = [PathBuf::from("a.png")];
     let plain = args(&["--out", "a.png"])?;
     let p = predict_memory(
         &plain,
         &s,
-        &png,
+        &OutputOptions::of(&plain),
         FILM_PIXEL_BYTES,
         TRANSPORT_BYTES,
         SCENE_BYTES,
         WAVELENGTHS,
     );
-    // Film + XYZ (3 f64) + 12 coefficient planes (f32).
-    let resolved = pixels * (24 + 12 * 4);
+    // Film + XYZ (3 f64); the 12 coefficient planes (f32) only where
+    // something reads them.
+    let resolved = pixels * 24;
+    let planes = pixels * 12 * 4;
     assert_eq!(
         p.render_bytes,
         pixels * FILM_PIXEL_BYTES + TRANSPORT_BYTES + resolved
@@ -454,29 +455,43 @@ fn memory_prediction_counts_film_outputs_and_scene() -> TestResult {
     let q = predict_memory(
         &spectral,
         &s,
-        &png,
+        &OutputOptions::of(&spectral),
         FILM_PIXEL_BYTES,
         TRANSPORT_BYTES,
         SCENE_BYTES,
         WAVELENGTHS,
     );
     assert!(
-        q.output_bytes >= resolved + 2 * pixels * WAVELENGTHS * 4,
+        q.output_bytes >= resolved + planes + 2 * pixels * WAVELENGTHS * 4,
         "{q:?}"
     );
     assert!(q.output_bytes > q.render_bytes, "{q:?}");
-    assert_eq!(q.render_bytes, p.render_bytes);
+    assert_eq!(q.render_bytes, p.render_bytes + planes);
     let coefficients = args(&["--out", "a.png", "--coefficients-exr", "c.exr"])?;
     let r = predict_memory(
         &coefficients,
         &s,
-        &png,
+        &OutputOptions::of(&coefficients),
         FILM_PIXEL_BYTES,
         TRANSPORT_BYTES,
         SCENE_BYTES,
         WAVELENGTHS,
     );
-    assert!(r.output_bytes >= resolved + pixels * 12 * 4, "{r:?}");
+    assert!(r.output_bytes >= resolved + 2 * planes, "{r:?}");
+    // A caller that reads the planes itself (Python's `coefficients=True`).
+    let kept = predict_memory(
+        &plain,
+        &s,
+        &OutputOptions {
+            keep_coefficients: true,
+            ..OutputOptions::of(&plain)
+        },
+        FILM_PIXEL_BYTES,
+        TRANSPORT_BYTES,
+        SCENE_BYTES,
+        WAVELENGTHS,
+    );
+    assert_eq!(kept.render_bytes, p.render_bytes + planes);
 
     // The refusal names the size and every part; the same render passes a
     // larger limit.
@@ -498,7 +513,15 @@ fn memory_prediction_counts_film_outputs_and_scene() -> TestResult {
     check_memory(&q, &s, q.peak_bytes())?;
     // Sampled transport: no coefficient planes.
     let sampled = args(&["--transport", "sampled", "--out", "a.png"])?;
-    let t = predict_memory(&sampled, &s, &png, 32, 0, 0, WAVELENGTHS);
+    let t = predict_memory(
+        &sampled,
+        &s,
+        &OutputOptions::of(&sampled),
+        32,
+        0,
+        0,
+        WAVELENGTHS,
+    );
     assert_eq!(t.render_bytes, pixels * (32 + 24));
     Ok(())
 }
@@ -555,7 +578,7 @@ fn spectral_outputs_can_tip_a_render_over_the_memory_limit() -> TestResult {
     // checked directly instead).
     let plain = args(&common)?;
     let s = settings(side.parse()?, side.parse()?);
-    let film = predict_memory(&plain, &s, &[PathBuf::from("a.png")], 64, 0, 0, 941);
+    let film = predict_memory(&plain, &s, &OutputOptions::of(&plain), 64, 0, 0, 941);
     assert!(film.peak_bytes() < limit, "{film:?} vs {limit}");
     Ok(())
 }

@@ -63,14 +63,16 @@ impl RenderObserver for PythonObserver {
 }
 
 /// The outputs of a render from Python: nothing is written, so only the
-/// image and coefficient planes count in the memory prediction.
-fn no_files() -> OutputOptions {
+/// image and (when `coefficients`, which makes them) the coefficient planes
+/// count in the memory prediction.
+fn no_files(coefficients: bool) -> OutputOptions {
     OutputOptions {
         outputs: Vec::new(),
         exr_xyz: false,
         spectral_exr: None,
         spectral_step_nm: 10.0,
         coefficients_exr: None,
+        keep_coefficients: coefficients,
         exposure: Exposure { stops: 0.0 },
         tone: Tone::Clamp,
     }
@@ -168,7 +170,7 @@ fn render<'py>(
             ));
         }
         let observer = PythonObserver::default();
-        let output = no_files();
+        let output = no_files(coefficients);
         let frame = py.detach(|| {
             guarded(|| {
                 render_cmd::render(&args, &output, &observer)
