@@ -187,7 +187,15 @@ def test_ctrl_c_stops_a_render_with_keyboard_interrupt():
         "except KeyboardInterrupt:\n"
         "    print('interrupted', flush=True)\n"
     )
-    process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    # The child starts with SIGINT at its default, whatever this process
+    # inherited (a shell's background job ignores it, and Python then keeps
+    # it ignored), so that it gets Python's KeyboardInterrupt handler.
+    process = subprocess.Popen(
+        [sys.executable, "-c", script],
+        stdout=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     assert process.stdout.readline().strip() == "started"
     time.sleep(1.0)
     signalled = time.monotonic()
