@@ -148,6 +148,19 @@ impl<'a> Shading<'a> {
         }
     }
 
+    /// The lanes of `lanes` whose material's directions may depend on
+    /// wavelength ([`Bsdf::disperses`]; which of them do is decided with
+    /// their lobe numbers, [`Self::wavelength_dependent`]).
+    pub(super) fn dispersive(&self, lanes: LaneMask) -> LaneMask {
+        let Self::General { bsdfs, .. } = self else {
+            return LaneMask::NONE;
+        };
+        lanes
+            .iter()
+            .filter(|&lane| bsdfs[lane].is_some_and(Bsdf::disperses))
+            .fold(LaneMask::NONE, LaneMask::with)
+    }
+
     /// The lanes of `lanes` whose sample with lobe numbers `u_lobe` takes a
     /// direction that depends on wavelength
     /// ([`Bsdf::direction_depends_on_wavelength`], from the same shading

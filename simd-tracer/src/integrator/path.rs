@@ -29,22 +29,6 @@ fn departure(direction: Vec3x8, normal: Vec3x8, above: Vec3x8, below: Vec3x8) ->
     Vec3x8::select(direction.dot(normal).simd_lt(f32x8::ZERO), below, above)
 }
 
-/// The lanes of `active` whose hit material's directions may depend on
-/// wavelength ([`crate::shading::material::Bsdf::disperses`]; which of them
-/// do is decided with their lobe numbers,
-/// [`crate::shading::material::Bsdf::direction_depends_on_wavelength`]).
-fn dispersive_lanes(scene: &Scene, hit: &PacketHit, active: LaneMask) -> LaneMask {
-    active
-        .iter()
-        .filter(|&lane| {
-            scene
-                .hit_material(hit.triangle[lane], hit.instance[lane])
-                .and_then(|m| scene.materials().get(m.index()))
-                .is_some_and(|m| m.bsdf.disperses())
-        })
-        .fold(LaneMask::NONE, LaneMask::with)
-}
-
 /// The largest `f32` below 1: a rescaled light number stays in [0, 1).
 const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
@@ -385,7 +369,7 @@ impl<S: Copy> PathState<S> {
                 front,
             );
             if T::SPLITS_AT_DISPERSION {
-                let dispersive = dispersive_lanes(scene, hit, active);
+                let dispersive = shading.dispersive(active);
                 if !dispersive.is_empty() {
                     let u_lobe = uniforms(rngs, dimensions.bsdf_lobe, active).to_array();
                     let lanes = SplitLanes {

@@ -146,12 +146,11 @@ impl SideFlags {
     /// many materials).
     fn pack_material(material: MaterialId) -> u32 {
         debug_assert!(material.is_none() || material.index() < MAX_PACKED_MATERIALS);
-        (material.0 << Self::MATERIAL_SHIFT) & Self::MATERIAL_MASK
-            | if material.index() >= MAX_PACKED_MATERIALS {
-                Self::MATERIAL_MASK
-            } else {
-                0
-            }
+        if material.index() >= MAX_PACKED_MATERIALS {
+            Self::MATERIAL_MASK
+        } else {
+            material.0 << Self::MATERIAL_SHIFT
+        }
     }
 
     /// The material of a record's word.
