@@ -56,6 +56,7 @@ use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
 use obvhs::bvh2::{Bvh2, DEFAULT_MAX_STACK_DEPTH};
 use obvhs::ray::RayHit;
+use rayon::prelude::*;
 use std::cell::RefCell;
 use std::time::Duration;
 use wide::f32x8;
@@ -193,7 +194,7 @@ impl InstanceBvh {
             ));
         }
         let mut placed = Vec::with_capacity(instances.len());
-        let mut boxes = Vec::with_capacity(instances.len());
+        let mut meshes_of = Vec::with_capacity(instances.len());
         for (k, instance) in instances.iter().enumerate() {
             let triangles = mesh_triangles.get(instance.mesh as usize).ok_or_else(|| {
                 format!(
@@ -212,9 +213,17 @@ impl InstanceBvh {
                 rows: rows_of(&inverse),
                 mesh: instance.mesh,
             });
-            // An instance of an empty mesh gets an empty box: never hit.
-            boxes.push(world_box(triangles, &instance.object_to_world).unwrap_or(Aabb::INVALID));
+            meshes_of.push(*triangles);
         }
+        // An instance of an empty mesh gets an empty box: never hit. Every
+        // box maps all of its mesh's vertices: in parallel.
+        let boxes: Vec<Aabb> = meshes_of
+            .par_iter()
+            .zip(instances)
+            .map(|(triangles, instance)| {
+                world_box(triangles, &instance.object_to_world).unwrap_or(Aabb::INVALID)
+            })
+            .collect();
         let top = if boxes.is_empty() {
             Bvh2::default()
         } else {
@@ -334,6 +343,18 @@ impl InstanceBvh {
                 self.placed.len()
             ));
         }
+        // Each instance's world box once (every vertex of its mesh mapped),
+        // in parallel, for both top levels' checks.
+        let world_boxes: Vec<Option<Aabb>> = self
+            .placed
+            .par_iter()
+            .zip(&self.object_to_world)
+            .map(|(placed, to_world)| {
+                mesh_triangles
+                    .get(placed.mesh as usize)
+                    .and_then(|triangles| world_box(triangles, to_world))
+            })
+            .collect();
         let mut seen = vec![false; self.placed.len()];
         let mut reached = vec![false; nodes.len()];
         let mut stack = vec![0usize];
@@ -365,9 +386,7 @@ impl InstanceBvh {
                         return Err(format!("instance {instance} sits in two leaves"));
                     }
                     *flag = true;
-                    let mesh = self.placed[instance].mesh as usize;
-                    let expected = world_box(mesh_triangles[mesh], &self.object_to_world[instance]);
-                    if let Some(aabb) = expected {
+                    if let Some(aabb) = world_boxes.get(instance).copied().flatten() {
                         if !contains(node.aabb(), &aabb) {
                             return Err(format!(
                                 "a top-level leaf does not bound instance {instance}"
@@ -394,11 +413,8 @@ impl InstanceBvh {
             return Err("the top-level tree is deeper than its traversal stack".to_owned());
         }
         self.top_wide.validate(&self.top, |slot| {
-            let (instance, placed) = self.at_slot(slot)?;
-            world_box(
-                mesh_triangles.get(placed.mesh as usize)?,
-                self.object_to_world.get(instance as usize)?,
-            )
+            let (instance, _) = self.at_slot(slot)?;
+            *world_boxes.get(instance as usize)?
         })
     }
 
