@@ -86,6 +86,27 @@ impl<const N: usize> Film for HybridFilm<N> {
         }
     }
 
+    fn scratch_len(&self) -> usize {
+        self.fourier.scratch_len() + SAMPLED_STATE_LEN
+    }
+
+    fn accumulate_scratch(&self, scratch: &mut [f32], sample: &Self::Sample, weight: f32) {
+        let (fourier, sampled) = scratch.split_at_mut(self.fourier.scratch_len());
+        self.fourier
+            .accumulate_scratch(fourier, &sample.fourier, weight);
+        for (acc, &v) in sampled.iter_mut().zip(&sample.sampled_xyz) {
+            *acc += weight * v;
+        }
+    }
+
+    fn add_scratch(&self, pixel: &mut Self::Pixel, scratch: &[f32]) {
+        let (fourier, sampled) = scratch.split_at(self.fourier.scratch_len().min(scratch.len()));
+        self.fourier.add_scratch(&mut pixel.fourier, fourier);
+        for (acc, &v) in pixel.sampled_xyz.iter_mut().zip(sampled) {
+            *acc += f64::from(v);
+        }
+    }
+
     fn add_pixel(&self, into: &mut Self::Pixel, from: &Self::Pixel) {
         self.fourier.add_pixel(&mut into.fourier, &from.fourier);
         for (acc, &v) in into.sampled_xyz.iter_mut().zip(&from.sampled_xyz) {

@@ -127,6 +127,22 @@ pub trait Film: Sync {
     /// Adds the sums and weight of `from` to `into` (a tile's splats into
     /// the film; nothing for films without a state).
     fn add_pixel(&self, _into: &mut Self::Pixel, _from: &Self::Pixel) {}
+    /// `f32` values per pixel of a pass's splat scratch (`0`: the film's
+    /// splats go straight into its `f64` pixels). A film whose weighted
+    /// sums are linear in the samples may gather one pass's splats over a
+    /// tile's apron in `f32` ([`Film::accumulate_scratch`]) and add them to
+    /// its pixels once per pass ([`Film::add_scratch`]): a pixel gets about
+    /// `(2M + 1)²` splats a pass (25 under the Gaussian), so the `f32` sums
+    /// round at about `25 ε` of their size before they reach the `f64`
+    /// sums, while the splat's inner loop runs on half the bytes.
+    fn scratch_len(&self) -> usize {
+        0
+    }
+    /// Adds `weight × sample` and `weight` to a pixel's pass scratch
+    /// ([`Film::scratch_len`] values).
+    fn accumulate_scratch(&self, _scratch: &mut [f32], _sample: &Self::Sample, _weight: f32) {}
+    /// Adds a pixel's pass scratch to its sums and weight sum.
+    fn add_scratch(&self, _pixel: &mut Self::Pixel, _scratch: &[f32]) {}
     /// The shared state for ending the current pass, from every pixel
     /// before any of them ends it (nothing unless passes interact).
     fn pass_shared<'a>(

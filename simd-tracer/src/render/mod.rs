@@ -28,6 +28,14 @@
 //!   own for the rest of its apron (the tile grown by `M` on every side,
 //!   less the tile), in the fixed order of its packets and lanes; the ring
 //!   is emptied before every pass;
+//! * films whose sums are linear in the samples (the Fourier and hybrid
+//!   films: [`Film::scratch_len`]) gather a pass's splats over the tile's
+//!   whole apron in an `f32` scratch first and add it to the tile's
+//!   pixels and ring once at the end of the pass, in apron order: a pixel
+//!   receives about `(2M + 1)²` splats a pass, which round in `f32` at
+//!   about that many `ε` of their size (bound tested), and the splat's
+//!   inner loop then runs on `4 (N + 1)` bytes a pixel instead of
+//!   `8 (N + 1)`. The order is still fixed by the pass, tile and lane;
 //! * after every pass the rings are added into the film's pixels: each
 //!   tile (in parallel) adds, pixel by pixel, the rings that cover it in
 //!   the fixed order of the tiles (row-major on the film's tile grid).
@@ -498,11 +506,12 @@ fn render_tile<T: Transport>(
         |(lx, ly): (u32, u32)| u64::from(y0 + ly) * u64::from(settings.width) + u64::from(x0 + lx);
     let window = settings.film_window();
     let keys = PassKeys::new(settings.sampler, settings.seed, pass);
-    let splat = Splat::new(settings, tile);
+    let splat = Splat::new(settings, tile, transport.film());
     if splat.is_some() {
         let film = transport.film();
         tile.ring.iter_mut().for_each(|p| *p = film.empty_pixel());
     }
+    let mut scratch = splat.as_ref().map_or_else(Vec::new, Splat::empty_scratch);
     for first in (0..count).step_by(GROUP) {
         let lanes: [[Option<(u32, u32)>; LANES]; GROUP] = core::array::from_fn(|g| {
             let mut lanes = [None; LANES];
@@ -561,7 +570,7 @@ fn render_tile<T: Transport>(
                     if finite.contains(lane) {
                         splat.add(
                             transport.film(),
-                            tile,
+                            (&mut *tile, &mut scratch),
                             (lx, ly),
                             (dx[lane], dy[lane]),
                             &samples[lane],
@@ -589,6 +598,9 @@ fn render_tile<T: Transport>(
                 }
             }
         }
+    }
+    if let Some(splat) = &splat {
+        splat.flush_scratch(transport.film(), tile, &scratch);
     }
 }
 
@@ -660,19 +672,52 @@ struct Splat<'a> {
     margin: u32,
     /// The tile's apron less the tile.
     ring: Ring,
+    /// `f32` values per apron pixel of the pass's scratch
+    /// ([`Film::scratch_len`]; 0: splats go straight into the pixels).
+    scratch_len: usize,
 }
 
 impl<'a> Splat<'a> {
-    /// The splat of `tile` when `settings` splat.
-    fn new<P>(settings: &'a RenderSettings, tile: &Tile<P>) -> Option<Self> {
+    /// The splat of `tile` into `film` when `settings` splat.
+    fn new<F: Film>(settings: &'a RenderSettings, tile: &Tile<F::Pixel>, film: &F) -> Option<Self> {
         (settings.film == FilmMode::Splat).then(|| {
             let margin = settings.filter.splat_margin_px();
             Self {
                 filter: &settings.filter,
                 margin,
                 ring: Ring::of(tile, margin),
+                scratch_len: film.scratch_len(),
             }
         })
+    }
+
+    /// The tile's apron: width and height, px.
+    fn apron(&self) -> (usize, usize) {
+        let margin = 2 * self.margin as usize;
+        (self.ring.width + margin, self.ring.height + margin)
+    }
+
+    /// A zeroed pass scratch over the apron (empty when the film has none).
+    fn empty_scratch(&self) -> Vec<f32> {
+        let (width, height) = self.apron();
+        vec![0.0; width * height * self.scratch_len]
+    }
+
+    /// Adds the pass's `scratch` to the tile's pixels and ring.
+    fn flush_scratch<F: Film>(&self, film: &F, tile: &mut Tile<F::Pixel>, scratch: &[f32]) {
+        if self.scratch_len == 0 {
+            return;
+        }
+        let (width, _) = self.apron();
+        for (index, values) in scratch.chunks_exact(self.scratch_len).enumerate() {
+            let pixel = match self.ring.place(index % width, index / width) {
+                Ok(own) => tile.pixels.get_mut(own),
+                Err(slot) => tile.ring.get_mut(slot),
+            };
+            if let Some(pixel) = pixel {
+                film.add_scratch(pixel, values);
+            }
+        }
     }
 
     /// Adds `sample`, traced at `offset` px from the centre of the tile's
@@ -682,7 +727,7 @@ impl<'a> Splat<'a> {
     fn add<F: Film>(
         &self,
         film: &F,
-        tile: &mut Tile<F::Pixel>,
+        (tile, scratch): (&mut Tile<F::Pixel>, &mut [f32]),
         (lx, ly): (u32, u32),
         (dx, dy): (f32, f32),
         sample: &F::Sample,
@@ -694,7 +739,7 @@ impl<'a> Splat<'a> {
         let mut spread = |rows: &[f32], columns: &[f32]| {
             self.spread(
                 film,
-                tile,
+                (&mut *tile, &mut *scratch),
                 (lx, ly),
                 (&rows[..reach], &columns[..reach]),
                 sample,
@@ -732,11 +777,32 @@ impl<'a> Splat<'a> {
     fn spread<F: Film>(
         &self,
         film: &F,
-        tile: &mut Tile<F::Pixel>,
+        (tile, scratch): (&mut Tile<F::Pixel>, &mut [f32]),
         (lx, ly): (u32, u32),
         (rows, columns): (&[f32], &[f32]),
         sample: &F::Sample,
     ) {
+        if self.scratch_len > 0 {
+            let (width, _) = self.apron();
+            let len = self.scratch_len;
+            for (j, &wy) in rows.iter().enumerate() {
+                if wy == 0.0 {
+                    continue;
+                }
+                let row = (ly as usize + j) * width + lx as usize;
+                for (i, &wx) in columns.iter().enumerate() {
+                    let w = wx * wy;
+                    if w == 0.0 {
+                        continue;
+                    }
+                    let at = (row + i) * len;
+                    if let Some(values) = scratch.get_mut(at..at + len) {
+                        film.accumulate_scratch(values, sample, w);
+                    }
+                }
+            }
+            return;
+        }
         for (j, &wy) in rows.iter().enumerate() {
             if wy == 0.0 {
                 continue;
