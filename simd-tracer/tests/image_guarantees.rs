@@ -98,7 +98,6 @@ fn transports(range: SpectralRange) -> TestResult<Vec<(String, Renderer)>> {
                 strategy: Hero,
                 observer: &Default::default(),
                 density: None,
-                children: true,
             })?,
         ),
         boxed(
@@ -110,7 +109,6 @@ fn transports(range: SpectralRange) -> TestResult<Vec<(String, Renderer)>> {
                 strategy: VisibleHero,
                 observer: &Default::default(),
                 density: None,
-                children: false,
             })?,
         ),
     ])

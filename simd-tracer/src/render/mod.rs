@@ -98,16 +98,14 @@ pub use film_state::FilmState;
 use crate::film::filter::{Filter, FilterError, MAX_SPLAT_MARGIN_PX};
 use crate::film::{Film, FilmMode};
 use crate::integrator::{
-    GROUP, GroupStart, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
-    trace_group_from,
+    GROUP, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
 };
 use crate::packet::RayPacket;
 use crate::sampling::sampler::{PIXEL_X, PIXEL_Y, PassKeys, PathSampler, SamplerKind};
 use crate::scene::Scene;
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
-use crate::transport::{FilmPixel, FilmSample, Transport};
-use glam::Vec3;
+use crate::transport::{FilmPixel, Transport};
 use rayon::prelude::*;
 use spectral_core::color::Xyz;
 use std::time::{Duration, Instant};
@@ -447,7 +445,7 @@ fn camera_packet<P>(
     let live = active.to_simd();
     let packet = RayPacket {
         origin: Vec3x8::splat(scene.camera().position()).to_array(),
-        direction: Vec3x8::select(live, direction, Vec3x8::splat(Vec3::Z)).to_array(),
+        direction: Vec3x8::select(live, direction, Vec3x8::splat(glam::Vec3::Z)).to_array(),
         t_max: live.select(f32x8::splat(f32::INFINITY), f32x8::ZERO),
         active,
     };
@@ -562,21 +560,9 @@ fn render_tile<T: Transport>(
             &mut wavelengths,
             &mut tile.rays,
         );
-        let mut group_samples: [[FilmSample<T>; LANES]; GROUP] =
-            core::array::from_fn(|g| transport.samples(&radiance[g], &wavelengths[g]));
-        if !state.children.is_empty() {
-            let parents = |packet: usize, lane: usize| pixels(&lanes[packet % GROUP])[lane % LANES];
-            trace_children(
-                &context,
-                state,
-                (&keys, &parents),
-                &mut group_samples,
-                &mut tile.rays,
-            );
-        }
         for g in 0..GROUP {
-            let samples = &group_samples[g];
-            let finite = transport.finite_lanes(&radiance[g], samples);
+            let samples = transport.samples(&radiance[g], &wavelengths[g]);
+            let finite = transport.finite_lanes(&radiance[g], &samples);
             if let Some(splat) = &splat {
                 let [dx, dy] = cameras[g].1.map(|o| o.to_array());
                 for (lane, slot) in lanes[g].iter().enumerate() {
@@ -616,97 +602,6 @@ fn render_tile<T: Transport>(
     if let Some(splat) = &splat {
         splat.flush_scratch(transport.film(), tile, &scratch);
     }
-}
-
-/// The high bit of a child's sampler key: no pixel's key has it (the
-/// padding lanes' keys do, with every other bit but the lane's set).
-const CHILD_KEY: u64 = 1 << 63;
-
-/// Traces the children the group's lanes spawned (`state.children`,
-/// [`crate::integrator::ChildPath`]) in groups of their own, one per
-/// first-segment depth, and adds each child's sample to its parent's in
-/// `samples`. A child's random numbers come from the stream of the key
-/// `CHILD_KEY | parent_pixel << 4 | slot` (a lane spawns once per pass
-/// and slot; `parents` gives the parent lane's pixel key).
-fn trace_children<T: Transport>(
-    context: &PathContext<'_, T>,
-    state: &mut GroupState<T::Spectra, GROUP>,
-    (keys, parents): (&PassKeys, &dyn Fn(usize, usize) -> u64),
-    samples: &mut [[FilmSample<T>; LANES]; GROUP],
-    counts: &mut RayCounts,
-) {
-    let transport = context.transport;
-    let mut children = core::mem::take(&mut state.children);
-    children.sort_by_key(|child| child.depth);
-    for same_depth in children.chunk_by(|a, b| a.depth == b.depth) {
-        for batch in same_depth.chunks(GROUP * LANES) {
-            let depth = batch.first().map_or(1, |child| child.depth);
-            let mut origins = [[Vec3::ZERO; LANES]; GROUP];
-            let mut directions = [[Vec3::Z; LANES]; GROUP];
-            let mut seeds = [[None; LANES]; GROUP];
-            let mut stream_keys: [[u64; LANES]; GROUP] =
-                [core::array::from_fn(|lane| u64::MAX - lane as u64); GROUP];
-            let mut active = [LaneMask::NONE; GROUP];
-            for (k, child) in batch.iter().enumerate() {
-                let (p, lane) = (k / LANES, k % LANES);
-                origins[p][lane] = child.origin;
-                directions[p][lane] = child.direction;
-                seeds[p][lane] = Some((child.lambda_nm, child.pdf_per_nm, child.value));
-                stream_keys[p][lane] =
-                    CHILD_KEY | parents(child.packet, child.lane) << 4 | child.slot as u64;
-                active[p] = active[p].with(lane);
-            }
-            let packets: [Option<(T::Wavelengths, T::Spectra)>; GROUP] =
-                core::array::from_fn(|p| transport.child_packet(&seeds[p]));
-            let mut wavelengths = Vec::with_capacity(GROUP);
-            let mut throughput = Vec::with_capacity(GROUP);
-            for (w, t) in packets.into_iter().flatten() {
-                wavelengths.push(w);
-                throughput.push(t);
-            }
-            let (Ok(mut wavelengths), Ok(throughput)) = (
-                <[T::Wavelengths; GROUP]>::try_from(wavelengths),
-                <[T::Spectra; GROUP]>::try_from(throughput),
-            ) else {
-                // A transport that spawns no children.
-                return;
-            };
-            let rays: [RayPacket; GROUP] = core::array::from_fn(|p| RayPacket {
-                origin: Vec3x8::from_lanes(&origins[p]).to_array(),
-                direction: Vec3x8::from_lanes(&directions[p]).to_array(),
-                t_max: f32x8::splat(f32::INFINITY),
-                active: active[p],
-            });
-            let mut rngs: [PathSampler; GROUP] =
-                core::array::from_fn(|p| keys.path_sampler(&stream_keys[p]));
-            let start = GroupStart {
-                depth,
-                throughput: Some(&throughput),
-            };
-            let radiance = trace_group_from(
-                context,
-                state,
-                &start,
-                &rays,
-                (&mut rngs, &mut wavelengths),
-                counts,
-            );
-            for (p, radiance) in radiance.iter().enumerate() {
-                let child_samples = transport.samples(radiance, &wavelengths[p]);
-                for lane in active[p].iter() {
-                    if let Some(child) = batch.get(p * LANES + lane)
-                        && let Some(parent) = samples
-                            .get_mut(child.packet)
-                            .and_then(|packet| packet.get_mut(child.lane))
-                    {
-                        transport.add_child_sample(parent, &child_samples[lane]);
-                    }
-                }
-            }
-        }
-    }
-    children.clear();
-    state.children = children;
 }
 
 /// A splatting tile's filter and margin (module docs).
