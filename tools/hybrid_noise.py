@@ -8,8 +8,9 @@
    per pixel of `fspec render` for the Fourier transport and the hybrid on
    `cornell` (nothing disperses) and on `prism`, and for the sampled
    transport (hero wavelengths and `--sampling lights`) and the hybrid
-   with C = 1, 4, 8 (its default `--sampling lights`) and with C = 4 and
-   hero wavelengths on `prism`; the renders of
+   with C = 1, 4, 8 (its default `--sampling lights`), with C = 4 and
+   hero wavelengths, and with C = 4 tracing every wavelength of a split
+   on its own path (`--dispersion-paths all`) on `prism`; the renders of
    each round are alternated and the median of three rounds is kept.
 2. Noise at equal time: every transport gets the CPU time of the hybrid
    (C = 4) at `--budget-spp` samples per pixel, converted to its own spp by
@@ -56,6 +57,7 @@ TRANSPORTS = {
     "hybrid C=4": ["--transport", "hybrid", "--wavelengths", "4"],
     "hybrid C=4 hero": ["--transport", "hybrid", "--wavelengths", "4", "--sampling", "hero"],
     "hybrid C=8": ["--transport", "hybrid", "--wavelengths", "8"],
+    "hybrid C=4 all": ["--transport", "hybrid", "--wavelengths", "4", "--dispersion-paths", "all"],
 }
 
 

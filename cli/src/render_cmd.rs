@@ -110,6 +110,22 @@ pub enum Sampling {
     Lights,
 }
 
+/// What a hybrid path does where its direction depends on wavelength (the
+/// refraction of smooth dispersive glass).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DispersionPaths {
+    /// pbrt's rule: the hero wavelength goes on alone, the secondaries are
+    /// terminated (what partial films written before this choice existed
+    /// were rendered with).
+    #[default]
+    Hero,
+    /// Every wavelength of the split goes on along its own direction, as a
+    /// path of its own: less colour noise in dispersed light, `C − 1` more
+    /// paths from every such refraction.
+    All,
+}
+
 /// How coefficients become colour.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -248,6 +264,11 @@ pub struct RenderArgs {
     /// hero otherwise].
     #[arg(long, value_enum)]
     pub sampling: Option<Sampling>,
+    /// Hybrid: where a path's direction depends on wavelength, trace every
+    /// wavelength of its split on its own path (all) or the hero alone
+    /// (hero) [default: HYBRID_DISPERSION_PATHS].
+    #[arg(long, value_enum)]
+    pub dispersion_paths: Option<DispersionPaths>,
     /// Conversion from coefficients to colour.
     #[arg(long, value_enum, default_value_t = ToColor::Zeroth)]
     pub to_color: ToColor,
@@ -850,6 +871,10 @@ pub enum TransportSpec {
         buffer: BufferKind,
         /// How the Fourier part's coefficients become colour.
         to_color: ToColor,
+        /// What a split path does where its direction depends on
+        /// wavelength (absent from older partial films: hero).
+        #[serde(default)]
+        paths: DispersionPaths,
     },
 }
 
@@ -916,6 +941,7 @@ impl TransportSpec {
                 sampling: args.sampling.unwrap_or(HYBRID_SAMPLING),
                 buffer: args.buffer,
                 to_color: args.to_color,
+                paths: args.dispersion_paths.unwrap_or(HYBRID_DISPERSION_PATHS),
             },
         }
     }
@@ -977,6 +1003,11 @@ const HYBRID_MIN_COEFFS: usize = 12;
 /// light comes from (`simd_tracer::transport::emission_density`; measured
 /// in docs/results.md, "Hybrid transport").
 pub const HYBRID_SAMPLING: Sampling = Sampling::Lights;
+
+/// What the hybrid does where a direction depends on wavelength unless
+/// `--dispersion-paths` says otherwise (`docs/results.md`, "Every
+/// wavelength of a split on its own path").
+pub const HYBRID_DISPERSION_PATHS: DispersionPaths = DispersionPaths::Hero;
 
 /// Wavelengths drawn where a hybrid path meets dispersion when
 /// `--wavelengths` is not given: 4, measured against 1 and 8 on the
@@ -1129,13 +1160,26 @@ fn cv<const C: usize, const N: usize, K: TransportTask>(
     task.run(&transport)
 }
 
-fn hybrid<const N: usize, const C: usize, K: TransportTask>(
-    basis: TransportBasis<'_>,
+/// The hybrid's choices besides its sizes (`TransportSpec::Hybrid`).
+#[derive(Debug, Clone, Copy)]
+struct HybridChoices {
     sampling: Sampling,
     buffer: BufferKind,
     to_color: ToColor,
+    paths: DispersionPaths,
+}
+
+fn hybrid<const N: usize, const C: usize, K: TransportTask>(
+    basis: TransportBasis<'_>,
+    choices: HybridChoices,
     task: K,
 ) -> Result<K::Output, CliError> {
+    let HybridChoices {
+        sampling,
+        buffer,
+        to_color,
+        paths,
+    } = choices;
     let transport = HybridTransport::<N, C>::new(&HybridSettings {
         range: basis.range,
         buffer: match buffer {
@@ -1146,6 +1190,7 @@ fn hybrid<const N: usize, const C: usize, K: TransportTask>(
         strategy: strategy(sampling),
         observer: basis.observer,
         density: density(sampling, &basis).as_ref(),
+        children: paths == DispersionPaths::All,
     })
     .map_err(range_error)?;
     task.run(&transport)
@@ -1219,17 +1264,26 @@ pub fn with_transport<K: TransportTask>(
             sampling,
             buffer,
             to_color,
-        } => match (coeffs, wavelengths) {
-            (12, 1) => hybrid::<12, 1, K>(basis, sampling, buffer, to_color, task),
-            (12, 4) => hybrid::<12, 4, K>(basis, sampling, buffer, to_color, task),
-            (12, 8) => hybrid::<12, 8, K>(basis, sampling, buffer, to_color, task),
-            (16, 4) => hybrid::<16, 4, K>(basis, sampling, buffer, to_color, task),
-            (24, 4) => hybrid::<24, 4, K>(basis, sampling, buffer, to_color, task),
-            (32, 4) => hybrid::<32, 4, K>(basis, sampling, buffer, to_color, task),
-            (n, c) => Err(CliError::input(format!(
-                "--transport hybrid with --coeffs {n} --wavelengths {c} is not supported (N in 12, 16, 24, 32 with C = 4; N = 12 with C in 1, 4, 8)"
-            ))),
-        },
+            paths,
+        } => {
+            let c = HybridChoices {
+                sampling,
+                buffer,
+                to_color,
+                paths,
+            };
+            match (coeffs, wavelengths) {
+                (12, 1) => hybrid::<12, 1, K>(basis, c, task),
+                (12, 4) => hybrid::<12, 4, K>(basis, c, task),
+                (12, 8) => hybrid::<12, 8, K>(basis, c, task),
+                (16, 4) => hybrid::<16, 4, K>(basis, c, task),
+                (24, 4) => hybrid::<24, 4, K>(basis, c, task),
+                (32, 4) => hybrid::<32, 4, K>(basis, c, task),
+                (n, c) => Err(CliError::input(format!(
+                    "--transport hybrid with --coeffs {n} --wavelengths {c} is not supported (N in 12, 16, 24, 32 with C = 4; N = 12 with C in 1, 4, 8)"
+                ))),
+            }
+        }
     }
 }
 
@@ -2059,6 +2113,7 @@ mod tests {
             sampling: Sampling::Hero,
             buffer: BufferKind::Rgb,
             to_color: ToColor::Series,
+            paths: DispersionPaths::All,
         };
         for (coeffs, wavelengths) in HYBRID_SIZES {
             assert!(

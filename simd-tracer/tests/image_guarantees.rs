@@ -98,6 +98,7 @@ fn transports(range: SpectralRange) -> TestResult<Vec<(String, Renderer)>> {
                 strategy: Hero,
                 observer: &Default::default(),
                 density: None,
+                children: true,
             })?,
         ),
         boxed(
@@ -109,6 +110,7 @@ fn transports(range: SpectralRange) -> TestResult<Vec<(String, Renderer)>> {
                 strategy: VisibleHero,
                 observer: &Default::default(),
                 density: None,
+                children: false,
             })?,
         ),
     ])

@@ -275,6 +275,7 @@ impl ViewSettings {
                 sampling: s,
                 buffer,
                 to_color,
+                paths,
             } => args.extend([
                 "--transport".into(),
                 "hybrid".into(),
@@ -288,6 +289,8 @@ impl ViewSettings {
                 name(&|| buffer.to_possible_value()),
                 "--to-color".into(),
                 name(&|| to_color.to_possible_value()),
+                "--dispersion-paths".into(),
+                name(&|| paths.to_possible_value()),
             ]),
         }
         if let Some(observer) = &self.observer {
@@ -477,6 +480,7 @@ pub fn default_transport() -> TransportSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render_cmd::DispersionPaths;
 
     fn settings() -> ViewSettings {
         ViewSettings {
@@ -520,6 +524,7 @@ mod tests {
                 sampling: Sampling::Lights,
                 buffer: BufferKind::Rgb,
                 to_color: ToColor::Series,
+                paths: DispersionPaths::All,
             },
         ] {
             let s = ViewSettings {

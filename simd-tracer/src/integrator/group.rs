@@ -4,7 +4,7 @@
 
 use super::compaction;
 use super::last_segment::{LAST_SEGMENT_EMITTERS, last_segment_hits};
-use super::path::{BounceLanes, NeeSample, PathState};
+use super::path::{BounceLanes, ChildPath, NeeSample, PathState};
 use super::{PathContext, RayCounts};
 use crate::ids::SpectrumId;
 use crate::packet::PacketHit;
@@ -22,9 +22,10 @@ use wide::f32x8;
 /// loses), although the group's path states (emission sums, throughput,
 /// light sample: about 3 KiB per packet at N = 12) then spill from the L1
 /// into the L2 cache. Measured by alternated renders and instruction counts;
-/// figures in `docs/performance.md`. They live on the render threads'
-/// stacks, which the renderer sizes for them
-/// (`render::RENDER_THREAD_STACK_BYTES`).
+/// figures in `docs/performance.md`. Their rays, hits and wavelengths live
+/// on the render threads' stacks, which the renderer sizes for them
+/// (`render::RENDER_THREAD_STACK_BYTES`); their [`GroupState`] on the heap,
+/// one per render thread.
 pub const GROUP: usize = 32;
 
 /// The per-packet path state of a group of `G` packets, kept from group to
@@ -33,6 +34,8 @@ pub const GROUP: usize = 32;
 pub struct GroupState<S, const G: usize> {
     pub(super) paths: [PathState<S>; G],
     pub(super) nee: [NeeSample<S>; G],
+    /// The children the last group's lanes spawned ([`ChildPath`]).
+    pub children: Vec<ChildPath>,
 }
 
 impl<S: Copy, const G: usize> GroupState<S, G> {
@@ -48,6 +51,7 @@ impl<S: Copy, const G: usize> GroupState<S, G> {
                 environment_uv: [[0.0; 2]; LANES],
                 through_bsdf: transport.zero(),
             }),
+            children: Vec::new(),
         }
     }
 }
@@ -92,19 +96,64 @@ pub fn trace_group<T: Transport, const G: usize>(
     wavelengths: &mut [T::Wavelengths; G],
     counts: &mut RayCounts,
 ) -> [T::Spectra; G] {
+    let start = GroupStart {
+        depth: 1,
+        throughput: None,
+    };
+    trace_group_from(
+        context,
+        state,
+        &start,
+        camera_rays,
+        (rngs, wavelengths),
+        counts,
+    )
+}
+
+/// Where a group's paths start: the depth of their first segment (1 for
+/// camera rays) and, for paths that start past a surface (children), their
+/// throughput (1 where `None`).
+#[derive(Debug, Clone, Copy)]
+pub struct GroupStart<'a, S, const G: usize> {
+    /// The depth of the first segment.
+    pub depth: u32,
+    /// The paths' throughput at their first ray.
+    pub throughput: Option<&'a [S; G]>,
+}
+
+/// [`trace_group`] of paths that start at `start` (children past the
+/// surface that spawned them, whose first rays are `rays`): the same
+/// bounces from `start.depth` on. The children spawned are left in
+/// `state.children` (cleared first).
+pub fn trace_group_from<T: Transport, const G: usize>(
+    context: &PathContext<'_, T>,
+    state: &mut GroupState<T::Spectra, G>,
+    start: &GroupStart<'_, T::Spectra, G>,
+    first_rays: &[RayPacket; G],
+    (rngs, wavelengths): (&mut [PathSampler; G], &mut [T::Wavelengths; G]),
+    counts: &mut RayCounts,
+) -> [T::Spectra; G] {
     let PathContext {
         transport,
         scene,
         settings,
     } = *context;
-    let GroupState { paths, nee } = state;
-    for (path, rays) in paths.iter_mut().zip(camera_rays) {
+    let GroupState {
+        paths,
+        nee,
+        children,
+    } = state;
+    children.clear();
+    for (p, (path, rays)) in paths.iter_mut().zip(first_rays).enumerate() {
         path.reset(transport, rays.active);
+        if let Some(throughput) = start.throughput {
+            path.throughput = throughput[p];
+        }
     }
-    let mut rays = *camera_rays;
+    let mut rays = *first_rays;
     let mut hits = rays.each_ref().map(PacketHit::misses);
     let mut shadows = rays;
-    let mut depth = 1u32;
+    let mut depth = start.depth;
     while paths.iter().any(|path| !path.active.is_empty()) {
         for (path, rays) in paths.iter().zip(&mut rays) {
             rays.active = path.active;
@@ -136,6 +185,7 @@ pub fn trace_group<T: Transport, const G: usize>(
                     nee: &mut nee[p],
                     rngs: &mut rngs[p],
                     wavelengths: &mut wavelengths[p],
+                    children: (p, &mut *children),
                 },
             );
             counts.shadow += shadows[p].active.count() as u64;

@@ -42,9 +42,10 @@ use crate::scene::Scene;
 mod emission;
 mod group;
 mod packet_shading;
-pub use group::{GROUP, GroupState, trace, trace_group};
+pub use group::{GROUP, GroupStart, GroupState, trace, trace_group, trace_group_from};
 mod last_segment;
 mod path;
+pub use path::ChildPath;
 
 /// What every step of a path reads and nothing changes: the transport, the
 /// scene and the integrator settings.

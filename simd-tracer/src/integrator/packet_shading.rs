@@ -206,6 +206,16 @@ impl<'a> Shading<'a> {
         }
     }
 
+    /// Gives lane `lane`'s shading point the hero wavelength `lambda_nm`
+    /// (a child's, whose direction is sampled at it).
+    pub(super) fn set_hero(&mut self, lane: usize, lambda_nm: f32) {
+        if let Self::General { points, .. } = self
+            && let Some(point) = points.get_mut(lane)
+        {
+            point.hero_nm = Some(lambda_nm);
+        }
+    }
+
     /// [`Bsdf::sample_packet`] for the lanes in `active`.
     pub(super) fn sample(
         &self,

@@ -140,6 +140,50 @@ impl OtherLights {
     }
 }
 
+/// A secondary wavelength of a lane that took a direction depending on
+/// wavelength, going on as a path of its own from the lane's surface
+/// (`transport/hybrid.rs`, "Children"): traced after its group, its
+/// sample added to its parent's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChildPath {
+    /// The parent's packet in its group and lane.
+    pub packet: usize,
+    /// The parent's lane.
+    pub lane: usize,
+    /// The wavelength's slot in the parent's wavelengths.
+    pub slot: usize,
+    /// The depth of the child's first segment.
+    pub depth: u32,
+    /// Where its first ray starts.
+    pub origin: Vec3,
+    /// Its first ray's direction.
+    pub direction: Vec3,
+    /// Its wavelength, nm.
+    pub lambda_nm: f32,
+    /// The density the wavelength was drawn with, per nm.
+    pub pdf_per_nm: f32,
+    /// Its throughput at its wavelength, past the surface.
+    pub value: f32,
+}
+
+/// The lanes of a bounce that spawn children, and what their samples need.
+struct Spawn<'a> {
+    lanes: LaneMask,
+    depth: u32,
+    geometry: SpawnGeometry,
+    uniforms: &'a SampleUniforms<'a>,
+}
+
+/// The surface frame of a bounce, as its sample saw it.
+struct SpawnGeometry {
+    normal: Vec3x8,
+    shading_normal: Vec3x8,
+    smooth: bool,
+    wo: Vec3x8,
+    origin: Vec3x8,
+    origin_below: Vec3x8,
+}
+
 /// One packet's share of its group's state in a bounce: its rays (made
 /// the next segment's), its shadow rays and light sample, its random
 /// streams and its wavelengths.
@@ -149,6 +193,8 @@ pub(super) struct BounceLanes<'a, S, W> {
     pub(super) nee: &'a mut NeeSample<S>,
     pub(super) rngs: &'a mut PathSampler,
     pub(super) wavelengths: &'a mut W,
+    /// The packet's index in its group and where its lanes' children go.
+    pub(super) children: (usize, &'a mut Vec<ChildPath>),
 }
 
 /// A packet's fluorescent events (`shading::material`'s `fluorescent.rs`).
@@ -255,6 +301,7 @@ impl<S: Copy> PathState<S> {
             nee,
             rngs,
             wavelengths,
+            children,
         } = lanes;
         shadow.active = LaneMask::NONE;
         if self.active.is_empty() {
@@ -507,7 +554,30 @@ impl<S: Copy> PathState<S> {
         active = active
             .and(sample.valid)
             .and(LaneMask::from_simd(sample.weight.simd_gt(f32x8::ZERO)));
-        for lane in sample.terminate_secondary.and(active).iter() {
+        let mut terminating = sample.terminate_secondary.and(active);
+        if T::SPLITS_AT_DISPERSION && !terminating.is_empty() && transport.spawns_children(scene) {
+            let spawning = terminating.and_not(self.fluorescence.shifted);
+            let mut shading = shading;
+            let spawn = Spawn {
+                lanes: spawning,
+                depth,
+                geometry: SpawnGeometry {
+                    normal,
+                    shading_normal,
+                    smooth,
+                    wo,
+                    origin,
+                    origin_below,
+                },
+                uniforms: &uniforms,
+            };
+            self.spawn(context, &mut shading, wavelengths, &spawn, children);
+            for lane in spawning.iter() {
+                transport.hand_over_secondaries(wavelengths, lane);
+            }
+            terminating = terminating.and_not(spawning);
+        }
+        for lane in terminating.iter() {
             transport.terminate_secondary(wavelengths, lane);
         }
         self.fluorescence.event = sample.fluorescence;
@@ -554,6 +624,79 @@ impl<S: Copy> PathState<S> {
             t_max: f32x8::splat(f32::INFINITY),
             active,
         };
+    }
+
+    /// The children of `spawn`'s lanes ([`ChildPath`]): for each live
+    /// secondary wavelength `λ_j` of a lane, its own sample of the surface
+    /// with the same uniforms (so the same lobe) at `λ_j` as the hero, and
+    /// its throughput `T(λ_j) f(λ_j) · weight` on its own direction.
+    fn spawn<T: Transport<Spectra = S>>(
+        &self,
+        context: &PathContext<'_, T>,
+        shading: &mut Shading,
+        wavelengths: &T::Wavelengths,
+        spawn: &Spawn<'_>,
+        (packet, children): (usize, &mut Vec<ChildPath>),
+    ) {
+        let PathContext {
+            transport, scene, ..
+        } = *context;
+        let geometry = &spawn.geometry;
+        for slot in 1.. {
+            let mut lanes = LaneMask::NONE;
+            let mut drawn = [(0.0f32, 0.0f32); LANES];
+            for lane in spawn.lanes.iter() {
+                if let Some(wavelength) = transport.secondary_wavelength(wavelengths, lane, slot) {
+                    shading.set_hero(lane, wavelength.0);
+                    drawn[lane] = wavelength;
+                    lanes = lanes.with(lane);
+                }
+            }
+            if lanes.is_empty() {
+                return;
+            }
+            let mut sample = shading.sample(
+                scene,
+                lanes,
+                geometry.shading_normal,
+                geometry.wo,
+                spawn.uniforms,
+            );
+            if geometry.smooth {
+                let consistent =
+                    consistent_sides(sample.wi, geometry.normal, geometry.shading_normal);
+                sample.valid = sample.valid.and(LaneMask::from_simd(consistent));
+            }
+            let through = sample
+                .spectrum
+                .times(transport, scene, wavelengths, &self.throughput);
+            let start = departure(
+                sample.wi,
+                geometry.normal,
+                geometry.origin,
+                geometry.origin_below,
+            )
+            .to_lanes();
+            let directions = sample.wi.to_lanes();
+            let weight = sample.weight.to_array();
+            for lane in lanes.and(sample.valid).iter() {
+                let value = transport.sampled_value(&through, lane, slot) * weight[lane];
+                if value > 0.0 && value.is_finite() {
+                    let (lambda_nm, pdf_per_nm) = drawn[lane];
+                    children.push(ChildPath {
+                        packet,
+                        lane,
+                        slot,
+                        depth: spawn.depth.saturating_add(1),
+                        origin: start[lane],
+                        direction: directions[lane],
+                        lambda_nm,
+                        pdf_per_nm,
+                        value,
+                    });
+                }
+            }
+        }
     }
 
     /// The throughput's mean, and past a fluorescent event what the

@@ -98,16 +98,19 @@ pub use film_state::FilmState;
 use crate::film::filter::{Filter, FilterError, MAX_SPLAT_MARGIN_PX};
 use crate::film::{Film, FilmMode};
 use crate::integrator::{
-    GROUP, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
+    GROUP, GroupStart, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
+    trace_group_from,
 };
 use crate::packet::RayPacket;
 use crate::sampling::sampler::{PIXEL_X, PIXEL_Y, PassKeys, PathSampler, SamplerKind};
 use crate::scene::Scene;
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
-use crate::transport::{FilmPixel, Transport};
+use crate::transport::{FilmPixel, FilmSample, Transport};
+use glam::Vec3;
 use rayon::prelude::*;
 use spectral_core::color::Xyz;
+use std::sync::{Mutex, TryLockError};
 use std::time::{Duration, Instant};
 use wide::f32x8;
 
@@ -445,7 +448,7 @@ fn camera_packet<P>(
     let live = active.to_simd();
     let packet = RayPacket {
         origin: Vec3x8::splat(scene.camera().position()).to_array(),
-        direction: Vec3x8::select(live, direction, Vec3x8::splat(glam::Vec3::Z)).to_array(),
+        direction: Vec3x8::select(live, direction, Vec3x8::splat(Vec3::Z)).to_array(),
         t_max: live.select(f32x8::splat(f32::INFINITY), f32x8::ZERO),
         active,
     };
@@ -459,6 +462,47 @@ fn camera_packet<P>(
 /// spawned thread's default 2 MiB. 16 MiB leaves room for debug builds'
 /// larger frames; only the pages a thread touches are committed.
 const RENDER_THREAD_STACK_BYTES: usize = 16 << 20;
+
+/// One group state per render thread, on the heap, built at the thread's
+/// first tile and kept for the whole render ([`GroupState`] is reset by
+/// [`trace_group`] for every group). A state holds [`GROUP`] path states,
+/// a few hundred kilobytes; rayon's `for_each_init` built one on the
+/// worker's stack for every split of every pass, so the state and its
+/// construction's temporaries sat in the frames of the tiles' traversal
+/// and were written anew each pass.
+struct ThreadStates<S> {
+    slots: Vec<Mutex<Option<Box<GroupState<S, GROUP>>>>>,
+}
+
+impl<S: Copy> ThreadStates<S> {
+    /// Empty slots for a pool of `threads` threads.
+    fn new(threads: usize) -> Self {
+        Self {
+            slots: (0..threads.max(1)).map(|_| Mutex::new(None)).collect(),
+        }
+    }
+
+    /// Runs `f` with the calling render thread's state. A thread that
+    /// finds its slot taken (a tile started inside another's wait, which
+    /// the renderer does not do today) gets a state of its own for the
+    /// call instead of blocking on itself.
+    fn with<T: Transport<Spectra = S>>(
+        &self,
+        transport: &T,
+        f: impl FnOnce(&mut GroupState<S, GROUP>),
+    ) {
+        let index = rayon::current_thread_index().unwrap_or(0);
+        let slot = self.slots.get(index).map(|slot| match slot.try_lock() {
+            Ok(guard) => Some(guard),
+            Err(TryLockError::Poisoned(poisoned)) => Some(poisoned.into_inner()),
+            Err(TryLockError::WouldBlock) => None,
+        });
+        match slot.flatten() {
+            Some(mut guard) => f(guard.get_or_insert_with(|| Box::new(GroupState::new(transport)))),
+            None => f(&mut Box::new(GroupState::new(transport))),
+        }
+    }
+}
 
 /// Wall time a batch of passes aims at: the progress callback (and so the
 /// CLI's progress display, Ctrl-C and the time limit) sees the render at
@@ -560,9 +604,21 @@ fn render_tile<T: Transport>(
             &mut wavelengths,
             &mut tile.rays,
         );
+        let mut group_samples: [[FilmSample<T>; LANES]; GROUP] =
+            core::array::from_fn(|g| transport.samples(&radiance[g], &wavelengths[g]));
+        if !state.children.is_empty() {
+            let parents = |packet: usize, lane: usize| pixels(&lanes[packet % GROUP])[lane % LANES];
+            trace_children(
+                &context,
+                state,
+                (&keys, &parents),
+                &mut group_samples,
+                &mut tile.rays,
+            );
+        }
         for g in 0..GROUP {
-            let samples = transport.samples(&radiance[g], &wavelengths[g]);
-            let finite = transport.finite_lanes(&radiance[g], &samples);
+            let samples = &group_samples[g];
+            let finite = transport.finite_lanes(&radiance[g], samples);
             if let Some(splat) = &splat {
                 let [dx, dy] = cameras[g].1.map(|o| o.to_array());
                 for (lane, slot) in lanes[g].iter().enumerate() {
@@ -602,6 +658,97 @@ fn render_tile<T: Transport>(
     if let Some(splat) = &splat {
         splat.flush_scratch(transport.film(), tile, &scratch);
     }
+}
+
+/// The high bit of a child's sampler key: no pixel's key has it (the
+/// padding lanes' keys do, with every other bit but the lane's set).
+const CHILD_KEY: u64 = 1 << 63;
+
+/// Traces the children the group's lanes spawned (`state.children`,
+/// [`crate::integrator::ChildPath`]) in groups of their own, one per
+/// first-segment depth, and adds each child's sample to its parent's in
+/// `samples`. A child's random numbers come from the stream of the key
+/// `CHILD_KEY | parent_pixel << 4 | slot` (a lane spawns once per pass
+/// and slot; `parents` gives the parent lane's pixel key).
+fn trace_children<T: Transport>(
+    context: &PathContext<'_, T>,
+    state: &mut GroupState<T::Spectra, GROUP>,
+    (keys, parents): (&PassKeys, &dyn Fn(usize, usize) -> u64),
+    samples: &mut [[FilmSample<T>; LANES]; GROUP],
+    counts: &mut RayCounts,
+) {
+    let transport = context.transport;
+    let mut children = core::mem::take(&mut state.children);
+    children.sort_by_key(|child| child.depth);
+    for same_depth in children.chunk_by(|a, b| a.depth == b.depth) {
+        for batch in same_depth.chunks(GROUP * LANES) {
+            let depth = batch.first().map_or(1, |child| child.depth);
+            let mut origins = [[Vec3::ZERO; LANES]; GROUP];
+            let mut directions = [[Vec3::Z; LANES]; GROUP];
+            let mut seeds = [[None; LANES]; GROUP];
+            let mut stream_keys: [[u64; LANES]; GROUP] =
+                [core::array::from_fn(|lane| u64::MAX - lane as u64); GROUP];
+            let mut active = [LaneMask::NONE; GROUP];
+            for (k, child) in batch.iter().enumerate() {
+                let (p, lane) = (k / LANES, k % LANES);
+                origins[p][lane] = child.origin;
+                directions[p][lane] = child.direction;
+                seeds[p][lane] = Some((child.lambda_nm, child.pdf_per_nm, child.value));
+                stream_keys[p][lane] =
+                    CHILD_KEY | parents(child.packet, child.lane) << 4 | child.slot as u64;
+                active[p] = active[p].with(lane);
+            }
+            let packets: [Option<(T::Wavelengths, T::Spectra)>; GROUP] =
+                core::array::from_fn(|p| transport.child_packet(&seeds[p]));
+            let mut wavelengths = Vec::with_capacity(GROUP);
+            let mut throughput = Vec::with_capacity(GROUP);
+            for (w, t) in packets.into_iter().flatten() {
+                wavelengths.push(w);
+                throughput.push(t);
+            }
+            let (Ok(mut wavelengths), Ok(throughput)) = (
+                <[T::Wavelengths; GROUP]>::try_from(wavelengths),
+                <[T::Spectra; GROUP]>::try_from(throughput),
+            ) else {
+                // A transport that spawns no children.
+                return;
+            };
+            let rays: [RayPacket; GROUP] = core::array::from_fn(|p| RayPacket {
+                origin: Vec3x8::from_lanes(&origins[p]).to_array(),
+                direction: Vec3x8::from_lanes(&directions[p]).to_array(),
+                t_max: f32x8::splat(f32::INFINITY),
+                active: active[p],
+            });
+            let mut rngs: [PathSampler; GROUP] =
+                core::array::from_fn(|p| keys.path_sampler(&stream_keys[p]));
+            let start = GroupStart {
+                depth,
+                throughput: Some(&throughput),
+            };
+            let radiance = trace_group_from(
+                context,
+                state,
+                &start,
+                &rays,
+                (&mut rngs, &mut wavelengths),
+                counts,
+            );
+            for (p, radiance) in radiance.iter().enumerate() {
+                let child_samples = transport.samples(radiance, &wavelengths[p]);
+                for lane in active[p].iter() {
+                    if let Some(child) = batch.get(p * LANES + lane)
+                        && let Some(parent) = samples
+                            .get_mut(child.packet)
+                            .and_then(|packet| packet.get_mut(child.lane))
+                    {
+                        transport.add_child_sample(parent, &child_samples[lane]);
+                    }
+                }
+            }
+        }
+    }
+    children.clear();
+    state.children = children;
 }
 
 /// A splatting tile's filter and margin (module docs).
@@ -1065,6 +1212,7 @@ pub fn render_observed<T: Transport>(
     let pool = builder
         .build()
         .map_err(|e| RenderError::Threads(e.to_string()))?;
+    let states = ThreadStates::new(pool.current_num_threads());
     let start = Instant::now();
     // The film's tiles cut to the traced pixels (splatting: those within
     // the margin of the window): each starts on the film's packet grid, so
@@ -1135,21 +1283,21 @@ pub fn render_observed<T: Transport>(
                 // One pass at a time, its rings flushed before the next
                 // (module docs): the batch never reaches the sums.
                 for pass in first..end {
-                    tiles.par_iter_mut().for_each_init(
-                        || GroupState::new(transport),
-                        |state, tile| render_tile(transport, scene, settings, pass, state, tile),
-                    );
+                    tiles.par_iter_mut().for_each(|tile| {
+                        states.with(transport, |state| {
+                            render_tile(transport, scene, settings, pass, state, tile);
+                        });
+                    });
                     flush_rings(film, &mut tiles, &sources, margin, &window);
                 }
             } else {
-                tiles.par_iter_mut().for_each_init(
-                    || GroupState::new(transport),
-                    |state, tile| {
+                tiles.par_iter_mut().for_each(|tile| {
+                    states.with(transport, |state| {
                         for pass in first..end {
                             render_tile(transport, scene, settings, pass, state, tile);
                         }
-                    },
-                );
+                    });
+                });
             }
         });
         if film.passes_interact() {
@@ -1360,6 +1508,38 @@ mod tests {
             panic!("Cornell box and transport");
         };
         (scene, transport)
+    }
+
+    /// A render thread gets the same heap state at every call; a call
+    /// made while its slot is taken gets a state of its own instead of
+    /// waiting on itself.
+    #[test]
+    fn a_thread_keeps_its_state_and_a_nested_call_gets_its_own() {
+        let (_, transport) = cornell_with_fourier4();
+        let states = ThreadStates::new(1);
+        let address = |state: &mut GroupState<_, GROUP>| core::ptr::from_mut(state) as usize;
+        // A mark a fresh state does not have (a freed box's address may be
+        // reused, so the address alone would not tell).
+        const MARK: usize = 7;
+        let mut seen = Vec::new();
+        states.with(&transport, |state| {
+            state.children.reserve(MARK);
+            seen.push(address(state));
+        });
+        states.with(&transport, |state| {
+            assert!(state.children.capacity() >= MARK, "a new state");
+            seen.push(address(state));
+        });
+        states.with(&transport, |outer| {
+            seen.push(address(outer));
+            states.with(&transport, |inner| {
+                assert_eq!(inner.children.capacity(), 0, "the taken state");
+                seen.push(address(inner));
+            });
+        });
+        assert_eq!(seen[0], seen[1]);
+        assert_eq!(seen[0], seen[2]);
+        assert_ne!(seen[2], seen[3], "the nested call shares the taken state");
     }
 
     #[test]

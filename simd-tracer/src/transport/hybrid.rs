@@ -62,6 +62,27 @@
 //! Fourier is the truncated-product approximation of the prefix `T_N`
 //! (the method's, the same as the Fourier transport's); nothing is added.
 //!
+//! **Children** ([`HybridSettings::children`], `fspec render
+//! --dispersion-paths all`). Termination keeps one of the `C` wavelengths
+//! past the refraction, so the dispersed light carries one wavelength per
+//! path. With children, a lane whose sample terminates its secondaries
+//! (the refraction of smooth dispersive glass) hands each live secondary
+//! `λ_j` to a path of its own (`integrator::ChildPath`): the same surface
+//! sampled with the same uniforms (so the same lobe) and `λ_j` as the
+//! hero, throughput `T(λ_j) f(λ_j) w_j` along `λ_j`'s own direction; the
+//! lane keeps `λ_1` with its density unchanged
+//! ([`Transport::hand_over_secondaries`]). Every wavelength then follows
+//! its own path, `E[L̂_i | λ_i] = L_k(λ_i)` for each, and the film gets
+//! `(1/C) Σ_i x̄(λ_i) T_N(λ_i) L̂_i / p(λ_i)`: the estimator above without
+//! termination. The children are traced after their group, in groups of
+//! their own by the depth of their first segment, with random numbers from
+//! streams of their own, and each child's sample is added to its parent's
+//! before the film sees it (one camera sample). Not in scenes with
+//! fluorescence: there a sampled event's integral over the excited side
+//! counts a lane's wavelengths together, and termination stays. The price
+//! is `C − 1` more paths from every such refraction (measured in
+//! `docs/results.md`).
+//!
 //! **Fluorescence.** A split lane fluoresces as a sampled one (new
 //! excitation wavelengths, the camera's kept); a Fourier lane as a Fourier
 //! one. A lane that splits after a Fourier fluorescent event integrates its
@@ -106,6 +127,9 @@ pub struct HybridTransport<const N: usize, const C: usize> {
     /// The wavelengths of lanes that have not split: never read (no lane
     /// reads its sampled wavelengths before its split), placed once.
     pub(super) idle: PacketWavelengths<C>,
+    /// Whether a split's secondary wavelengths go on as children where
+    /// the direction depends on wavelength ([`HybridSettings::children`]).
+    pub(super) children: bool,
 }
 
 /// The settings of a [`HybridTransport`] besides its sizes.
@@ -124,6 +148,11 @@ pub struct HybridSettings<'a> {
     pub density: Option<&'a Arc<EmissionDensity>>,
     /// What the film's channels measure.
     pub observer: &'a Arc<Observer>,
+    /// Where a split lane's direction depends on wavelength, every live
+    /// wavelength goes on along its own direction as a path of its own
+    /// (module docs, "Children"); otherwise the secondaries are
+    /// terminated (pbrt's rule) and the hero goes on alone.
+    pub children: bool,
 }
 
 impl<const N: usize, const C: usize> HybridTransport<N, C> {
@@ -152,6 +181,7 @@ impl<const N: usize, const C: usize> HybridTransport<N, C> {
             sampled,
             basis: FourierBasis::new(range),
             idle,
+            children: settings.children,
         })
     }
 }
@@ -236,9 +266,14 @@ impl<const N: usize, const C: usize> Transport for HybridTransport<N, C> {
     const SPLITS_AT_DISPERSION: bool = true;
 
     fn describe(&self) -> String {
+        let paths = if self.children {
+            ", every wavelength traced"
+        } else {
+            ""
+        };
         match self.sampled.density {
-            Some(_) => format!("hybrid N={N} C={C} lights"),
-            None => format!("hybrid N={N} C={C} {:?}", self.sampled.strategy),
+            Some(_) => format!("hybrid N={N} C={C} lights{paths}"),
+            None => format!("hybrid N={N} C={C} {:?}{paths}", self.sampled.strategy),
         }
     }
 
@@ -269,6 +304,78 @@ impl<const N: usize, const C: usize> Transport for HybridTransport<N, C> {
         if wavelengths.split.contains(lane) {
             self.sampled
                 .terminate_secondary(&mut wavelengths.sampled, lane);
+        }
+    }
+
+    fn spawns_children(&self, scene: &Scene) -> bool {
+        self.children && scene.fluorophores().is_empty()
+    }
+
+    fn secondary_wavelength(
+        &self,
+        wavelengths: &Self::Wavelengths,
+        lane: usize,
+        slot: usize,
+    ) -> Option<(f32, f32)> {
+        if slot == 0 || !wavelengths.split.contains(lane) {
+            return None;
+        }
+        let drawn = wavelengths.sampled.lanes.get(lane)?;
+        let pdf = *drawn.pdf_per_nm().get(slot)?;
+        (pdf > 0.0).then(|| (drawn.lambda_nm()[slot], pdf))
+    }
+
+    fn hand_over_secondaries(&self, wavelengths: &mut Self::Wavelengths, lane: usize) {
+        if !wavelengths.split.contains(lane) {
+            return;
+        }
+        let Some(&drawn) = wavelengths.sampled.lanes.get(lane) else {
+            return;
+        };
+        let pdf = core::array::from_fn(|i| if i == 0 { drawn.pdf_per_nm()[0] } else { 0.0 });
+        let kept = SampledWavelengths::from_parts(*drawn.lambda_nm(), pdf);
+        // Children are spawned only before a fluorescent event, where the
+        // camera's wavelengths are the path's.
+        wavelengths.sampled.place(lane, kept, true);
+    }
+
+    fn sampled_value(&self, spectra: &Self::Spectra, lane: usize, slot: usize) -> f32 {
+        spectra
+            .1
+            .get(slot)
+            .map_or(0.0, |values| values.to_array()[lane % LANES])
+    }
+
+    /// Lanes with a seed are split lanes carrying their one wavelength in
+    /// slot 0 (the others at the same wavelength with density 0, never
+    /// read), their throughput the seed's value there.
+    fn child_packet(
+        &self,
+        seeds: &[Option<(f32, f32, f32)>; LANES],
+    ) -> Option<(Self::Wavelengths, Self::Spectra)> {
+        let mut wavelengths = HybridWavelengths {
+            sampled: self.idle,
+            split: LaneMask::NONE,
+        };
+        let mut values = [[0.0f32; LANES]; C];
+        for (lane, seed) in seeds.iter().enumerate() {
+            let Some((lambda_nm, pdf, value)) = *seed else {
+                continue;
+            };
+            let pdfs = core::array::from_fn(|i| if i == 0 { pdf } else { 0.0 });
+            let drawn = SampledWavelengths::from_parts([lambda_nm; C], pdfs);
+            wavelengths.sampled.place(lane, drawn, true);
+            wavelengths.split = wavelengths.split.with(lane);
+            if let Some(first) = values.first_mut() {
+                first[lane] = value;
+            }
+        }
+        Some((wavelengths, (self.fourier.zero(), values.map(f32x8::new))))
+    }
+
+    fn add_child_sample(&self, parent: &mut HybridSample<N>, child: &HybridSample<N>) {
+        for (p, c) in parent.sampled_xyz.iter_mut().zip(&child.sampled_xyz) {
+            *p += c;
         }
     }
 

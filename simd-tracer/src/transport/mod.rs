@@ -60,7 +60,7 @@ pub trait Transport: Sync {
     /// Per-packet wavelengths (unit for Fourier).
     type Wavelengths: Copy + Send;
     /// Packet-wide spectral values, 8 lanes.
-    type Spectra: Copy;
+    type Spectra: Copy + Send;
     /// Where the finished samples go.
     type Film: Film;
 
@@ -99,6 +99,44 @@ pub trait Transport: Sync {
     }
     /// Keeps only the hero wavelength of a lane (dispersion).
     fn terminate_secondary(&self, _wavelengths: &mut Self::Wavelengths, _lane: usize) {}
+    /// Whether, where a lane's direction depends on wavelength, its live
+    /// secondary wavelengths go on as paths of their own (`ChildPath`s of
+    /// the integrator) instead of being terminated: the hybrid's, in
+    /// scenes without fluorescence (a fluorescent event's integral over
+    /// the excited side counts a lane's wavelengths together).
+    fn spawns_children(&self, _scene: &Scene) -> bool {
+        false
+    }
+    /// Wavelength `slot` of a lane and its density, if it is a live
+    /// secondary wavelength (slot ≥ 1, density > 0).
+    fn secondary_wavelength(
+        &self,
+        _wavelengths: &Self::Wavelengths,
+        _lane: usize,
+        _slot: usize,
+    ) -> Option<(f32, f32)> {
+        None
+    }
+    /// Keeps only the hero wavelength of a lane whose secondaries went on
+    /// as children: their densities become 0, the hero's stays (each of
+    /// the `C` wavelength paths is one term of `(1/C) Σ L/p`).
+    fn hand_over_secondaries(&self, _wavelengths: &mut Self::Wavelengths, _lane: usize) {}
+    /// The sampled value of `spectra` at a lane's wavelength `slot`.
+    fn sampled_value(&self, _spectra: &Self::Spectra, _lane: usize, _slot: usize) -> f32 {
+        0.0
+    }
+    /// The wavelengths and throughput of a packet of children: lane `l`
+    /// carries the one wavelength `seeds[l] = (λ, p(λ), value)` (none in
+    /// lanes without a seed); `None` for transports that spawn none.
+    fn child_packet(
+        &self,
+        _seeds: &[Option<(f32, f32, f32)>; LANES],
+    ) -> Option<(Self::Wavelengths, Self::Spectra)> {
+        None
+    }
+    /// Adds a child's finished sample to its parent's (the film's two
+    /// samples of one camera sample are one).
+    fn add_child_sample(&self, _parent: &mut FilmSample<Self>, _child: &FilmSample<Self>) {}
     /// 1 in every lane.
     fn one(&self) -> Self::Spectra;
     /// 0 in every lane.
