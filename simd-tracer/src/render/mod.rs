@@ -498,9 +498,17 @@ impl<S: Copy> ThreadStates<S> {
             Err(TryLockError::WouldBlock) => None,
         });
         match slot.flatten() {
-            Some(mut guard) => f(guard.get_or_insert_with(|| Box::new(GroupState::new(transport)))),
-            None => f(&mut Box::new(GroupState::new(transport))),
+            Some(mut guard) => f(guard.get_or_insert_with(|| Self::boxed(transport))),
+            None => f(&mut Self::boxed(transport)),
         }
+    }
+
+    /// A new state on the heap. Not inlined: the state is built in this
+    /// frame before it is moved, and inlined into the tile loop that frame
+    /// would stay on the stack under every tile.
+    #[inline(never)]
+    fn boxed<T: Transport<Spectra = S>>(transport: &T) -> Box<GroupState<S, GROUP>> {
+        Box::new(GroupState::new(transport))
     }
 }
 
@@ -669,7 +677,10 @@ const CHILD_KEY: u64 = 1 << 63;
 /// first-segment depth, and adds each child's sample to its parent's in
 /// `samples`. A child's random numbers come from the stream of the key
 /// `CHILD_KEY | parent_pixel << 4 | slot` (a lane spawns once per pass
-/// and slot; `parents` gives the parent lane's pixel key).
+/// and slot; `parents` gives the parent lane's pixel key). Not inlined:
+/// its packets' arrays would otherwise enlarge the tile loop's frame for
+/// the renders that spawn no child.
+#[inline(never)]
 fn trace_children<T: Transport>(
     context: &PathContext<'_, T>,
     state: &mut GroupState<T::Spectra, GROUP>,
