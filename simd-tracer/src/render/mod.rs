@@ -455,12 +455,14 @@ fn camera_packet<P>(
     (packet, [dx, dy])
 }
 
-/// Stack of each render thread. A group's path states, rays, hits and
-/// wavelengths ([`GROUP`] packets) live on it: with 32 coefficients or 32
-/// wavelengths and groups of 32 packets a release build needs 2–3 MiB
-/// (found by shrinking `RUST_MIN_STACK` until it overflowed), more than a
-/// spawned thread's default 2 MiB. 16 MiB leaves room for debug builds'
-/// larger frames; only the pages a thread touches are committed.
+/// Stack of each render thread. A group's rays, hits, wavelengths and
+/// radiance ([`GROUP`] packets) live on it (its path states on the heap,
+/// [`ThreadStates`]): with 32 coefficients or 32 wavelengths and groups of
+/// 32 packets a release build needed 2–3 MiB when the path states were
+/// there too (found by shrinking `RUST_MIN_STACK` until it overflowed),
+/// more than a spawned thread's default 2 MiB. 16 MiB leaves room for
+/// debug builds' larger frames; only the pages a thread touches are
+/// committed.
 const RENDER_THREAD_STACK_BYTES: usize = 16 << 20;
 
 /// One group state per render thread, on the heap, built at the thread's
