@@ -104,13 +104,16 @@ impl OtherLights {
         let origins = origin.to_lanes();
         let (mut wi, mut target) = ([Vec3::Z; LANES], [Vec3::ZERO; LANES]);
         let (mut pdf, mut factor) = ([0.0f32; LANES], [1.0f32; LANES]);
-        for lane in lanes.iter() {
-            let Some(sample) = scene.light_sampler().sample(
-                u_light[lane],
-                [u[lane], v[lane]],
-                origins[lane],
-                scene.environment_map(),
-            ) else {
+        let requests: [Option<(f32, [f32; 2], Vec3)>; LANES] = core::array::from_fn(|lane| {
+            lanes
+                .contains(lane)
+                .then(|| (u_light[lane], [u[lane], v[lane]], origins[lane]))
+        });
+        let samples = scene
+            .light_sampler()
+            .sample_batch(requests, scene.environment_map());
+        for (lane, sample) in samples.into_iter().enumerate() {
+            let Some(sample) = sample else {
                 continue;
             };
             self.lanes = self.lanes.with(lane);

@@ -105,6 +105,12 @@
 //! a bucket that holds about one edge on average (all of `P_i · n`, `u n`
 //! and `⌊u n⌋` are exact in `f64`: 24-bit mantissas times `n ≤ 2²⁴`). The
 //! guide costs 4 bytes per CDF edge.
+//!
+//! What remains are two dependent loads per sample in a large row (the
+//! guide's bucket, then the edges it names), each a likely miss. A packet
+//! draws its lanes' points together ([`Distribution2D::sample_batch`]):
+//! every lane's bucket is loaded before any lane searches, so the lanes'
+//! misses overlap instead of queueing lane after lane.
 
 use core::cmp::Ordering;
 
@@ -266,16 +272,30 @@ fn clamp_unit(u: f32) -> f32 {
 /// it, so its step has positive width. Searches only the edges of `u`'s
 /// bucket of the guide (module docs, "Guide tables"), which gives the cell
 /// of the search over all edges.
-#[inline]
+#[cfg(test)]
 fn guided_cell(cdf: &[f32], guide: &[u32], u: f32) -> usize {
+    cell_in_bucket(cdf, u, guide_bucket(cdf, guide, u))
+}
+
+/// The edges `lo .. hi` of the bucket of `u` (in `[0, 1)`) in the guide of
+/// `cdf`: the guide's two counts (module docs, "Guide tables").
+#[inline]
+fn guide_bucket(cdf: &[f32], guide: &[u32], u: f32) -> (usize, usize) {
     let n = cdf.len().saturating_sub(1);
-    let edges = cdf.get(..n).unwrap_or(&[]);
     // ⌊u n⌋ < n for u < 1, exact in f64 (module docs).
     let bucket = (f64::from(u) * n as f64) as usize;
-    let (lo, hi) = match (guide.get(bucket), guide.get(bucket + 1)) {
+    match (guide.get(bucket), guide.get(bucket + 1)) {
         (Some(&lo), Some(&hi)) => (lo as usize, hi as usize),
         _ => (0, n),
-    };
+    }
+}
+
+/// The cell that `u` falls in, searched among the edges `lo .. hi` of its
+/// guide bucket ([`guide_bucket`]).
+#[inline]
+fn cell_in_bucket(cdf: &[f32], u: f32, (lo, hi): (usize, usize)) -> usize {
+    let n = cdf.len().saturating_sub(1);
+    let edges = cdf.get(..n).unwrap_or(&[]);
     let below = edges
         .get(lo..hi)
         .map_or(0, |bucket| bucket.partition_point(|&p| p <= u));
@@ -286,9 +306,15 @@ fn guided_cell(cdf: &[f32], guide: &[u32], u: f32) -> usize {
 /// guide: the coordinate, its density and its cell. Empty tables give
 /// `(0, 0, 0)`.
 fn sample_cells(pdf: &[f32], cdf: &[f32], guide: &[u32], u: f32) -> (f32, f32, usize) {
-    let n = pdf.len();
     let u = clamp_unit(u);
-    let cell = guided_cell(cdf, guide, u);
+    sample_in_bucket(pdf, cdf, u, guide_bucket(cdf, guide, u))
+}
+
+/// [`sample_cells`] of a clamped `u` whose guide bucket is `bucket`.
+#[inline]
+fn sample_in_bucket(pdf: &[f32], cdf: &[f32], u: f32, bucket: (usize, usize)) -> (f32, f32, usize) {
+    let n = pdf.len();
+    let cell = cell_in_bucket(cdf, u, bucket);
     let (Some(&lo), Some(&hi), Some(&density)) = (cdf.get(cell), cdf.get(cell + 1), pdf.get(cell))
     else {
         return (0.0, 0.0, 0);
@@ -524,6 +550,38 @@ impl Distribution2D {
             u[0],
         );
         ([x, y], pdf_y * pdf_x)
+    }
+
+    /// [`Self::sample`] of every `Some` of `points` (`None`: no sample),
+    /// bit for bit, phase by phase over all of them: every row from the
+    /// marginal, then every row's guide bucket, then every search in its
+    /// bucket. Each phase's loads are independent of one another, so
+    /// the cache misses of a large map's rows (the guide's and the CDF's,
+    /// one each) overlap instead of following each other point by point
+    /// (module docs, "Guide tables").
+    pub fn sample_batch<const L: usize>(
+        &self,
+        points: [Option<[f32; 2]>; L],
+    ) -> [Option<([f32; 2], f32)>; L] {
+        let rows = points.map(|u| {
+            u.map(|[u, v]| {
+                let (y, pdf_y, row) = self.marginal.sample(v);
+                (clamp_unit(u), y, pdf_y, row)
+            })
+        });
+        let buckets = rows.map(|row| {
+            row.map(|(u, y, pdf_y, row)| {
+                let bucket = guide_bucket(self.row_cdf(row), self.row_guide(row), u);
+                (u, y, pdf_y, row, bucket)
+            })
+        });
+        buckets.map(|bucket| {
+            bucket.map(|(u, y, pdf_y, row, bucket)| {
+                let (x, pdf_x, _) =
+                    sample_in_bucket(self.row_pdf(row), self.row_cdf(row), u, bucket);
+                ([x, y], pdf_y * pdf_x)
+            })
+        })
     }
 
     /// The density per unit area at `point` `(x, y)`: its cell's weight over
@@ -995,5 +1053,48 @@ mod tests {
         let marginal = 4 * (3 * TABLE_HEIGHT + 2);
         assert!(d.memory_bytes() >= tables + marginal);
         assert!(d.memory_bytes() <= tables + marginal + 256);
+    }
+
+    /// A batch of points is sampled bit for bit as each point alone
+    /// ([`Distribution2D::sample`]), absent points give none, on a table
+    /// with zero-weight rows and cells, for numbers at and past the ends
+    /// of `[0, 1)` (clamped) and NaN (0).
+    #[test]
+    fn a_batch_samples_what_each_point_samples_alone() {
+        let (width, height) = (37, 11);
+        let mut rng = Rng::new(23, 8);
+        let weights: Vec<f32> = (0..width * height)
+            .map(|i| {
+                let (row, column) = (i / width, i % width);
+                if row == 4 || column % 7 == 3 {
+                    0.0
+                } else {
+                    rng.next_f32().powi(3)
+                }
+            })
+            .collect();
+        let d = match Distribution2D::new(width, height, &weights) {
+            Ok(d) => d,
+            Err(e) => panic!("{e}"),
+        };
+        assert_eq!(d.validate(), Ok(()));
+        let ends = [0.0, ONE_MINUS_EPSILON, 1.0, 2.0, -1.0, f32::NAN];
+        let number = |rng: &mut Rng| {
+            if rng.next_f32() < 0.2 {
+                ends[(rng.next_u32() % ends.len() as u32) as usize]
+            } else {
+                rng.next_f32()
+            }
+        };
+        for _ in 0..5000 {
+            let points: [Option<[f32; 2]>; 8] = core::array::from_fn(|_| {
+                (rng.next_f32() < 0.85).then(|| [number(&mut rng), number(&mut rng)])
+            });
+            let bits =
+                |s: Option<([f32; 2], f32)>| s.map(|(p, pdf)| (p.map(f32::to_bits), pdf.to_bits()));
+            for (point, got) in points.iter().zip(d.sample_batch(points)) {
+                assert_eq!(bits(got), bits(point.map(|u| d.sample(u))), "{point:?}");
+            }
+        }
     }
 }

@@ -275,12 +275,67 @@ impl LightSampler {
     pub fn sample(
         &self,
         u_light: f32,
-        [u, v]: [f32; 2],
+        uv: [f32; 2],
         origin: Vec3,
         map: Option<&EnvironmentMap>,
     ) -> Option<OtherLightSample> {
+        let index = self.pick(u_light)?;
+        let environment = match self.others.get(index)? {
+            OtherLight::Environment => self.environment.as_ref()?.sample(uv),
+            _ => ([0.0; 2], 0.0),
+        };
+        self.finish(index, environment, origin, map)
+    }
+
+    /// [`Self::sample`] of every `Some((u_light, uv, origin))` of
+    /// `requests`, bit for bit: the environment's points are drawn for all
+    /// of them at once ([`Distribution2D::sample_batch`], whose loads
+    /// overlap), then each sample is finished as [`Self::sample`] does.
+    pub fn sample_batch<const L: usize>(
+        &self,
+        requests: [Option<(f32, [f32; 2], Vec3)>; L],
+        map: Option<&EnvironmentMap>,
+    ) -> [Option<OtherLightSample>; L] {
+        let picks = requests.map(|r| r.and_then(|(u_light, _, _)| self.pick(u_light)));
+        let points = core::array::from_fn(|k| match (picks[k], requests[k]) {
+            (Some(index), Some((_, uv, _)))
+                if matches!(self.others.get(index), Some(OtherLight::Environment)) =>
+            {
+                Some(uv)
+            }
+            _ => None,
+        });
+        let environment = self
+            .environment
+            .as_ref()
+            .map_or([None; L], |d| d.sample_batch(points));
+        core::array::from_fn(|k| {
+            let index = picks[k]?;
+            let (_, _, origin) = requests[k]?;
+            let environment = match self.others.get(index)? {
+                OtherLight::Environment => environment[k]?,
+                _ => ([0.0; 2], 0.0),
+            };
+            self.finish(index, environment, origin, map)
+        })
+    }
+
+    /// The other light that `u_light` picks.
+    fn pick(&self, u_light: f32) -> Option<usize> {
         let last = self.others.len().checked_sub(1)?;
-        let index = self.cdf.partition_point(|&c| c <= u_light).min(last);
+        Some(self.cdf.partition_point(|&c| c <= u_light).min(last))
+    }
+
+    /// The sample of light `index` seen from `origin`, with the point
+    /// `(uv, pdf_uv)` drawn from the environment's distribution when it is
+    /// the environment (ignored otherwise).
+    fn finish(
+        &self,
+        index: usize,
+        (uv, pdf_uv): ([f32; 2], f32),
+        origin: Vec3,
+        map: Option<&EnvironmentMap>,
+    ) -> Option<OtherLightSample> {
         let pmf = *self.pmf.get(index)?;
         match *self.others.get(index)? {
             OtherLight::Point(light) => {
@@ -305,8 +360,7 @@ impl LightSampler {
                 emission: LightEmission::Spectrum(light.irradiance),
             }),
             OtherLight::Environment => {
-                let (map, distribution) = (map?, self.environment.as_ref()?);
-                let (uv, pdf_uv) = distribution.sample([u, v]);
+                let map = map?;
                 let (wi, sin_theta) = map.direction_of(uv);
                 let pdf = pmf * pdf_uv / (2.0 * std::f32::consts::PI.powi(2) * sin_theta);
                 (sin_theta > 0.0 && pdf > 0.0 && pdf.is_finite()).then_some(OtherLightSample {
@@ -347,6 +401,7 @@ impl LightSampler {
 mod tests {
     use super::*;
     use crate::sampling::rng::Rng;
+    use crate::spectra::SpectrumSource;
     use crate::spectra::environment::EnvironmentImage;
     use glam::Mat3;
     use spectral_core::SpectralRange;
@@ -478,6 +533,90 @@ mod tests {
         assert!(
             chi2_wrong > critical_wrong,
             "a wrong map passes: {chi2_wrong}"
+        );
+    }
+
+    /// Each request of a batch gets the sample that [`LightSampler::sample`]
+    /// draws for it alone, bit for bit (absent requests none), with an
+    /// environment, a point light and a directional light to pick from, and
+    /// without a map (no environment sample). The numbers include the ends
+    /// of `[0, 1)` and values past them, which both clamp.
+    #[test]
+    fn a_batch_samples_what_each_request_samples_alone() {
+        let env = map(4.0);
+        let range = SpectralRange::VISIBLE;
+        let spectra: Vec<SceneSpectrum> = [1.0, 2.0]
+            .iter()
+            .filter_map(|&c| SceneSpectrum::new(SpectrumSource::Constant(c), range).ok())
+            .collect();
+        let sampler = match LightSampler::new(&SceneLights {
+            triangle_power: 1.0,
+            points: &[PointLight {
+                position: Vec3::new(0.5, 2.0, -1.0),
+                intensity: SpectrumId(0),
+                scale: 3.0,
+            }],
+            directional: &[DirectionalLight {
+                direction: Vec3::new(0.0, -1.0, 0.0),
+                irradiance: SpectrumId(1),
+                scale: 0.5,
+            }],
+            environment: Some(&env),
+            scene_radius: 2.0,
+            spectra: &spectra,
+        }) {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        };
+        assert_eq!(sampler.validate(), Ok(()));
+        assert_eq!(sampler.other_count(), 3);
+        let mut rng = Rng::new(17, 3);
+        let ends = [0.0, 1.0 - f32::EPSILON / 2.0, 1.0, -0.25, f32::NAN];
+        let number = |rng: &mut Rng| {
+            if rng.next_f32() < 0.1 {
+                ends[(rng.next_u32() % ends.len() as u32) as usize]
+            } else {
+                rng.next_f32()
+            }
+        };
+        let mut environment_samples = 0;
+        for round in 0..3000 {
+            let requests: [Option<(f32, [f32; 2], Vec3)>; 8] = core::array::from_fn(|_| {
+                (rng.next_f32() < 0.8).then(|| {
+                    let origin = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+                    (rng.next_f32(), [number(&mut rng), number(&mut rng)], origin)
+                })
+            });
+            let map = (round % 5 != 0).then_some(&env);
+            let batch = sampler.sample_batch(requests, map);
+            for (request, got) in requests.iter().zip(batch) {
+                let alone = request
+                    .and_then(|(u_light, uv, origin)| sampler.sample(u_light, uv, origin, map));
+                let bits = |s: Option<OtherLightSample>| {
+                    s.map(|s| {
+                        let emission = match s.emission {
+                            LightEmission::Spectrum(id) => [id.0, 0, 0],
+                            LightEmission::Environment(uv) => {
+                                [u32::MAX, uv[0].to_bits(), uv[1].to_bits()]
+                            }
+                        };
+                        (
+                            s.wi.to_array().map(f32::to_bits),
+                            [s.distance, s.pdf, s.factor].map(f32::to_bits),
+                            s.delta,
+                            emission,
+                        )
+                    })
+                };
+                assert_eq!(bits(got), bits(alone), "{request:?}");
+                if matches!(alone, Some(s) if matches!(s.emission, LightEmission::Environment(_))) {
+                    environment_samples += 1;
+                }
+            }
+        }
+        assert!(
+            environment_samples > 1000,
+            "{environment_samples} environment samples"
         );
     }
 }
