@@ -27,7 +27,9 @@
 
 Every transport runs with fspec's defaults otherwise, so `--coeffs auto`
 gives the Fourier transport and the hybrid with C = 4 the same N (32 on
-`prism`), and the hybrid with C = 1 or 8 N = 12 (the sizes compiled in).
+`prism`), and the hybrid with C = 1 or 8 N = 12 (the sizes compiled in);
+the rows "fourier N=12" and "hybrid N=12 C=4" compare both transports at
+that N too.
 
 Prints Markdown tables (docs/results.md, "Hybrid transport").
 """
@@ -51,10 +53,12 @@ REGIONS = {
 
 TRANSPORTS = {
     "fourier": ["--transport", "fourier"],
+    "fourier N=12": ["--transport", "fourier", "--coeffs", "12"],
     "sampled C=4": ["--transport", "sampled", "--wavelengths", "4"],
     "sampled C=4 lights": ["--transport", "sampled", "--wavelengths", "4", "--sampling", "lights"],
     "hybrid C=1": ["--transport", "hybrid", "--wavelengths", "1"],
     "hybrid C=4": ["--transport", "hybrid", "--wavelengths", "4"],
+    "hybrid N=12 C=4": ["--transport", "hybrid", "--wavelengths", "4", "--coeffs", "12"],
     "hybrid C=4 hero": ["--transport", "hybrid", "--wavelengths", "4", "--sampling", "hero"],
     "hybrid C=8": ["--transport", "hybrid", "--wavelengths", "8"],
     "hybrid C=4 all": ["--transport", "hybrid", "--wavelengths", "4", "--dispersion-paths", "all"],
