@@ -3,7 +3,7 @@
 
 use super::packet_traversal::PacketRays;
 use super::triangle::{PreparedTriangle, weight};
-use super::{Bvh, BvhLayout, WideStack, index_u32};
+use super::{Bvh, BvhLayout, in_step, index_u32};
 use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::{PacketHit, RayPacket};
 use crate::simd::{LANES, LaneMask};
@@ -246,11 +246,13 @@ impl Bvh {
     /// Occlusion of a packet's active lanes, one ray at a time through the
     /// 8-wide tree.
     pub fn occluded_packet_wide(&self, packet: &RayPacket) -> LaneMask {
-        let mut stack = WideStack::new();
-        packet
-            .active
-            .iter()
-            .filter(|&lane| self.occluded_wide(&packet.ray(lane), &mut stack))
+        let blocked = in_step(
+            packet,
+            |rays, stacks| self.wide.occluded_many(rays, stacks),
+            |ray, stack| self.occluded_wide(ray, stack),
+        );
+        (0..LANES)
+            .filter(|&lane| blocked[lane] == Some(true))
             .fold(LaneMask::NONE, LaneMask::with)
     }
 }

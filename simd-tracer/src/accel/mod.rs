@@ -166,7 +166,7 @@ use obvhs::bvh2::node::Bvh2Node;
 use wide::f32x8;
 
 use crate::packet::{PacketHit, Ray, RayPacket};
-use crate::simd::LaneMask;
+use crate::simd::{LANES, LaneMask};
 
 mod triangle;
 use triangle::{
@@ -176,7 +176,7 @@ mod binned_build;
 mod build;
 mod single_ray;
 mod validate;
-use single_ray::hits_by_lane;
+use single_ray::packet_hit;
 mod packet_traversal;
 use packet_traversal::inside_x8;
 mod flat;
@@ -190,6 +190,41 @@ pub use wide_tree::{WIDTH as WIDE_WIDTH, WideStack};
 
 /// Stack entries kept inline before spilling to the heap.
 const INLINE_STACK: usize = 64;
+
+/// `one(ray)` of each of `packet`'s active lanes (`None` for the others),
+/// computed [`RAYS_IN_STEP`] lanes at a time by `many` (the leftovers one
+/// by one): the rays' walks through the 8-wide tree go in step.
+fn in_step<T: Copy>(
+    packet: &RayPacket,
+    mut many: impl FnMut([&Ray; RAYS_IN_STEP], &mut [WideStack; RAYS_IN_STEP]) -> [T; RAYS_IN_STEP],
+    mut one: impl FnMut(&Ray, &mut WideStack) -> T,
+) -> [Option<T>; LANES] {
+    let mut stacks: [WideStack; RAYS_IN_STEP] = core::array::from_fn(|_| WideStack::new());
+    let rays: [Ray; LANES] = core::array::from_fn(|lane| packet.ray(lane));
+    let (mut order, mut count) = ([0usize; LANES], 0);
+    for lane in packet.active.iter() {
+        order[count] = lane;
+        count += 1;
+    }
+    let mut found = [None; LANES];
+    for chunk in order[..count].chunks(RAYS_IN_STEP) {
+        if let Ok(lanes) = <[usize; RAYS_IN_STEP]>::try_from(chunk) {
+            let results = many(lanes.map(|lane| &rays[lane]), &mut stacks);
+            for (lane, result) in lanes.into_iter().zip(results) {
+                found[lane] = Some(result);
+            }
+        } else {
+            for &lane in chunk {
+                found[lane] = Some(one(&rays[lane], &mut stacks[0]));
+            }
+        }
+    }
+    found
+}
+
+/// Rays whose walks through the 8-wide tree go in step
+/// ([`wide_tree::WideBvh`]'s `intersect_many`).
+const RAYS_IN_STEP: usize = 2;
 
 /// How a packet query finds its hits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -588,7 +623,13 @@ impl Bvh {
     /// Closest hit of one ray through the 8-wide tree (children and
     /// triangles 8 at a time). `stack` is reusable scratch space.
     pub fn intersect_wide(&self, ray: &Ray, stack: &mut WideStack) -> Option<Hit> {
-        self.wide.intersect(ray, stack).map(|(slot, h)| Hit {
+        self.hit_of_slot(self.wide.intersect(ray, stack))
+    }
+
+    /// The hit of a wide-tree hit on triangle slot `slot`: the slot named
+    /// by its input triangle.
+    fn hit_of_slot(&self, found: Option<(u32, ScalarHit)>) -> Option<Hit> {
+        found.map(|(slot, h)| Hit {
             t: h.t,
             u: h.u,
             v: h.v,
@@ -608,8 +649,16 @@ impl Bvh {
     /// Closest hits of a packet's active lanes, one ray at a time through
     /// the 8-wide tree. Same output convention as [`Bvh::intersect_packet`].
     pub fn intersect_packet_wide(&self, packet: &RayPacket) -> PacketHit {
-        let mut stack = WideStack::new();
-        hits_by_lane(packet, |ray| self.intersect_wide(ray, &mut stack))
+        let found = in_step(
+            packet,
+            |rays, stacks| {
+                self.wide
+                    .intersect_many(rays, stacks)
+                    .map(|h| self.hit_of_slot(h))
+            },
+            |ray, stack| self.intersect_wide(ray, stack),
+        );
+        packet_hit(packet, &found.map(Option::flatten))
     }
 }
 

@@ -19,18 +19,28 @@ pub(super) fn hits_by_lane(
     packet: &RayPacket,
     mut hit: impl FnMut(&Ray) -> Option<Hit>,
 ) -> PacketHit {
+    let mut found: [Option<Hit>; LANES] = [None; LANES];
+    for lane in packet.active.iter() {
+        found[lane] = hit(&packet.ray(lane));
+    }
+    packet_hit(packet, &found)
+}
+
+/// The packet hit of per-lane hits `found` (`None`: a miss, which keeps
+/// the lane's `t_max`).
+pub(super) fn packet_hit(packet: &RayPacket, found: &[Option<Hit>; LANES]) -> PacketHit {
     let mut t = packet.t_max.to_array();
     let mut u = [0.0f32; LANES];
     let mut v = [0.0f32; LANES];
     let mut triangle = [NO_TRIANGLE; LANES];
-    let mut found = LaneMask::NONE;
-    for lane in packet.active.iter() {
-        if let Some(h) = hit(&packet.ray(lane)) {
+    let mut lanes = LaneMask::NONE;
+    for (lane, h) in found.iter().enumerate() {
+        if let Some(h) = h {
             t[lane] = h.t;
             u[lane] = h.u;
             v[lane] = h.v;
             triangle[lane] = h.triangle;
-            found = found.with(lane);
+            lanes = lanes.with(lane);
         }
     }
     PacketHit {
@@ -39,7 +49,7 @@ pub(super) fn hits_by_lane(
         v: f32x8::new(v),
         triangle,
         instance: [NO_INSTANCE; LANES],
-        hit: found,
+        hit: lanes,
     }
 }
 

@@ -63,6 +63,25 @@
 //! test of that triangle. Of the accepted lanes the smallest `t` wins
 //! (lowest lane on exact ties, the first in leaf order); occlusion stops at
 //! the first accepted lane.
+//!
+//! # Rays in step
+//!
+//! On a scene of a million triangles the tree is far larger than the
+//! caches, and a single ray's walk is a chain of dependent loads: the node
+//! names the child to load next, so the core waits for memory at almost
+//! every step while its arithmetic units idle. A packet's rays are
+//! independent, so [`WideBvh::intersect_many`] and
+//! [`WideBvh::occluded_many`] walk a few of them at once, alternating one
+//! step (a node's children or a leaf's triangles, then the next entry) of
+//! each: the out-of-order core then has the loads of several walks in
+//! flight together (the same latency hiding as the "coherent streams" of
+//! Barringer & Akenine-Möller, "Dynamic Ray Stream Traversal", SIGGRAPH
+//! 2014, without reordering). When one walk ends the others finish alone.
+//! Each walk keeps its own stack, closest hit and `t_max` and runs exactly
+//! the operations of its single-ray walk, so the results are the same bit
+//! for bit. Two rays in step were faster than one and than four (four walks'
+//! state spills registers); the parent module's `RAYS_IN_STEP` says how
+//! many, and docs/performance.md has the measurements.
 
 use super::{
     Bvh2, Bvh2Node, InlineStack, PreparedTriangle, ScalarHit, cross, dot, edge_weights, inside_x8,
@@ -301,6 +320,27 @@ impl SplatRay {
         let (sum, inside) = inside_x8(w0, w1, w2);
         let accept = (in_range & inside).to_bitmask() & lanes;
         (accept != 0).then_some((accept, t, w1, w2, sum))
+    }
+}
+
+/// A ray's closest-hit walk between two steps ([`WideBvh::intersect`]).
+struct ClosestWalk {
+    splat: SplatRay,
+    best: Option<(u32, ScalarHit)>,
+    /// The closest hit's distance so far (the ray's `t_max` at first).
+    t_max: f32,
+    /// The entry to visit next.
+    current: Entry,
+}
+
+impl ClosestWalk {
+    fn new(ray: &Ray) -> Self {
+        Self {
+            splat: SplatRay::new(ray),
+            best: None,
+            t_max: ray.t_max,
+            current: (0, 0, 0.0),
+        }
     }
 }
 
@@ -608,56 +648,93 @@ impl WideBvh {
         if self.nodes.is_empty() {
             return None;
         }
-        let splat = SplatRay::new(ray);
-        let mut best: Option<(u32, ScalarHit)> = None;
-        let mut t_max = ray.t_max;
-        let mut current: Entry = (0, 0, 0.0);
-        loop {
-            let (index, count, _) = current;
-            let mut next = None;
-            if count == 0 {
-                if let Some(node) = self.nodes.get(index as usize) {
-                    next = Self::visit_children(node, &splat, t_max, stack);
-                }
-            } else {
-                for (block, lanes) in self.leaf_blocks(index, count) {
-                    if let Some((accept, t, w1, w2, sum)) = splat.block(block, lanes, t_max) {
-                        let t_lanes = t.to_array();
-                        let mut lane = accept.trailing_zeros() as usize;
-                        let mut rest = accept & (accept - 1);
-                        while rest != 0 {
-                            let k = rest.trailing_zeros() as usize;
-                            if t_lanes[k] < t_lanes[lane] {
-                                lane = k;
-                            }
-                            rest &= rest - 1;
+        let mut walk = ClosestWalk::new(ray);
+        while self.step(&mut walk, stack) {}
+        walk.best
+    }
+
+    /// [`Self::intersect`] of `K` rays at once, bit for bit: their steps
+    /// alternate, so that each ray's loads (a node, then the child it
+    /// names) are in flight while the others compute (module docs,
+    /// "Rays in step").
+    pub(super) fn intersect_many<const K: usize>(
+        &self,
+        rays: [&Ray; K],
+        stacks: &mut [WideStack; K],
+    ) -> [Option<(u32, ScalarHit)>; K] {
+        if self.nodes.is_empty() {
+            return [None; K];
+        }
+        for stack in stacks.iter_mut() {
+            stack.0.clear();
+        }
+        let mut walks = rays.map(ClosestWalk::new);
+        let mut live = [true; K];
+        while live.iter().all(|&l| l) {
+            for ((walk, stack), live) in walks.iter_mut().zip(stacks.iter_mut()).zip(&mut live) {
+                *live = self.step(walk, &mut stack.0);
+            }
+        }
+        for ((walk, stack), live) in walks.iter_mut().zip(stacks.iter_mut()).zip(live) {
+            if live {
+                while self.step(walk, &mut stack.0) {}
+            }
+        }
+        walks.map(|walk| walk.best)
+    }
+
+    /// One step of a closest-hit walk: tests the current node's children or
+    /// the current leaf's triangles, then moves to the next entry; `false`
+    /// when none is left (the walk's best hit is then the closest).
+    #[inline(always)]
+    fn step(&self, walk: &mut ClosestWalk, stack: &mut InlineStack<Entry>) -> bool {
+        let (index, count, _) = walk.current;
+        let mut next = None;
+        if count == 0 {
+            if let Some(node) = self.nodes.get(index as usize) {
+                next = Self::visit_children(node, &walk.splat, walk.t_max, stack);
+            }
+        } else {
+            for (block, lanes) in self.leaf_blocks(index, count) {
+                if let Some((accept, t, w1, w2, sum)) = walk.splat.block(block, lanes, walk.t_max) {
+                    let t_lanes = t.to_array();
+                    let mut lane = accept.trailing_zeros() as usize;
+                    let mut rest = accept & (accept - 1);
+                    while rest != 0 {
+                        let k = rest.trailing_zeros() as usize;
+                        if t_lanes[k] < t_lanes[lane] {
+                            lane = k;
                         }
-                        let at = |v: f32x8| v.to_array()[lane];
-                        let sum = at(sum);
-                        t_max = t_lanes[lane];
-                        best = Some((
-                            block.slot[lane],
-                            ScalarHit {
-                                t: t_max,
-                                u: weight(at(w1), sum, 0.0),
-                                v: weight(at(w2), sum, 0.0),
-                            },
-                        ));
+                        rest &= rest - 1;
                     }
+                    let at = |v: f32x8| v.to_array()[lane];
+                    let sum = at(sum);
+                    walk.t_max = t_lanes[lane];
+                    walk.best = Some((
+                        block.slot[lane],
+                        ScalarHit {
+                            t: walk.t_max,
+                            u: weight(at(w1), sum, 0.0),
+                            v: weight(at(w2), sum, 0.0),
+                        },
+                    ));
                 }
             }
-            if next.is_none() {
-                while let Some(entry) = stack.pop() {
-                    if entry.2 < t_max {
-                        next = Some(entry);
-                        break;
-                    }
+        }
+        if next.is_none() {
+            while let Some(entry) = stack.pop() {
+                if entry.2 < walk.t_max {
+                    next = Some(entry);
+                    break;
                 }
             }
-            match next {
-                Some(entry) => current = entry,
-                None => return best,
+        }
+        match next {
+            Some(entry) => {
+                walk.current = entry;
+                true
             }
+            None => false,
         }
     }
 
@@ -670,25 +747,78 @@ impl WideBvh {
         }
         let splat = SplatRay::new(ray);
         stack.push((0, 0, 0.0));
-        while let Some((index, count, _)) = stack.pop() {
-            if count == 0 {
-                let Some(node) = self.nodes.get(index as usize) else {
-                    continue;
-                };
-                let (_, mut hits) = splat.children(node, ray.t_max);
+        loop {
+            if let Some(blocked) = self.occlusion_step(&splat, ray.t_max, stack) {
+                return blocked;
+            }
+        }
+    }
+
+    /// [`Self::occluded`] of `K` rays at once, bit for bit, their steps
+    /// alternating as in [`Self::intersect_many`].
+    pub(super) fn occluded_many<const K: usize>(
+        &self,
+        rays: [&Ray; K],
+        stacks: &mut [WideStack; K],
+    ) -> [bool; K] {
+        let mut blocked = [false; K];
+        if self.nodes.is_empty() {
+            return blocked;
+        }
+        for stack in stacks.iter_mut() {
+            stack.0.clear();
+            stack.0.push((0, 0, 0.0));
+        }
+        let splats = rays.map(SplatRay::new);
+        let mut live = [true; K];
+        while live.iter().all(|&l| l) {
+            for k in 0..K {
+                if let Some(b) = self.occlusion_step(&splats[k], rays[k].t_max, &mut stacks[k].0) {
+                    (blocked[k], live[k]) = (b, false);
+                }
+            }
+        }
+        for k in 0..K {
+            while live[k] {
+                if let Some(b) = self.occlusion_step(&splats[k], rays[k].t_max, &mut stacks[k].0) {
+                    (blocked[k], live[k]) = (b, false);
+                }
+            }
+        }
+        blocked
+    }
+
+    /// One step of an occlusion walk: pops an entry and pushes a node's hit
+    /// children or tests a leaf's triangles. `Some(true)` at the first hit,
+    /// `Some(false)` when the stack is empty, `None` to go on.
+    #[inline(always)]
+    fn occlusion_step(
+        &self,
+        splat: &SplatRay,
+        t_max: f32,
+        stack: &mut InlineStack<Entry>,
+    ) -> Option<bool> {
+        let Some((index, count, _)) = stack.pop() else {
+            return Some(false);
+        };
+        if count == 0 {
+            if let Some(node) = self.nodes.get(index as usize) {
+                let (_, mut hits) = splat.children(node, t_max);
                 while hits != 0 {
                     let k = hits.trailing_zeros() as usize;
                     stack.push((node.index[k], node.count[k], 0.0));
                     hits &= hits - 1;
                 }
-            } else if self
-                .leaf_blocks(index, count)
-                .any(|(block, lanes)| splat.block(block, lanes, ray.t_max).is_some())
-            {
-                return true;
             }
+            None
+        } else if self
+            .leaf_blocks(index, count)
+            .any(|(block, lanes)| splat.block(block, lanes, t_max).is_some())
+        {
+            Some(true)
+        } else {
+            None
         }
-        false
     }
 
     /// The blocks of the leaf whose `count` triangles start at lane `first`
@@ -1113,5 +1243,72 @@ mod tests {
             }
         }
         assert!(hits > 200, "{hits}");
+    }
+
+    /// Rays through the soup's box along the diagonal (`along`), or far
+    /// beside it (`beside`): walks of very different lengths, so that in a
+    /// group one walk ends while the others go on.
+    fn step_rays(count: usize) -> Vec<Ray> {
+        (0..count)
+            .map(|i| {
+                let a = i as f32 * 0.618_034;
+                let origin = Vec3::new(-1.0, (1.3 * a).fract(), (2.9 * a).fract());
+                let target = Vec3::new(2.0, (3.7 * a).fract(), (0.7 * a).fract());
+                let beside = if i % 5 == 0 {
+                    Vec3::Y * 4.0
+                } else {
+                    Vec3::ZERO
+                };
+                Ray {
+                    origin: origin + beside,
+                    direction: target - origin,
+                    t_max: if i % 3 == 0 { 0.4 } else { f32::INFINITY },
+                }
+            })
+            .collect()
+    }
+
+    /// `intersect_many` and `occluded_many` return, for every ray of the
+    /// group, what that ray's own walk returns, bit for bit, whatever the
+    /// group's size and order, and whatever the stacks held before.
+    fn check_in_step<const K: usize>(bvh: &Bvh, rays: &[Ray]) -> (usize, usize) {
+        let (mut stack, mut stacks) =
+            (WideStack::new(), core::array::from_fn(|_| WideStack::new()));
+        let (mut hits, mut blocked) = (0, 0);
+        for group in rays.chunks_exact(K) {
+            let group: [&Ray; K] = core::array::from_fn(|k| &group[k]);
+            let many = bvh.wide.intersect_many(group, &mut stacks);
+            let many_blocked = bvh.wide.occluded_many(group, &mut stacks);
+            for (k, ray) in group.into_iter().enumerate() {
+                let own = bvh.wide.intersect(ray, &mut stack);
+                let bits = |h: Option<(u32, ScalarHit)>| {
+                    h.map(|(slot, h)| (slot, [h.t, h.u, h.v].map(f32::to_bits)))
+                };
+                assert_eq!(bits(many[k]), bits(own), "ray {ray:?}");
+                assert_eq!(
+                    many_blocked[k],
+                    bvh.wide.occluded(ray, &mut stack),
+                    "ray {ray:?}"
+                );
+                hits += usize::from(own.is_some());
+                blocked += usize::from(many_blocked[k]);
+            }
+        }
+        (hits, blocked)
+    }
+
+    #[test]
+    fn rays_in_step_match_single_rays_bit_for_bit() {
+        let bvh = Bvh::build(&soup(500));
+        let rays = step_rays(600);
+        let (hits, blocked) = check_in_step::<2>(&bvh, &rays);
+        assert_eq!(hits, blocked);
+        // Some rays hit, some miss: both endings are in the groups.
+        assert!(hits > 100 && hits < 500, "{hits} of {}", rays.len());
+        check_in_step::<3>(&bvh, &rays);
+        check_in_step::<4>(&bvh, &rays[1..]);
+        // An empty tree: every ray misses.
+        let empty = Bvh::build(&[]);
+        assert_eq!(check_in_step::<2>(&empty, &rays), (0, 0));
     }
 }
