@@ -3,7 +3,7 @@
 
 use super::packet_traversal::PacketRays;
 use super::triangle::{PreparedTriangle, weight};
-use super::{Bvh, BvhLayout, in_step, index_u32};
+use super::{Bvh, BvhLayout, in_step, index_u32, packet_rays, step_stacks};
 use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::{PacketHit, RayPacket};
 use crate::simd::{LANES, LaneMask};
@@ -247,7 +247,9 @@ impl Bvh {
     /// 8-wide tree.
     pub fn occluded_packet_wide(&self, packet: &RayPacket) -> LaneMask {
         let blocked = in_step(
-            packet,
+            &packet_rays(packet),
+            packet.active,
+            &mut step_stacks(),
             |rays, stacks| self.wide.occluded_many(rays, stacks),
             |ray, stack| self.occluded_wide(ray, stack),
         );

@@ -191,35 +191,69 @@ pub use wide_tree::{WIDTH as WIDE_WIDTH, WideStack};
 /// Stack entries kept inline before spilling to the heap.
 const INLINE_STACK: usize = 64;
 
-/// `one(ray)` of each of `packet`'s active lanes (`None` for the others),
-/// computed [`RAYS_IN_STEP`] lanes at a time by `many` (the leftovers one
-/// by one): the rays' walks through the 8-wide tree go in step.
-fn in_step<T: Copy>(
-    packet: &RayPacket,
-    mut many: impl FnMut([&Ray; RAYS_IN_STEP], &mut [WideStack; RAYS_IN_STEP]) -> [T; RAYS_IN_STEP],
-    mut one: impl FnMut(&Ray, &mut WideStack) -> T,
+/// `one(ray)` of each active lane's ray of `rays` (`None` for the
+/// others), computed [`RAYS_IN_STEP`] lanes at a time by `many` (the
+/// leftovers one by one), each ray with its own `scratch`: the rays' walks
+/// through the 8-wide trees go in step ([`alternate`]).
+fn in_step<T: Copy, S>(
+    rays: &[Ray; LANES],
+    active: LaneMask,
+    scratch: &mut [S; RAYS_IN_STEP],
+    mut many: impl FnMut([&Ray; RAYS_IN_STEP], &mut [S; RAYS_IN_STEP]) -> [T; RAYS_IN_STEP],
+    mut one: impl FnMut(&Ray, &mut S) -> T,
 ) -> [Option<T>; LANES] {
-    let mut stacks: [WideStack; RAYS_IN_STEP] = core::array::from_fn(|_| WideStack::new());
-    let rays: [Ray; LANES] = core::array::from_fn(|lane| packet.ray(lane));
     let (mut order, mut count) = ([0usize; LANES], 0);
-    for lane in packet.active.iter() {
+    for lane in active.iter() {
         order[count] = lane;
         count += 1;
     }
     let mut found = [None; LANES];
     for chunk in order[..count].chunks(RAYS_IN_STEP) {
         if let Ok(lanes) = <[usize; RAYS_IN_STEP]>::try_from(chunk) {
-            let results = many(lanes.map(|lane| &rays[lane]), &mut stacks);
+            let results = many(lanes.map(|lane| &rays[lane]), scratch);
             for (lane, result) in lanes.into_iter().zip(results) {
                 found[lane] = Some(result);
             }
         } else {
             for &lane in chunk {
-                found[lane] = Some(one(&rays[lane], &mut stacks[0]));
+                found[lane] = Some(one(&rays[lane], &mut scratch[0]));
             }
         }
     }
     found
+}
+
+/// Advances `K` walks in step (`wide_tree` module docs, "Rays in step"):
+/// one `step` of each in turn while all go on, then each of the others
+/// alone to its end. `step` returns whether its walk goes on; each walk
+/// takes exactly the steps it would take alone.
+#[inline(always)]
+fn alternate<W, S, const K: usize>(
+    walks: &mut [W; K],
+    scratch: &mut [S; K],
+    mut step: impl FnMut(&mut W, &mut S) -> bool,
+) {
+    let mut live = [true; K];
+    while live.iter().all(|&l| l) {
+        for ((walk, s), live) in walks.iter_mut().zip(scratch.iter_mut()).zip(&mut live) {
+            *live = step(walk, s);
+        }
+    }
+    for ((walk, s), live) in walks.iter_mut().zip(scratch.iter_mut()).zip(live) {
+        if live {
+            while step(walk, s) {}
+        }
+    }
+}
+
+/// The rays of all of `packet`'s lanes.
+fn packet_rays(packet: &RayPacket) -> [Ray; LANES] {
+    core::array::from_fn(|lane| packet.ray(lane))
+}
+
+/// Fresh scratch stacks, one per ray in step.
+fn step_stacks() -> [WideStack; RAYS_IN_STEP] {
+    core::array::from_fn(|_| WideStack::new())
 }
 
 /// Rays whose walks through the 8-wide tree go in step
@@ -650,7 +684,9 @@ impl Bvh {
     /// the 8-wide tree. Same output convention as [`Bvh::intersect_packet`].
     pub fn intersect_packet_wide(&self, packet: &RayPacket) -> PacketHit {
         let found = in_step(
-            packet,
+            &packet_rays(packet),
+            packet.active,
+            &mut step_stacks(),
             |rays, stacks| {
                 self.wide
                     .intersect_many(rays, stacks)

@@ -84,8 +84,8 @@
 //! many, and docs/performance.md has the measurements.
 
 use super::{
-    Bvh2, Bvh2Node, InlineStack, PreparedTriangle, ScalarHit, cross, dot, edge_weights, inside_x8,
-    plane_terms, safe_inverse, sub3, weight,
+    Bvh2, Bvh2Node, InlineStack, PreparedTriangle, ScalarHit, alternate, cross, dot, edge_weights,
+    inside_x8, plane_terms, safe_inverse, sub3, weight,
 };
 use crate::packet::Ray;
 use glam::Vec3;
@@ -334,15 +334,19 @@ struct ClosestWalk {
 }
 
 impl ClosestWalk {
+    /// A walk of `ray` from the root.
     fn new(ray: &Ray) -> Self {
         Self {
             splat: SplatRay::new(ray),
             best: None,
             t_max: ray.t_max,
-            current: (0, 0, 0.0),
+            current: ROOT,
         }
     }
 }
+
+/// The root's stack entry (a node, index 0).
+const ROOT: Entry = (0, 0, 0.0);
 
 /// A stack entry: child index (a node, or a leaf's first lane), triangle
 /// count (0: inner node), entry distance.
@@ -669,17 +673,9 @@ impl WideBvh {
             stack.0.clear();
         }
         let mut walks = rays.map(ClosestWalk::new);
-        let mut live = [true; K];
-        while live.iter().all(|&l| l) {
-            for ((walk, stack), live) in walks.iter_mut().zip(stacks.iter_mut()).zip(&mut live) {
-                *live = self.step(walk, &mut stack.0);
-            }
-        }
-        for ((walk, stack), live) in walks.iter_mut().zip(stacks.iter_mut()).zip(live) {
-            if live {
-                while self.step(walk, &mut stack.0) {}
-            }
-        }
+        alternate(&mut walks, stacks, |walk, stack| {
+            self.step(walk, &mut stack.0)
+        });
         walks.map(|walk| walk.best)
     }
 
@@ -746,7 +742,7 @@ impl WideBvh {
             return false;
         }
         let splat = SplatRay::new(ray);
-        stack.push((0, 0, 0.0));
+        stack.push(ROOT);
         loop {
             if let Some(blocked) = self.occlusion_step(&splat, ray.t_max, stack) {
                 return blocked;
@@ -761,31 +757,28 @@ impl WideBvh {
         rays: [&Ray; K],
         stacks: &mut [WideStack; K],
     ) -> [bool; K] {
-        let mut blocked = [false; K];
         if self.nodes.is_empty() {
-            return blocked;
+            return [false; K];
         }
         for stack in stacks.iter_mut() {
             stack.0.clear();
-            stack.0.push((0, 0, 0.0));
+            stack.0.push(ROOT);
         }
-        let splats = rays.map(SplatRay::new);
-        let mut live = [true; K];
-        while live.iter().all(|&l| l) {
-            for k in 0..K {
-                if let Some(b) = self.occlusion_step(&splats[k], rays[k].t_max, &mut stacks[k].0) {
-                    (blocked[k], live[k]) = (b, false);
+        // Each walk: its ray, the ray splatted, and whether it is blocked.
+        let mut walks = rays.map(|ray| (ray, SplatRay::new(ray), false));
+        alternate(
+            &mut walks,
+            stacks,
+            |(ray, splat, blocked), stack| match self.occlusion_step(splat, ray.t_max, &mut stack.0)
+            {
+                Some(b) => {
+                    *blocked = b;
+                    false
                 }
-            }
-        }
-        for k in 0..K {
-            while live[k] {
-                if let Some(b) = self.occlusion_step(&splats[k], rays[k].t_max, &mut stacks[k].0) {
-                    (blocked[k], live[k]) = (b, false);
-                }
-            }
-        }
-        blocked
+                None => true,
+            },
+        );
+        walks.map(|(_, _, blocked)| blocked)
     }
 
     /// One step of an occlusion walk: pops an entry and pushes a node's hit
