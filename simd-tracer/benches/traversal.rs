@@ -12,7 +12,7 @@
 //! Throughput is reported per ray (`Throughput::Elements(8)` per packet).
 //!
 //! `*/wide_per_ray` is the renderer's single-ray path through the 8-wide
-//! tree (`Bvh::intersect_packet_wide`, `Bvh::occluded_packet_wide`), used
+//! tree (a packet's rays two in step) (`Bvh::intersect_packet_wide`, `Bvh::occluded_packet_wide`), used
 //! for incoherent rays in scenes above `WIDE_MIN_TRIANGLES` triangles.
 //!
 //! `closest/cwbvh_per_ray` is not the renderer's code: the same 8 rays one

@@ -999,6 +999,10 @@ fn hit_bits(h: &PacketHit) -> ([[u32; LANES]; 3], [u32; LANES], u8) {
 /// `packet_agrees_with_scalar_on_many_random_packets` checks against the
 /// scalar oracle), and holds at least the binary tree's per-triangle data
 /// less.
+///
+/// This is also the bit-for-bit oracle of the packet forms' rays in step
+/// (`intersect_packet_wide`, `occluded_packet_wide`) against single-ray
+/// walks, on random partial packets (odd counts leave a lane alone).
 #[test]
 fn wide_only_trees_answer_every_query_like_the_wide_tree_of_both_layouts() {
     for (name, scene) in [

@@ -3,7 +3,7 @@
 
 use super::packet_traversal::PacketRays;
 use super::triangle::{PreparedTriangle, weight};
-use super::{Bvh, BvhLayout, in_step, index_u32, packet_rays, step_stacks};
+use super::{Bvh, BvhLayout, in_step, index_u32};
 use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::{PacketHit, RayPacket};
 use crate::simd::{LANES, LaneMask};
@@ -243,13 +243,11 @@ impl Bvh {
         LaneMask((blocked & wanted) as u8)
     }
 
-    /// Occlusion of a packet's active lanes, one ray at a time through the
-    /// 8-wide tree.
+    /// Occlusion of a packet's active lanes through the 8-wide tree, each
+    /// its single-ray walk, two rays in step.
     pub fn occluded_packet_wide(&self, packet: &RayPacket) -> LaneMask {
         let blocked = in_step(
-            &packet_rays(packet),
-            packet.active,
-            &mut step_stacks(),
+            packet,
             |rays, stacks| self.wide.occluded_many(rays, stacks),
             |ray, stack| self.occluded_wide(ray, stack),
         );

@@ -103,7 +103,8 @@
 //!   [`Bvh::occluded_wide`], and the packet forms
 //!   [`Bvh::intersect_packet_wide`], [`Bvh::occluded_packet_wide`]): the
 //!   binary tree collapsed to 8 children per node, 8 child boxes and 8
-//!   triangles per SIMD test (`wide_tree`), each triangle lane bit-identical
+//!   triangles per SIMD test (`wide_tree`; the packet forms walk two rays
+//!   in step, its "Rays in step"), each triangle lane bit-identical
 //!   to the scalar test.
 //!
 //! * Flat ([`Bvh::intersect_packet_flat`], [`Bvh::occluded_packet_flat`]):
@@ -142,7 +143,7 @@
 //! are dropped after the wide tree is built from them (the wide blocks are
 //! filled from the input on demand, so the build never holds both copies of
 //! the records), and every query, packets, flat and scalar alike, goes
-//! through the wide tree one ray at a time.
+//! through the wide tree ray by ray (a packet's rays two in step).
 //!
 //! The renderer sends camera rays through packets and incoherent rays
 //! through [`Bvh::intersect_incoherent`] (bounces) and
@@ -191,69 +192,37 @@ pub use wide_tree::{WIDTH as WIDE_WIDTH, WideStack};
 /// Stack entries kept inline before spilling to the heap.
 const INLINE_STACK: usize = 64;
 
-/// `one(ray)` of each active lane's ray of `rays` (`None` for the
-/// others), computed [`RAYS_IN_STEP`] lanes at a time by `many` (the
-/// leftovers one by one), each ray with its own `scratch`: the rays' walks
-/// through the 8-wide trees go in step ([`alternate`]).
-fn in_step<T: Copy, S>(
-    rays: &[Ray; LANES],
-    active: LaneMask,
-    scratch: &mut [S; RAYS_IN_STEP],
-    mut many: impl FnMut([&Ray; RAYS_IN_STEP], &mut [S; RAYS_IN_STEP]) -> [T; RAYS_IN_STEP],
-    mut one: impl FnMut(&Ray, &mut S) -> T,
+/// `one(ray)` of each of `packet`'s active lanes (`None` for the others),
+/// computed [`RAYS_IN_STEP`] lanes at a time by `many` (the leftovers one
+/// by one), so that the rays' walks through the 8-wide tree go in step
+/// (`wide_tree` module docs, "Rays in step"). The stacks are scratch space
+/// shared by all.
+fn in_step<T: Copy>(
+    packet: &RayPacket,
+    mut many: impl FnMut([&Ray; RAYS_IN_STEP], &mut [WideStack; RAYS_IN_STEP]) -> [T; RAYS_IN_STEP],
+    mut one: impl FnMut(&Ray, &mut WideStack) -> T,
 ) -> [Option<T>; LANES] {
+    let mut stacks: [WideStack; RAYS_IN_STEP] = core::array::from_fn(|_| WideStack::new());
+    let rays: [Ray; LANES] = core::array::from_fn(|lane| packet.ray(lane));
     let (mut order, mut count) = ([0usize; LANES], 0);
-    for lane in active.iter() {
+    for lane in packet.active.iter() {
         order[count] = lane;
         count += 1;
     }
     let mut found = [None; LANES];
     for chunk in order[..count].chunks(RAYS_IN_STEP) {
         if let Ok(lanes) = <[usize; RAYS_IN_STEP]>::try_from(chunk) {
-            let results = many(lanes.map(|lane| &rays[lane]), scratch);
+            let results = many(lanes.map(|lane| &rays[lane]), &mut stacks);
             for (lane, result) in lanes.into_iter().zip(results) {
                 found[lane] = Some(result);
             }
         } else {
             for &lane in chunk {
-                found[lane] = Some(one(&rays[lane], &mut scratch[0]));
+                found[lane] = Some(one(&rays[lane], &mut stacks[0]));
             }
         }
     }
     found
-}
-
-/// Advances `K` walks in step (`wide_tree` module docs, "Rays in step"):
-/// one `step` of each in turn while all go on, then each of the others
-/// alone to its end. `step` returns whether its walk goes on; each walk
-/// takes exactly the steps it would take alone.
-#[inline(always)]
-fn alternate<W, S, const K: usize>(
-    walks: &mut [W; K],
-    scratch: &mut [S; K],
-    mut step: impl FnMut(&mut W, &mut S) -> bool,
-) {
-    let mut live = [true; K];
-    while live.iter().all(|&l| l) {
-        for ((walk, s), live) in walks.iter_mut().zip(scratch.iter_mut()).zip(&mut live) {
-            *live = step(walk, s);
-        }
-    }
-    for ((walk, s), live) in walks.iter_mut().zip(scratch.iter_mut()).zip(live) {
-        if live {
-            while step(walk, s) {}
-        }
-    }
-}
-
-/// The rays of all of `packet`'s lanes.
-fn packet_rays(packet: &RayPacket) -> [Ray; LANES] {
-    core::array::from_fn(|lane| packet.ray(lane))
-}
-
-/// Fresh scratch stacks, one per ray in step.
-fn step_stacks() -> [WideStack; RAYS_IN_STEP] {
-    core::array::from_fn(|_| WideStack::new())
 }
 
 /// Rays whose walks through the 8-wide tree go in step
@@ -303,7 +272,7 @@ pub enum BvhLayout {
     /// The binary tree with its prepared triangles and the 8-wide tree.
     BinaryAndWide,
     /// The 8-wide tree alone: packet, flat and scalar queries all run
-    /// through it (one ray at a time); the prepared records live only in
+    /// through it (ray by ray); the prepared records live only in
     /// its blocks.
     WideOnly,
 }
@@ -660,8 +629,8 @@ impl Bvh {
         self.hit_of_slot(self.wide.intersect(ray, stack))
     }
 
-    /// The hit of a wide-tree hit on triangle slot `slot`: the slot named
-    /// by its input triangle.
+    /// A wide-tree hit with its triangle slot replaced by the input
+    /// triangle of that slot ([`NO_TRIANGLE`] for a slot out of range).
     fn hit_of_slot(&self, found: Option<(u32, ScalarHit)>) -> Option<Hit> {
         found.map(|(slot, h)| Hit {
             t: h.t,
@@ -680,13 +649,12 @@ impl Bvh {
         self.wide.occluded(ray, stack)
     }
 
-    /// Closest hits of a packet's active lanes, one ray at a time through
-    /// the 8-wide tree. Same output convention as [`Bvh::intersect_packet`].
+    /// Closest hits of a packet's active lanes through the 8-wide tree,
+    /// each its single-ray walk, two rays in step. Same output convention
+    /// as [`Bvh::intersect_packet`].
     pub fn intersect_packet_wide(&self, packet: &RayPacket) -> PacketHit {
         let found = in_step(
-            &packet_rays(packet),
-            packet.active,
-            &mut step_stacks(),
+            packet,
             |rays, stacks| {
                 self.wide
                     .intersect_many(rays, stacks)

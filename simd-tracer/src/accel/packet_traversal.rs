@@ -283,8 +283,8 @@ impl Bvh {
     /// considered. Lanes without a hit carry their `t_max`, `u = v = 0` and
     /// triangle [`NO_TRIANGLE`].
     ///
-    /// A [`BvhLayout::WideOnly`] tree answers through its 8-wide tree, one
-    /// ray at a time ([`Bvh::intersect_packet_wide`]).
+    /// A [`BvhLayout::WideOnly`] tree answers through its 8-wide tree, ray
+    /// by ray ([`Bvh::intersect_packet_wide`]).
     pub fn intersect_packet(&self, packet: &RayPacket) -> PacketHit {
         if self.layout == BvhLayout::WideOnly {
             return self.intersect_packet_wide(packet);

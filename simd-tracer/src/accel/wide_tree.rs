@@ -74,18 +74,19 @@
 //! [`WideBvh::occluded_many`] walk a few of them at once, alternating one
 //! step (a node's children or a leaf's triangles, then the next entry) of
 //! each: the out-of-order core then has the loads of several walks in
-//! flight together (the same latency hiding as the "coherent streams" of
-//! Barringer & Akenine-Möller, "Dynamic Ray Stream Traversal", SIGGRAPH
-//! 2014, without reordering). When one walk ends the others finish alone.
-//! Each walk keeps its own stack, closest hit and `t_max` and runs exactly
-//! the operations of its single-ray walk, so the results are the same bit
-//! for bit. Two rays in step were faster than one and than four (four walks'
-//! state spills registers); the parent module's `RAYS_IN_STEP` says how
-//! many, and docs/performance.md has the measurements.
+//! flight together (memory-level parallelism from independent work, not
+//! from shared nodes). When one walk ends the others finish alone. Each
+//! walk keeps its own stack, closest hit and `t_max` and runs exactly the
+//! operations of its single-ray walk, so the results are the same bit for
+//! bit. Two rays in step were faster than one and than four (the
+//! parent module's `RAYS_IN_STEP`; docs/performance.md has the
+//! measurements). Where the tree fits in the caches a walk seldom waits
+//! and nothing is gained, which is why the instances' bounce rays, whose
+//! mesh trees are small, still walk alone.
 
 use super::{
-    Bvh2, Bvh2Node, InlineStack, PreparedTriangle, ScalarHit, alternate, cross, dot, edge_weights,
-    inside_x8, plane_terms, safe_inverse, sub3, weight,
+    Bvh2, Bvh2Node, InlineStack, PreparedTriangle, ScalarHit, cross, dot, edge_weights, inside_x8,
+    plane_terms, safe_inverse, sub3, weight,
 };
 use crate::packet::Ray;
 use glam::Vec3;
@@ -320,6 +321,31 @@ impl SplatRay {
         let (sum, inside) = inside_x8(w0, w1, w2);
         let accept = (in_range & inside).to_bitmask() & lanes;
         (accept != 0).then_some((accept, t, w1, w2, sum))
+    }
+}
+
+/// Advances `K` walks in step (module docs, "Rays in step"): one `step`
+/// of each in turn while all go on, then each of the others alone to its
+/// end. `step` returns whether its walk goes on; each walk takes exactly
+/// the steps it would take alone.
+#[inline(always)]
+fn alternate<W, const K: usize>(
+    walks: &mut [W; K],
+    stacks: &mut [WideStack; K],
+    mut step: impl FnMut(&mut W, &mut InlineStack<Entry>) -> bool,
+) {
+    // With no walk, `all` below would hold for ever.
+    const { assert!(K > 0) };
+    let mut live = [true; K];
+    while live.iter().all(|&l| l) {
+        for ((walk, stack), live) in walks.iter_mut().zip(stacks.iter_mut()).zip(&mut live) {
+            *live = step(walk, &mut stack.0);
+        }
+    }
+    for ((walk, stack), live) in walks.iter_mut().zip(stacks.iter_mut()).zip(live) {
+        if live {
+            while step(walk, &mut stack.0) {}
+        }
     }
 }
 
@@ -673,9 +699,7 @@ impl WideBvh {
             stack.0.clear();
         }
         let mut walks = rays.map(ClosestWalk::new);
-        alternate(&mut walks, stacks, |walk, stack| {
-            self.step(walk, &mut stack.0)
-        });
+        alternate(&mut walks, stacks, |walk, stack| self.step(walk, stack));
         walks.map(|walk| walk.best)
     }
 
@@ -769,8 +793,7 @@ impl WideBvh {
         alternate(
             &mut walks,
             stacks,
-            |(ray, splat, blocked), stack| match self.occlusion_step(splat, ray.t_max, &mut stack.0)
-            {
+            |(ray, splat, blocked), stack| match self.occlusion_step(splat, ray.t_max, stack) {
                 Some(b) => {
                     *blocked = b;
                     false
