@@ -122,20 +122,32 @@ pub(super) fn keeps_flat_copies(kept_triangles: usize) -> bool {
 /// pairing is the input's and not the tree's. `original` maps slots to input
 /// indices.
 pub(super) fn slot_fan_pairs(input: &[[Vec3; 3]], original: &[u32]) -> Vec<[u32; 2]> {
-    let mut by_input: Vec<(u32, u32)> = original
-        .iter()
-        .enumerate()
-        .map(|(slot, &o)| (o, index_u32(slot)))
-        .collect();
-    by_input.par_sort_unstable();
-    let corners = |k: usize| by_input.get(k).and_then(|&(o, _)| input.get(o as usize));
-    let mut pairs: Vec<[u32; 2]> = fan_pairs(by_input.len(), corners)
+    // The kept triangles' slots in input order: `original` is a
+    // permutation of the kept input indices, so scattering the slots by
+    // input index and dropping the gaps inverts it (no sort, 4 bytes a
+    // triangle).
+    let mut kept = vec![NO_SLOT; input.len()];
+    for (slot, &o) in original.iter().enumerate() {
+        if let Some(s) = kept.get_mut(o as usize) {
+            *s = index_u32(slot);
+        }
+    }
+    kept.retain(|&slot| slot != NO_SLOT);
+    debug_assert_eq!(kept.len(), original.len(), "slots name distinct triangles");
+    let corners = |k: usize| {
+        let &slot = kept.get(k)?;
+        input.get(*original.get(slot as usize)? as usize)
+    };
+    let mut pairs: Vec<[u32; 2]> = fan_pairs(kept.len(), corners)
         .into_iter()
-        .filter_map(|k| Some([by_input.get(k)?.1, by_input.get(k + 1)?.1]))
+        .filter_map(|k| Some([*kept.get(k)?, *kept.get(k + 1)?]))
         .collect();
-    pairs.sort_unstable();
+    pairs.par_sort_unstable();
     pairs
 }
+
+/// No slot (an input triangle the tree left out).
+const NO_SLOT: u32 = u32::MAX;
 
 /// Makes the prepared record of a slot from the input on demand: its own
 /// edges, and the plane of its fan pair's first triangle where it is a
@@ -145,7 +157,7 @@ pub(super) fn slot_fan_pairs(input: &[[Vec3; 3]], original: &[u32]) -> Vec<[u32;
 pub(super) struct Preparer<'a> {
     input: &'a [[Vec3; 3]],
     original: &'a [u32],
-    /// Per slot, the slot of its pair's first triangle, or `u32::MAX`.
+    /// Per slot, the slot of its pair's first triangle, or [`NO_SLOT`].
     plane_of: Vec<u32>,
 }
 
@@ -153,7 +165,7 @@ impl<'a> Preparer<'a> {
     /// For the tree's slots (`original`: slot → input index) and its fan
     /// pairs (slots).
     pub(super) fn new(input: &'a [[Vec3; 3]], original: &'a [u32], pairs: &[[u32; 2]]) -> Self {
-        let mut plane_of = vec![u32::MAX; original.len()];
+        let mut plane_of = vec![NO_SLOT; original.len()];
         for &[first, second] in pairs {
             if let Some(p) = plane_of.get_mut(second as usize) {
                 *p = first;
@@ -178,7 +190,7 @@ impl<'a> Preparer<'a> {
         let first = self
             .plane_of
             .get(slot)
-            .filter(|&&first| first != u32::MAX)
+            .filter(|&&first| first != NO_SLOT)
             .and_then(|&first| self.corners(first as usize));
         Some(match first {
             Some(first) => PreparedTriangle::on_plane_of(vertices, &PreparedTriangle::new(first)),

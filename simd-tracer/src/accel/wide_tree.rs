@@ -908,7 +908,7 @@ impl WideBvh {
         &self,
         slots: usize,
         prepared: impl Fn(usize) -> Option<PreparedTriangle> + Sync,
-        corners: impl Fn(usize) -> Option<[Vec3; 3]>,
+        corners: impl Fn(usize) -> Option<[Vec3; 3]> + Sync,
     ) -> Result<(), String> {
         if slots == 0 {
             return if self.nodes.is_empty() && self.blocks.is_empty() {
@@ -927,6 +927,11 @@ impl WideBvh {
         let mut lane_seen = vec![false; self.blocks.len() * WIDTH];
         let mut slot_seen = vec![false; slots];
         let mut pending = vec![0usize];
+        // The leaf children met, as (node, child), checked after the walk.
+        let mut leaves = Vec::new();
+        let lane = |v: [f32x8; 3], k: usize| {
+            Vec3::new(v[0].to_array()[k], v[1].to_array()[k], v[2].to_array()[k])
+        };
         while let Some(index) = pending.pop() {
             let node = self
                 .nodes
@@ -938,9 +943,6 @@ impl WideBvh {
             if node.used == 0 {
                 return Err(format!("wide node {index} has no children"));
             }
-            let lane = |v: [f32x8; 3], k: usize| {
-                Vec3::new(v[0].to_array()[k], v[1].to_array()[k], v[2].to_array()[k])
-            };
             for k in 0..WIDTH {
                 if node.used & (1 << k) == 0 {
                     if node.index[k] != 0 || node.count[k] != 0 {
@@ -995,14 +997,8 @@ impl WideBvh {
                     if std::mem::replace(seen, true) {
                         return Err(format!("triangle slot {slot} is in two lanes"));
                     }
-                    let [a, bb, c] = corners(slot as usize)
-                        .ok_or_else(|| format!("triangle slot {slot} has no input triangle"))?;
-                    if !inside(a.min(bb).min(c), a.max(bb).max(c)) {
-                        return Err(format!(
-                            "wide node {index} child {k} does not bound triangle slot {slot}"
-                        ));
-                    }
                 }
+                leaves.push((index, k));
             }
         }
         if let Some(n) = node_seen.iter().position(|&s| !s) {
@@ -1017,6 +1013,26 @@ impl WideBvh {
         }
         if let Some(s) = slot_seen.iter().position(|&s| !s) {
             return Err(format!("triangle slot {s} is in no block"));
+        }
+        // Every leaf's box bounds its triangles (random reads of the input,
+        // on all threads, the first failure in the order of the walk).
+        let unbounded = leaves.par_iter().find_map_first(|&(index, k)| {
+            let node = self.nodes.get(index)?;
+            let (min, max) = (lane(node.min, k), lane(node.max, k));
+            let first = node.index[k] as usize;
+            (first..first + node.count[k] as usize).find_map(|at| {
+                let slot = self.blocks.get(at / WIDTH)?.slot[at % WIDTH];
+                let Some([a, b, c]) = corners(slot as usize) else {
+                    return Some(format!("triangle slot {slot} has no input triangle"));
+                };
+                let (low, high) = (a.min(b).min(c), a.max(b).max(c));
+                (!(min.cmple(low).all() && high.cmple(max).all())).then(|| {
+                    format!("wide node {index} child {k} does not bound triangle slot {slot}")
+                })
+            })
+        });
+        if let Some(error) = unbounded {
+            return Err(error);
         }
         // Every used lane holds its slot's record, bit for bit: the costly
         // part (each record is derived again), on all threads, reporting
@@ -1126,7 +1142,8 @@ mod tests {
         let mut max = broken.wide.nodes[node].max[0].to_array();
         max[k] = broken.wide.nodes[node].min[0].to_array()[k];
         broken.wide.nodes[node].max[0] = f32x8::new(max);
-        assert!(broken.validate(&input).unwrap_err().contains("bound"));
+        let error = broken.validate(&input).unwrap_err();
+        assert!(error.contains("does not bound triangle slot"), "{error}");
 
         // A child dropped: its triangles are in no block.
         let mut broken = bvh.clone();
