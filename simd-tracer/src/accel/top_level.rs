@@ -142,7 +142,7 @@ impl TopLevel {
                 let (_, mut hits) = splat.children(node, ray.t_max);
                 while hits != 0 {
                     let k = hits.trailing_zeros() as usize;
-                    stack.push((node.index[k], node.count[k], 0.0));
+                    stack.push((node.index[k], u32::from(node.count[k]), 0.0));
                     hits &= hits - 1;
                 }
             } else if (index..index.saturating_add(count)).any(|slot| blocked(slot as usize)) {
@@ -197,7 +197,7 @@ impl TopLevel {
                 let (min, max) = node.child_box(k);
                 let inside = |a: Vec3, b: Vec3| min.cmple(a).all() && b.cmple(max).all();
                 let first = node.index[k] as usize;
-                let count = node.count[k] as usize;
+                let count = usize::from(node.count[k]);
                 if count == 0 {
                     let inner = self.nodes.get(first).ok_or_else(|| {
                         format!("top-level wide node {index} child {k} out of range")

@@ -98,8 +98,9 @@ use wide::f32x8;
 pub const WIDTH: usize = 8;
 
 /// A node: the boxes of up to [`WIDTH`] children in structure-of-arrays
-/// form and what each child is.
+/// form and what each child is: [`NODE_BYTES`], aligned to cache lines.
 #[derive(Debug, Clone, Copy)]
+#[repr(align(64))]
 pub(super) struct WideNode {
     /// Box minima, per axis, child in lane.
     min: [f32x8; 3],
@@ -111,8 +112,10 @@ pub(super) struct WideNode {
     /// lanes; in the instances' top level, [`super::top_level`], its first
     /// top-level slot and its number of slots).
     pub(super) index: [u32; WIDTH],
-    /// See `index`.
-    pub(super) count: [u32; WIDTH],
+    /// See `index`. Leaves hold at most a binary leaf's primitives (16 by
+    /// the builds' presets), so 16 bits suffice and keep the node at
+    /// [`NODE_BYTES`].
+    pub(super) count: [u16; WIDTH],
     /// Bit `k`: child `k` exists.
     pub(super) used: u8,
 }
@@ -374,6 +377,12 @@ impl ClosestWalk {
 /// The root's stack entry (a node, index 0).
 const ROOT: Entry = (0, 0, 0.0);
 
+/// Bytes of a [`WideNode`]: its boxes take three cache lines of 64 bytes
+/// and what its children are the fourth, so a node visit reads four lines
+/// (with `u32` counts it was 288 bytes, which straddle five).
+pub(super) const NODE_BYTES: usize = 256;
+const _: () = assert!(size_of::<WideNode>() == NODE_BYTES);
+
 /// A stack entry: child index (a node, or a leaf's first lane), triangle
 /// count (0: inner node), entry distance.
 pub(super) type Entry = (u32, u32, f32);
@@ -507,7 +516,12 @@ pub(super) fn collapse(
                 work.push((nodes.len(), child));
                 nodes.push(WideNode::EMPTY);
             } else {
-                (node.index[k], node.count[k]) = leaf(child);
+                let (first, count) = leaf(child);
+                // A count beyond 16 bits (no build makes one) is cut,
+                // and `validate` then finds triangles in no leaf.
+                debug_assert!(count <= u32::from(u16::MAX), "leaf of {count}");
+                node.index[k] = first;
+                node.count[k] = u16::try_from(count).unwrap_or(u16::MAX);
             }
         }
         nodes[wide_index] = node;
@@ -822,7 +836,7 @@ impl WideBvh {
                 let (_, mut hits) = splat.children(node, t_max);
                 while hits != 0 {
                     let k = hits.trailing_zeros() as usize;
-                    stack.push((node.index[k], node.count[k], 0.0));
+                    stack.push((node.index[k], u32::from(node.count[k]), 0.0));
                     hits &= hits - 1;
                 }
             }
@@ -865,7 +879,7 @@ impl WideBvh {
         stack: &mut InlineStack<Entry>,
     ) -> Option<Entry> {
         let (entry, hits) = ray.children(node, t_max);
-        let child = |k: usize, entry: f32| (node.index[k], node.count[k], entry);
+        let child = |k: usize, entry: f32| (node.index[k], u32::from(node.count[k]), entry);
         match hits.count_ones() {
             0 => None,
             1 => {
@@ -971,7 +985,7 @@ impl WideBvh {
                     pending.push(child);
                     continue;
                 }
-                let count = node.count[k] as usize;
+                let count = usize::from(node.count[k]);
                 let first = node.index[k] as usize;
                 let end = first + count;
                 if end > lane_seen.len() {
@@ -1020,7 +1034,7 @@ impl WideBvh {
             let node = self.nodes.get(index)?;
             let (min, max) = (lane(node.min, k), lane(node.max, k));
             let first = node.index[k] as usize;
-            (first..first + node.count[k] as usize).find_map(|at| {
+            (first..first + usize::from(node.count[k])).find_map(|at| {
                 let slot = self.blocks.get(at / WIDTH)?.slot[at % WIDTH];
                 let Some([a, b, c]) = corners(slot as usize) else {
                     return Some(format!("triangle slot {slot} has no input triangle"));
