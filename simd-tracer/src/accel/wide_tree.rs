@@ -78,7 +78,7 @@
 //! from shared nodes). When one walk ends the others finish alone. Each
 //! walk keeps its own stack, closest hit and `t_max` and runs exactly the
 //! operations of its single-ray walk, so the results are the same bit for
-//! bit. Two rays in step were faster than one and than four (the
+//! bit. Two rays in step were faster than one, three or four (the
 //! parent module's `RAYS_IN_STEP`; docs/performance.md has the
 //! measurements). Where the tree fits in the caches a walk seldom waits
 //! and nothing is gained, which is why the instances' bounce rays, whose
