@@ -34,8 +34,12 @@
 //! # Determinism and threads
 //!
 //! The levels above [`TASK_MAX_TRIANGLES`] are split first, one after the
-//! other (their binning passes run on all threads, with bins merged in a
-//! fixed order); the subtrees below are then built in parallel, each into
+//! other, each split on all threads: its binning over chunks of
+//! [`CHUNK_TRIANGLES`], bins merged in a fixed order, and its partition
+//! chunk by chunk, then the misplaced runs swapped across the split point
+//! (`partition`: the order within each side depends on the chunks, which
+//! are fixed, not on the threads; which items go to which side is the
+//! plane's alone); the subtrees below are then built in parallel, each into
 //! its own node list, and appended in order. The tree is the same whatever
 //! the number of threads. Every step is iterative: skewed splits cannot
 //! overflow a stack.
@@ -305,13 +309,125 @@ fn split(items: &mut [BuildItem], bounds: &RangeBounds, bins: &mut Bins) -> Spli
             right: RangeBounds::of(right),
         };
     };
-    // Two-pointer partition, left of the plane first: each item is
-    // classified once, where `lo` meets it.
+    let parts = partition(items, &|item: &BuildItem| {
+        binning.bin(item.centroid2()[axis]) < first_right
+    });
+    debug_assert!(
+        parts.left_len > 0 && parts.left_len < items.len(),
+        "a binned split leaves both sides non-empty"
+    );
+    Split {
+        left_len: parts.left_len.clamp(1, items.len() - 1),
+        ..parts
+    }
+}
+
+/// Moves the items `is_left` takes to the front, gathering both sides'
+/// bounds: the [`Split`] at the first item not taken. Ranges of more than
+/// [`TASK_MAX_TRIANGLES`] are partitioned on all threads (module docs,
+/// "Determinism and threads"): every chunk of [`CHUNK_TRIANGLES`] in place
+/// on its own, then the right items that lie before the split point are
+/// swapped, in order, with the left items that lie after it, in parallel
+/// runs. The order this leaves depends on the chunks, never on the threads.
+fn partition(items: &mut [BuildItem], is_left: &(impl Fn(&BuildItem) -> bool + Sync)) -> Split {
+    if items.len() <= TASK_MAX_TRIANGLES {
+        return partition_serial(items, is_left);
+    }
+    let parts: Vec<Split> = items
+        .par_chunks_mut(CHUNK_TRIANGLES)
+        .map(|chunk| partition_serial(chunk, is_left))
+        .collect();
+    let left_len = parts.iter().map(|part| part.left_len).sum();
+    let (left, right) = parts
+        .iter()
+        .fold((RangeBounds::EMPTY, RangeBounds::EMPTY), |(l, r), part| {
+            (l.merge(part.left), r.merge(part.right))
+        });
+    // Chunk `c` now holds its left items, then its right ones from `mid`.
+    // Right items before `left_len` and left items from it on, as ranges
+    // in order (as many items of each kind, so they pair up).
+    let mut misplaced_right = Vec::new();
+    let mut misplaced_left = Vec::new();
+    for (c, part) in parts.iter().enumerate() {
+        let start = c * CHUNK_TRIANGLES;
+        let end = (start + CHUNK_TRIANGLES).min(items.len());
+        let mid = start + part.left_len;
+        let (right_run, left_run) = (mid..end.min(left_len), start.max(left_len)..mid);
+        if !right_run.is_empty() {
+            misplaced_right.push(right_run);
+        }
+        if !left_run.is_empty() {
+            misplaced_left.push(left_run);
+        }
+    }
+    let (head, tail) = items.split_at_mut(left_len);
+    swap_runs((head, &misplaced_right), (tail, left_len, &misplaced_left));
+    Split {
+        left_len,
+        left,
+        right,
+    }
+}
+
+/// Swaps the items of the ranges `runs_a` of `a` (positions in `a`) with
+/// those of the ranges `runs_b` of `b` (positions from `b_offset`), the
+/// `k`-th item of the one with the `k`-th of the other (both in order,
+/// ascending, disjoint, as many items in each), in parallel runs.
+fn swap_runs(
+    (a, runs_a): (&mut [BuildItem], &[std::ops::Range<usize>]),
+    (b, b_offset, runs_b): (&mut [BuildItem], usize, &[std::ops::Range<usize>]),
+) {
+    // Pieces of equal length, cut from both sides in order.
+    let mut pieces: Vec<(&mut [BuildItem], &mut [BuildItem])> = Vec::new();
+    let (mut rest_a, mut at_a) = (a, 0);
+    let (mut rest_b, mut at_b) = (b, b_offset);
+    let (mut runs_a, mut runs_b) = (runs_a.iter().cloned(), runs_b.iter().cloned());
+    let (mut run_a, mut run_b) = (runs_a.next(), runs_b.next());
+    while let (Some(ra), Some(rb)) = (run_a.clone(), run_b.clone()) {
+        let len = ra.len().min(rb.len());
+        let Some((piece_a, after_a)) = std::mem::take(&mut rest_a)
+            .split_at_mut_checked(ra.start - at_a)
+            .and_then(|(_, from)| from.split_at_mut_checked(len))
+        else {
+            break;
+        };
+        let Some((piece_b, after_b)) = std::mem::take(&mut rest_b)
+            .split_at_mut_checked(rb.start - at_b)
+            .and_then(|(_, from)| from.split_at_mut_checked(len))
+        else {
+            break;
+        };
+        pieces.push((piece_a, piece_b));
+        (rest_a, at_a) = (after_a, ra.start + len);
+        (rest_b, at_b) = (after_b, rb.start + len);
+        run_a = if len == ra.len() {
+            runs_a.next()
+        } else {
+            Some(ra.start + len..ra.end)
+        };
+        run_b = if len == rb.len() {
+            runs_b.next()
+        } else {
+            Some(rb.start + len..rb.end)
+        };
+    }
+    debug_assert!(
+        run_a.is_none() && run_b.is_none(),
+        "the runs pair up exactly"
+    );
+    pieces
+        .into_par_iter()
+        .for_each(|(piece_a, piece_b)| piece_a.swap_with_slice(piece_b));
+}
+
+/// [`partition`] on one thread: two pointers, left of the plane first, each
+/// item classified once, where the lower pointer meets it.
+fn partition_serial(items: &mut [BuildItem], is_left: &impl Fn(&BuildItem) -> bool) -> Split {
     let (mut lo, mut hi) = (0, items.len());
     let (mut left, mut right) = (RangeBounds::EMPTY, RangeBounds::EMPTY);
     while lo < hi {
         let item = items[lo];
-        if binning.bin(item.centroid2()[axis]) < first_right {
+        if is_left(&item) {
             left.add(&item);
             lo += 1;
         } else {
@@ -320,12 +436,8 @@ fn split(items: &mut [BuildItem], bounds: &RangeBounds, bins: &mut Bins) -> Spli
             items.swap(lo, hi);
         }
     }
-    debug_assert!(
-        lo > 0 && lo < items.len(),
-        "a binned split leaves both sides non-empty"
-    );
     Split {
-        left_len: lo.clamp(1, items.len() - 1),
+        left_len: lo,
         left,
         right,
     }
@@ -523,6 +635,46 @@ mod tests {
         );
         assert!(items[..8].iter().all(|i| i.min.x < 50.0));
         assert!(items[8..].iter().all(|i| i.min.x > 50.0));
+    }
+
+    /// The partition on all threads (ranges above `TASK_MAX_TRIANGLES`)
+    /// puts every item on the side the predicate names, loses and repeats
+    /// none, and gathers each side's bounds, whatever the input's order:
+    /// shuffled, sorted (the left items all in the first chunks, nothing to
+    /// swap), sorted backwards (every chunk misplaced), and with the split
+    /// point inside a chunk. Negative control, run by hand: skipping the
+    /// last swapped run leaves right items on the left.
+    #[test]
+    fn the_parallel_partition_puts_every_item_on_its_side() {
+        let count = 3 * TASK_MAX_TRIANGLES + 1_234;
+        let shuffled: Vec<f32> = (0..count)
+            .map(|i| ((i as u64 * 2_654_435_761) % 1_000_003) as f32)
+            .collect();
+        let mut sorted = shuffled.clone();
+        sorted.sort_by(f32::total_cmp);
+        let backwards: Vec<f32> = sorted.iter().rev().copied().collect();
+        for positions in [&shuffled, &sorted, &backwards] {
+            for threshold in [1_000.0, 333_333.5, 500_001.0, 999_000.0] {
+                let mut items = row(positions);
+                let is_left = |item: &BuildItem| item.min.x < threshold;
+                let parts = partition(&mut items, &is_left);
+                let lefts = positions.iter().filter(|&&x| x < threshold).count();
+                assert_eq!(parts.left_len, lefts, "threshold {threshold}");
+                assert!(items[..lefts].iter().all(is_left));
+                assert!(!items[lefts..].iter().any(is_left));
+                let mut indices: Vec<u32> = items.iter().map(|item| item.index).collect();
+                indices.sort_unstable();
+                assert!(indices.iter().enumerate().all(|(i, &k)| i as u32 == k));
+                let (left, right) = (
+                    RangeBounds::of(&items[..lefts]),
+                    RangeBounds::of(&items[lefts..]),
+                );
+                assert_eq!(parts.left.boxes, left.boxes);
+                assert_eq!(parts.left.centroids, left.centroids);
+                assert_eq!(parts.right.boxes, right.boxes);
+                assert_eq!(parts.right.centroids, right.centroids);
+            }
+        }
     }
 
     #[test]

@@ -250,10 +250,7 @@ impl Bvh {
                 let vertices = triangles.get(i as usize)?;
                 Some(BuildItem::new(&triangle_aabb(vertices), index_u32(k)))
             }));
-            let mut bvh2 = build_binned(&mut items);
-            drop(items);
-            bvh2.max_depth = (tree_depth(&bvh2.nodes) + 1).max(DEFAULT_MAX_STACK_DEPTH);
-            bvh2
+            build_binned(&mut items)
         } else {
             // Sized up front: a collect through `filter_map` grows by
             // doubling and held up to 16 bytes a triangle at the build's
@@ -261,15 +258,17 @@ impl Bvh {
             let mut primitives: Vec<BuildTriangle<'_>> = Vec::with_capacity(kept.len());
             primitives.extend((0..kept.len()).filter_map(|k| input(k).map(BuildTriangle)));
             let mut build_time = Duration::ZERO;
-            let mut bvh2 = build_bvh2(&primitives, build_params(primitives.len()), &mut build_time);
-            // obvhs' PLOC build leaves `max_depth` (the size of its traversal
-            // stack) at the default of 96 even when the tree is deeper, as it
-            // is over many coincident triangles (found by fuzzing: depth 129);
-            // its traversal would then overflow and its validation refuses
-            // the tree. Size it from the real depth.
-            bvh2.max_depth = (tree_depth(&bvh2.nodes) + 1).max(DEFAULT_MAX_STACK_DEPTH);
-            bvh2
+            build_bvh2(&primitives, build_params(primitives.len()), &mut build_time)
         };
+        if layout == BvhLayout::BinaryAndWide {
+            // Builds leave `max_depth` (the size of obvhs' traversal stack)
+            // at the default of 96 even when the tree is deeper, as it is
+            // over many coincident triangles (found by fuzzing: depth 129);
+            // its traversal would then overflow and its validation refuses
+            // the tree. Size it from the real depth (a tree that is not
+            // kept is never traversed: no walk over its nodes).
+            bvh2.max_depth = (tree_depth(&bvh2.nodes) + 1).max(DEFAULT_MAX_STACK_DEPTH);
+        }
 
         // Leaf order, so that leaves index the triangles directly.
         let mut original: Vec<u32> = bvh2
@@ -281,11 +280,15 @@ impl Bvh {
         // grows (up to twice the slots).
         original.shrink_to_fit();
         drop(kept);
-        // Fan pairs (consecutive in the input): the second takes the
-        // first's plane.
-        let mut flat_pairs = slot_fan_pairs(triangles, &original);
-        let preparer = Preparer::new(triangles, &original, &flat_pairs);
         let slots = original.len();
+        // The wide tree's nodes (a walk of the binary tree, one thread)
+        // beside the fan pairs (consecutive in the input: the second takes
+        // the first's plane).
+        let (staged, mut flat_pairs) = rayon::join(
+            || WideBvh::stage(&bvh2, slots),
+            || slot_fan_pairs(triangles, &original),
+        );
+        let preparer = Preparer::new(triangles, &original, &flat_pairs);
         let triangles_prepared: Vec<PreparedTriangle> = match layout {
             BvhLayout::BinaryAndWide => (0..slots)
                 .into_par_iter()
@@ -297,7 +300,6 @@ impl Bvh {
             .nodes
             .first()
             .map(|root| (Vec3::from(root.aabb().min), Vec3::from(root.aabb().max)));
-        let staged = WideBvh::stage(&bvh2, slots);
         if layout == BvhLayout::WideOnly {
             // Not kept: freed before the blocks, the build's largest part.
             bvh2 = Bvh2::default();
