@@ -31,8 +31,8 @@ use simd_tracer::render::{
     render_passes, resolve_state,
 };
 use simd_tracer::sampling::sampler::SamplerKind;
-use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::SceneOptions;
+use simd_tracer::scene::{DerivedChecks, Scene};
 use simd_tracer::transport::emission_density::{EmissionDensity, emission_density};
 use simd_tracer::transport::{
     ControlVariateTransport, FourierTransport, HybridSettings, HybridTransport, SampledTransport,
@@ -368,6 +368,12 @@ pub struct RenderArgs {
     /// Do not print progress (a one-line summary only).
     #[arg(long, short)]
     pub quiet: bool,
+    /// Check the tree and the other structures the scene's build derives
+    /// against the input before rendering (always done by debug builds;
+    /// a release build skips these re-derivations, about a sixth of
+    /// loading a large mesh, unless asked).
+    #[arg(long)]
+    pub validate: bool,
 }
 
 /// `X,Y,W,H` as a [`PixelWindow`] (whether it fits the film is checked
@@ -1845,7 +1851,7 @@ pub fn render(
             .collect::<Result<_, _>>()?,
         lenient: args.lenient,
     };
-    let (builder, defaults, mut warnings) = resolve_scene(&args.scene, &options, &mitsuba)?;
+    let (mut builder, defaults, mut warnings) = resolve_scene(&args.scene, &options, &mitsuba)?;
     let scene_args = with_scene_transport(args, &defaults);
     let args = scene_args.as_ref().unwrap_or(args);
     output.check(TransportSpec::of(args).keeps_coefficients())?;
@@ -1870,6 +1876,9 @@ pub fn render(
         return Err(CliError::input(
             "--film splat (or the scene's `film = \"splat\"`) needs --transport fourier, sampled or hybrid: control variates weight each pass by every earlier pass, so their pixels are no weighted sums to splat into",
         ));
+    }
+    if args.validate {
+        builder.set_derived_checks(DerivedChecks::Full);
     }
     let scene = builder
         .build()

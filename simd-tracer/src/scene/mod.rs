@@ -657,6 +657,40 @@ pub const BVH_TRIANGLE_BYTES: usize = crate::accel::BYTES_PER_TRIANGLE;
 /// and CDF entry (its per-triangle light index is counted per triangle).
 pub const LIGHT_BYTES: usize = size_of::<Light>() + size_of::<f32>();
 
+/// Whether [`SceneBuilder::build`] checks the structures it derives from
+/// the input against that input: the tree ([`Bvh::validate`]), the
+/// triangle store and the instances' two-level tree.
+///
+/// Those checks re-derive what the build made (every prepared triangle,
+/// the fan pairs, the degenerate set, the bounds of every leaf) and
+/// compare: they find defects of the build, not of the input, which the
+/// loaders and the builder check on their own (malformed meshes, unknown
+/// ids, non-finite or degenerate triangles) whatever this setting. They
+/// cost about a sixth of loading a million-triangle mesh
+/// (`docs/performance.md`), as much again as parts of the build itself,
+/// so, like an internal `debug_assert!`, they run by default in debug
+/// builds (every test, every fuzz run) and in release builds only when
+/// asked for (`fspec render --validate`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DerivedChecks {
+    /// Every derived structure validated against the input.
+    Full,
+    /// None of those re-derivations.
+    Skip,
+}
+
+impl Default for DerivedChecks {
+    /// [`DerivedChecks::Full`] in debug builds, else
+    /// [`DerivedChecks::Skip`].
+    fn default() -> Self {
+        if cfg!(debug_assertions) {
+            Self::Full
+        } else {
+            Self::Skip
+        }
+    }
+}
+
 /// Incremental construction of a [`Scene`].
 #[derive(Debug)]
 pub struct SceneBuilder {
@@ -681,6 +715,7 @@ pub struct SceneBuilder {
     instance_requests: Vec<InstanceRequest>,
     instancing: Instancing,
     skipped: usize,
+    checks: DerivedChecks,
 }
 
 /// Where a smooth triangle's vertex normals go in the table
@@ -813,7 +848,14 @@ impl SceneBuilder {
             instance_requests: Vec::new(),
             instancing: Instancing::Auto,
             skipped: 0,
+            checks: DerivedChecks::default(),
         }
+    }
+
+    /// Sets whether [`Self::build`] validates what it derives
+    /// ([`DerivedChecks`]; by default only in debug builds).
+    pub fn set_derived_checks(&mut self, checks: DerivedChecks) {
+        self.checks = checks;
     }
 
     /// The spectral range.
@@ -1386,11 +1428,14 @@ impl SceneBuilder {
             ));
         }
         let bvh = Bvh::build(&self.triangles);
-        bvh.validate(&self.triangles).map_err(SceneError::Bvh)?;
-        if let Some(instances) = &instances {
-            instances
-                .validate(&self.materials)
-                .map_err(SceneError::Bvh)?;
+        let full = self.checks == DerivedChecks::Full;
+        if full {
+            bvh.validate(&self.triangles).map_err(SceneError::Bvh)?;
+            if let Some(instances) = &instances {
+                instances
+                    .validate(&self.materials)
+                    .map_err(SceneError::Bvh)?;
+            }
         }
         // Material ids were checked above, so every triangle has a record
         // (`Surface::NONE` is unreachable). The records are packed as they
@@ -1412,7 +1457,9 @@ impl SceneBuilder {
         // vector is gone before the records are made (`triangle_store`), so
         // the two are never held together at the build's peak.
         let triangles = TriangleStore::new(self.triangles, &bvh);
-        triangles.validate(&bvh).map_err(SceneError::Bvh)?;
+        if full {
+            triangles.validate(&bvh).map_err(SceneError::Bvh)?;
+        }
         let reader = triangles.reader(&bvh);
         let vertices_of = |index: usize| reader.get(index).unwrap_or([Vec3::NAN; 3]);
         let mut packed_surfaces = PackedSurfaces::collect(
@@ -1565,6 +1612,41 @@ mod tests {
             each.vertex_normals.memory_bytes(),
         );
         assert!(2 * shared_bytes < each_bytes, "{shared_bytes} {each_bytes}");
+        Ok(())
+    }
+
+    /// The derived checks run by default in debug builds only, and
+    /// skipping them changes neither the scene nor the checks of the input.
+    /// Negative control: a triangle of an unknown material is refused with
+    /// the checks skipped.
+    #[test]
+    fn skipping_the_derived_checks_changes_neither_the_scene_nor_the_input_checks()
+    -> Result<(), Box<dyn std::error::Error>> {
+        use super::{DerivedChecks, SceneBuilder, SceneError, camera::Camera};
+        use crate::ids::MaterialId;
+        use glam::Vec3;
+        assert_eq!(
+            DerivedChecks::default() == DerivedChecks::Full,
+            cfg!(debug_assertions)
+        );
+        let cornell = |checks| -> Result<super::Scene, Box<dyn std::error::Error>> {
+            let mut b = super::builtin::cornell_builder(SpectralRange::VISIBLE)?;
+            b.set_derived_checks(checks);
+            Ok(b.build()?)
+        };
+        let (full, skipped) = (cornell(DerivedChecks::Full)?, cornell(DerivedChecks::Skip)?);
+        assert_eq!(full.triangles(), skipped.triangles());
+        assert_eq!(full.bvh().node_count(), skipped.bvh().node_count());
+        assert_eq!(skipped.bvh().validate(&skipped.triangles()), Ok(()));
+        assert_eq!(skipped.validate_surfaces(), Ok(()));
+        let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
+        b.set_derived_checks(DerivedChecks::Skip);
+        b.add_triangle([Vec3::ZERO, Vec3::X, Vec3::Y], MaterialId(7));
+        b.set_camera(Camera::look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 40.0)?);
+        assert!(matches!(
+            b.build(),
+            Err(SceneError::UnknownMaterial(MaterialId(7)))
+        ));
         Ok(())
     }
 
