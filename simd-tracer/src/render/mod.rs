@@ -566,6 +566,9 @@ fn render_tile<T: Transport>(
         tile.ring.iter_mut().for_each(|p| *p = film.empty_pixel());
     }
     let mut scratch = splat.as_ref().map_or_else(Vec::new, Splat::empty_scratch);
+    // The group's finished samples, refilled in place for each group (an
+    // array made per group is written once and copied whole, tens of KB).
+    let mut group_samples: Vec<[FilmSample<T>; LANES]> = Vec::with_capacity(GROUP);
     for first in (0..count).step_by(GROUP) {
         let lanes: [[Option<(u32, u32)>; LANES]; GROUP] = core::array::from_fn(|g| {
             let mut lanes = [None; LANES];
@@ -593,10 +596,13 @@ fn render_tile<T: Transport>(
         };
         let mut path_rngs: [PathSampler; GROUP] =
             core::array::from_fn(|g| keys.path_sampler(&pixels(&lanes[g])));
-        let cameras: [(RayPacket, [f32x8; 2]); GROUP] = core::array::from_fn(|g| {
-            camera_packet(scene, settings, tile, &lanes[g], &mut path_rngs[g])
+        // Each lane's offset from its pixel's centre, px (x, y).
+        let mut offsets = [[f32x8::ZERO; 2]; GROUP];
+        let camera_rays: [RayPacket; GROUP] = core::array::from_fn(|g| {
+            let (rays, offset) = camera_packet(scene, settings, tile, &lanes[g], &mut path_rngs[g]);
+            offsets[g] = offset;
+            rays
         });
-        let camera_rays: [RayPacket; GROUP] = core::array::from_fn(|g| cameras[g].0);
         let mut wavelengths: [T::Wavelengths; GROUP] = core::array::from_fn(|g| {
             let pixels = pixels(&lanes[g]);
             transport.sample_wavelengths(|lane| keys.wavelength_stream(pixels[lane]))
@@ -614,8 +620,13 @@ fn render_tile<T: Transport>(
             &mut wavelengths,
             &mut tile.rays,
         );
-        let mut group_samples: [[FilmSample<T>; LANES]; GROUP] =
-            core::array::from_fn(|g| transport.samples(&radiance[g], &wavelengths[g]));
+        group_samples.clear();
+        group_samples.extend(
+            radiance
+                .iter()
+                .zip(&wavelengths)
+                .map(|(radiance, wavelengths)| transport.samples(radiance, wavelengths)),
+        );
         if !state.children.is_empty() {
             let parents = |packet: usize, lane: usize| pixels(&lanes[packet % GROUP])[lane % LANES];
             trace_children(
@@ -626,11 +637,10 @@ fn render_tile<T: Transport>(
                 &mut tile.rays,
             );
         }
-        for g in 0..GROUP {
-            let samples = &group_samples[g];
+        for (g, samples) in group_samples.iter().enumerate() {
             let finite = transport.finite_lanes(&radiance[g], samples);
             if let Some(splat) = &splat {
-                let [dx, dy] = cameras[g].1.map(|o| o.to_array());
+                let [dx, dy] = offsets[g].map(|o| o.to_array());
                 for (lane, slot) in lanes[g].iter().enumerate() {
                     let Some((lx, ly)) = *slot else { continue };
                     if finite.contains(lane) {
@@ -687,7 +697,7 @@ fn trace_children<T: Transport>(
     context: &PathContext<'_, T>,
     state: &mut GroupState<T::Spectra, GROUP>,
     (keys, parents): (&PassKeys, &dyn Fn(usize, usize) -> u64),
-    samples: &mut [[FilmSample<T>; LANES]; GROUP],
+    samples: &mut [[FilmSample<T>; LANES]],
     counts: &mut RayCounts,
 ) {
     let transport = context.transport;
