@@ -5,7 +5,9 @@
 //! NaN policy: plain IEEE arithmetic; [`Vec3x8::normalize`] of a zero vector
 //! gives NaN lanes, as `glam::Vec3::normalize` does. Callers mask such lanes.
 
+mod exp;
 mod lanes;
+pub use exp::{EXP_ARGUMENT_MIN, exp_nonpositive_x8};
 pub use lanes::{LANES, LaneMask};
 
 use glam::Vec3;
