@@ -379,37 +379,17 @@ fn swap_runs(
 ) {
     // Pieces of equal length, cut from both sides in order.
     let mut pieces: Vec<(&mut [BuildItem], &mut [BuildItem])> = Vec::new();
-    let (mut rest_a, mut at_a) = (a, 0);
-    let (mut rest_b, mut at_b) = (b, b_offset);
-    let (mut runs_a, mut runs_b) = (runs_a.iter().cloned(), runs_b.iter().cloned());
-    let (mut run_a, mut run_b) = (runs_a.next(), runs_b.next());
+    let mut side_a = RunCutter::new(a, 0, runs_a);
+    let mut side_b = RunCutter::new(b, b_offset, runs_b);
+    let (mut run_a, mut run_b) = (side_a.runs.next().cloned(), side_b.runs.next().cloned());
     while let (Some(ra), Some(rb)) = (run_a.clone(), run_b.clone()) {
         let len = ra.len().min(rb.len());
-        let Some((piece_a, after_a)) = std::mem::take(&mut rest_a)
-            .split_at_mut_checked(ra.start - at_a)
-            .and_then(|(_, from)| from.split_at_mut_checked(len))
-        else {
-            break;
-        };
-        let Some((piece_b, after_b)) = std::mem::take(&mut rest_b)
-            .split_at_mut_checked(rb.start - at_b)
-            .and_then(|(_, from)| from.split_at_mut_checked(len))
-        else {
+        let (Some(piece_a), Some(piece_b)) = (side_a.cut(&ra, len), side_b.cut(&rb, len)) else {
             break;
         };
         pieces.push((piece_a, piece_b));
-        (rest_a, at_a) = (after_a, ra.start + len);
-        (rest_b, at_b) = (after_b, rb.start + len);
-        run_a = if len == ra.len() {
-            runs_a.next()
-        } else {
-            Some(ra.start + len..ra.end)
-        };
-        run_b = if len == rb.len() {
-            runs_b.next()
-        } else {
-            Some(rb.start + len..rb.end)
-        };
+        run_a = side_a.after(ra, len);
+        run_b = side_b.after(rb, len);
     }
     debug_assert!(
         run_a.is_none() && run_b.is_none(),
@@ -418,6 +398,42 @@ fn swap_runs(
     pieces
         .into_par_iter()
         .for_each(|(piece_a, piece_b)| piece_a.swap_with_slice(piece_b));
+}
+
+/// One side of [`swap_runs`]: what is left of its items (from position
+/// `at`) and its runs still to swap.
+struct RunCutter<'a, 'r> {
+    rest: &'a mut [BuildItem],
+    at: usize,
+    runs: core::slice::Iter<'r, std::ops::Range<usize>>,
+}
+
+impl<'a, 'r> RunCutter<'a, 'r> {
+    fn new(items: &'a mut [BuildItem], at: usize, runs: &'r [std::ops::Range<usize>]) -> Self {
+        Self {
+            rest: items,
+            at,
+            runs: runs.iter(),
+        }
+    }
+
+    /// The `len` items from the start of `run` (which lies in what is
+    /// left), dropping those before it.
+    fn cut(&mut self, run: &std::ops::Range<usize>, len: usize) -> Option<&'a mut [BuildItem]> {
+        let (_, from) = std::mem::take(&mut self.rest).split_at_mut_checked(run.start - self.at)?;
+        let (piece, after) = from.split_at_mut_checked(len)?;
+        (self.rest, self.at) = (after, run.start + len);
+        Some(piece)
+    }
+
+    /// What is left of `run` after its first `len` items, or the next run.
+    fn after(&mut self, run: std::ops::Range<usize>, len: usize) -> Option<std::ops::Range<usize>> {
+        if len == run.len() {
+            self.runs.next().cloned()
+        } else {
+            Some(run.start + len..run.end)
+        }
+    }
 }
 
 /// [`partition`] on one thread: two pointers, left of the plane first, each
