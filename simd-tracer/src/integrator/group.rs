@@ -16,10 +16,11 @@ use wide::f32x8;
 
 /// Packets traced together by [`trace_group`] in the renderer: their
 /// bounce and shadow rays are compacted across the group
-/// ([`crate::integrator::compaction`]), a whole 16 × 16 tile. More packets leave fewer
+/// ([`crate::integrator::compaction`]), 32 × 8 pixels, a quarter of a
+/// tile. More packets leave fewer
 /// partly filled queries: on the Cornell box 16 packets beat 8, and 32
-/// beat 16 (a count that does not divide a tile's 32 packets, such as 12,
-/// loses), although the group's path states (emission sums, throughput,
+/// beat 16 (a count that does not divide the 32 packets of the 16 × 16
+/// tiles of then, such as 12, loses), although the group's path states (emission sums, throughput,
 /// light sample: about 3 KiB per packet at N = 12) then spill from the L1
 /// into the L2 cache. Measured by alternated renders and instruction counts;
 /// figures in `docs/performance.md`. Their rays, hits and wavelengths live

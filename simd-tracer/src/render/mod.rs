@@ -1,4 +1,4 @@
-//! Progressive rendering: passes of one sample per pixel over 16 × 16 tiles
+//! Progressive rendering: passes of one sample per pixel over 32 × 32 tiles
 //! in parallel (rayon), packets of 8 pixels (4 × 2), traced
 //! [`crate::integrator::GROUP`] packets at a time (their bounce and shadow
 //! rays compacted, [`crate::integrator::compaction`]). Passes run in
@@ -47,12 +47,15 @@
 //! happens per pass inside a batch, never per batch. Per pass rather than
 //! per group of passes: a group would need its passes aligned to absolute
 //! pass indices so that `--passes` ranges and resumed renders stop at its
-//! edges, and the flush (one `f64` add per value of the ring, about
-//! `(1 + 2M/16)² − 1` of the film per pass) is small beside tracing. The
-//! rings cost that much memory beside the film: 0.56 of it with the
-//! default Gaussian (`M` = 2). Whole aprons, tile included, cost 1.56 of
-//! it, the largest part of a small scene's peak memory, and a clearing and
-//! a flush of the tile's own pixels every pass.
+//! edges. The flush is one `f64` add per value of the ring, about
+//! `(1 + 2M/T)² − 1` of the film per pass for tiles of `T` × `T` pixels,
+//! and the rings cost that much memory beside the film: 0.27 of it with
+//! the default Gaussian (`M` = 2) and `T` = [`TILE_SIZE`] = 32, against
+//! 0.56 with tiles of 16, whose rings' clearing and flush took a twentieth
+//! of a Cornell-box render (`docs/performance.md`). Whole aprons, tile
+//! included, cost 1.56 of it at `T` = 16, the largest part of a small
+//! scene's peak memory, and a clearing and a flush of the tile's own
+//! pixels every pass.
 //!
 //! A cropped splat render traces the window grown by `M` (on the packet
 //! grid, clipped to the film) and flushes into the window only. A window
@@ -114,8 +117,15 @@ use std::sync::{Mutex, TryLockError};
 use std::time::{Duration, Instant};
 use wide::f32x8;
 
-/// Tile edge, pixels.
-pub const TILE_SIZE: u32 = 16;
+/// Tile edge, pixels: a multiple of the packet's 4 × 2 footprint (a
+/// 32 × 32 tile is four [`GROUP`]s of 32 × 8 pixels). Why 32 and not 16:
+/// a splatting render's per-pass ring flush and clearing scale with
+/// `(1 + 2M/T)² − 1` (module docs), and 32 halves them; a tile's pixels
+/// (32² × 136 bytes at N = 16) and its `f32` apron scratch still fit a
+/// core's L2, and a 512² image still has 256 tiles to share among the
+/// threads.
+pub const TILE_SIZE: u32 = 32;
+
 /// Packet footprint: 4 × 2 pixels.
 const PACKET_WIDTH: u32 = 4;
 const PACKET_HEIGHT: u32 = 2;
@@ -551,10 +561,9 @@ fn render_tile<T: Transport>(
     state: &mut GroupState<T::Spectra, GROUP>,
     tile: &mut Tile<FilmPixel<T>>,
 ) {
-    // The tile's packets in row-major order, traced GROUP at a time; the
-    // last group is padded with packets without pixels.
-    let columns = tile.width.div_ceil(PACKET_WIDTH);
-    let count = columns * tile.height.div_ceil(PACKET_HEIGHT);
+    // The tile's packets in block order ([`packet_origins`]), traced GROUP
+    // at a time; the last group is padded with packets without pixels.
+    let mut origins = packet_origins(tile.x0, tile.y0, tile.width, tile.height);
     let (x0, y0) = (tile.x0, tile.y0);
     let pixel_index =
         |(lx, ly): (u32, u32)| u64::from(y0 + ly) * u64::from(settings.width) + u64::from(x0 + lx);
@@ -569,15 +578,14 @@ fn render_tile<T: Transport>(
     // The group's finished samples, refilled in place for each group (an
     // array made per group is written once and copied whole, tens of KB).
     let mut group_samples: Vec<[FilmSample<T>; LANES]> = Vec::with_capacity(GROUP);
-    for first in (0..count).step_by(GROUP) {
+    loop {
+        let group: [Option<(u32, u32)>; GROUP] = core::array::from_fn(|_| origins.next());
+        if group[0].is_none() {
+            break;
+        }
         let lanes: [[Option<(u32, u32)>; LANES]; GROUP] = core::array::from_fn(|g| {
             let mut lanes = [None; LANES];
-            let packet = first + g as u32;
-            if packet < count {
-                let (bx, by) = (
-                    packet % columns * PACKET_WIDTH,
-                    packet / columns * PACKET_HEIGHT,
-                );
+            if let Some((bx, by)) = group[g] {
                 for (lane, slot) in lanes.iter_mut().enumerate() {
                     let (lx, ly) = (
                         bx + lane as u32 % PACKET_WIDTH,
@@ -678,6 +686,42 @@ fn render_tile<T: Transport>(
     if let Some(splat) = &splat {
         splat.flush_scratch(transport.film(), tile, &scratch);
     }
+}
+
+/// Edge of the film-aligned squares whose packets a tile traces one after
+/// another, pixels: 16 × 16 pixels are [`GROUP`]'s 32 packets of 4 × 2,
+/// so a whole square is one group, whose camera rays stay as coherent as
+/// a square can make them (a group of 32 × 8 pixels, a row of packets of
+/// a 32-pixel tile, rendered the instanced bunnies 3 % slower).
+const GROUP_BLOCK: u32 = 16;
+
+/// The packets' top-left corners, relative to the tile at `(x0, y0)` of
+/// `width` × `height` pixels: the [`GROUP_BLOCK`] squares of the film's
+/// grid that meet the tile in row-major order, and each square's packets
+/// (its part inside the tile) in row-major order. The squares sit on the
+/// film's grid, not the tile's, so a tile cut by a crop keeps the order
+/// of the full tile's packets that it holds (module docs: crops are
+/// exact). `x0` and `y0` lie on the packet grid.
+fn packet_origins(x0: u32, y0: u32, width: u32, height: u32) -> impl Iterator<Item = (u32, u32)> {
+    let (x_end, y_end) = (x0 + width, y0 + height);
+    let square = GROUP_BLOCK as usize;
+    (y0 / GROUP_BLOCK * GROUP_BLOCK..y_end)
+        .step_by(square)
+        .flat_map(move |sy| {
+            (x0 / GROUP_BLOCK * GROUP_BLOCK..x_end)
+                .step_by(square)
+                .flat_map(move |sx| {
+                    let columns = sx.max(x0)..(sx + GROUP_BLOCK).min(x_end);
+                    (sy.max(y0)..(sy + GROUP_BLOCK).min(y_end))
+                        .step_by(PACKET_HEIGHT as usize)
+                        .flat_map(move |y| {
+                            columns
+                                .clone()
+                                .step_by(PACKET_WIDTH as usize)
+                                .map(move |x| (x - x0, y - y0))
+                        })
+                })
+        })
 }
 
 /// The high bit of a child's sampler key: no pixel's key has it (the
@@ -1484,6 +1528,50 @@ pub fn resolve_state<T: Transport>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every packet of a tile once, in whole squares of one group each, and
+    /// a tile cut by a crop keeps the full tile's order of the packets it
+    /// holds. Negative control: squares on the tile's own grid would break
+    /// the cut tile's order (checked by hand: anchoring at `x0` fails the
+    /// last assertion).
+    #[test]
+    fn packets_come_square_by_square_in_the_full_tiles_order() {
+        let full: Vec<(u32, u32)> = packet_origins(32, 64, TILE_SIZE, TILE_SIZE).collect();
+        let mut expected = Vec::new();
+        for y in (0..TILE_SIZE).step_by(PACKET_HEIGHT as usize) {
+            for x in (0..TILE_SIZE).step_by(PACKET_WIDTH as usize) {
+                expected.push((x, y));
+            }
+        }
+        let mut sorted = full.clone();
+        sorted.sort_by_key(|&(x, y)| (y, x));
+        assert_eq!(sorted, expected, "each packet once");
+        for (group, packets) in full.chunks(GROUP).enumerate() {
+            let (x_min, y_min) = (packets[0].0, packets[0].1);
+            assert_eq!((x_min % GROUP_BLOCK, y_min % GROUP_BLOCK), (0, 0));
+            for &(x, y) in packets {
+                assert!(
+                    (x_min..x_min + GROUP_BLOCK).contains(&x)
+                        && (y_min..y_min + GROUP_BLOCK).contains(&y),
+                    "group {group}: packet ({x}, {y}) outside its square"
+                );
+            }
+        }
+        // The same tile cut to columns 44.. and rows 70..83 (a crop's
+        // traced region on the packet grid): its packets in film
+        // coordinates are the full tile's that it holds, in the same order.
+        let (cx0, cy0, cw, ch) = (44, 70, 32 + TILE_SIZE - 44, 14);
+        let cut: Vec<(u32, u32)> = packet_origins(cx0, cy0, cw, ch)
+            .map(|(x, y)| (x + cx0, y + cy0))
+            .collect();
+        let kept: Vec<(u32, u32)> = full
+            .iter()
+            .map(|&(x, y)| (x + 32, y + 64))
+            .filter(|&(x, y)| x >= cx0 && y >= cy0 && y < cy0 + ch)
+            .collect();
+        assert!(!cut.is_empty());
+        assert_eq!(cut, kept);
+    }
 
     #[test]
     fn batches_fill_half_a_second_within_bounds() {
