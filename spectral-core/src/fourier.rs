@@ -256,34 +256,43 @@ impl<const N: usize> FourierSpectrum<f64, N> {
 /// the code has no loop, no index arithmetic at run time and no bounds check,
 /// and LLVM schedules the `N²` FMAs and the term-pair additions freely.
 /// Several times faster than the loops, whose inner trip counts LLVM does
-/// not fully unroll, so their accumulators stay in memory. (Blocking the
-/// rows of `k` to relieve the 16 AVX registers gains nothing: LLVM
-/// reorders the straight-line code anyway.) Measured with
-/// `cargo bench -p spectral-core`; figures in the workspace's
+/// not fully unroll, so their accumulators stay in memory. Blocking the
+/// rows of `k` inside one function gains nothing: LLVM reorders the
+/// straight-line code anyway. At `N = 16` the straight line needs the
+/// 16 accumulators and 136 distinct sums `d_{|k−p|} + d_{k+p}` at once,
+/// and spills (184 stores of a 2 KB frame per call on AVX2's 16
+/// registers); its speed then depends on where the caller's stack lies
+/// (up to 1.8× in a renderer, same code). So `N = 16` computes its rows
+/// `0‥8` and `8‥16` in two functions that are not inlined, which LLVM
+/// cannot interleave (47 spill stores in all): faster alone in a loop
+/// (`cargo bench -p spectral-core`) and inside the renderer, and much
+/// less at the mercy of its stack. Figures in the workspace's
 /// `docs/performance.md`.
 mod unrolled {
     use crate::lane::Lane;
 
     /// Adds, for each `p` in the first list and each `k` in the second,
-    /// `c_p e_{kp}` to `h[k]`, where `e_{kp} = d_{|k−p|} + d_{k+p}` (Toeplitz
+    /// `c_p e_{kp}` to `h[k − off]`, where `e_{kp} = d_{|k−p|} + d_{k+p}` (Toeplitz
     /// plus Hankel term) for `p ≥ 1`, `k + p < N`, else `d_{|k−p|}`. The
     /// `N²` multiply-adds take the products; the additions of `e`, formed
     /// once for `(k, p)` and `(p, k)` alike (`e` is symmetric, the compiler
     /// merges the equal sums), run beside them (on cores with separate add
     /// and multiply-add units, such as AMD Zen, they cost no multiply-add
     /// slot; a multiply-add per Hankel term would cost `N(N − 1)/2` more).
+    /// `off` is the first row `k` that `h` holds (0 but for `N = 16`'s
+    /// halves).
     macro_rules! product_terms {
-        ($h:ident, $c:ident, $d:ident, [$($p:literal)*], $ks:tt) => {
-            $( product_terms!(@row $h, $c, $d, $p, $ks); )*
+        ($off:literal, $h:ident, $c:ident, $d:ident, [$($p:literal)*], $ks:tt) => {
+            $( product_terms!(@row $off, $h, $c, $d, $p, $ks); )*
         };
-        (@row $h:ident, $c:ident, $d:ident, $p:literal, [$($k:literal)*]) => {
+        (@row $off:literal, $h:ident, $c:ident, $d:ident, $p:literal, [$($k:literal)*]) => {
             $(
                 let toeplitz = $d[usize::abs_diff($k, $p)];
                 let e = match $d.get($k + $p) {
                     Some(&hankel) if $p != 0 => toeplitz + hankel,
                     _ => toeplitz,
                 };
-                $h[$k] = $c[$p].mul_add(e, $h[$k]);
+                $h[$k - $off] = $c[$p].mul_add(e, $h[$k - $off]);
             )*
         };
     }
@@ -291,33 +300,51 @@ mod unrolled {
     #[inline(always)]
     fn product_4<L: Lane>(c: &[L; 4], d: &[L; 4]) -> [L; 4] {
         let mut h = [L::splat(0.0); 4];
-        product_terms!(h, c, d, [0 1 2 3], [0 1 2 3]);
+        product_terms!(0, h, c, d, [0 1 2 3], [0 1 2 3]);
         h
     }
 
     #[inline(always)]
     fn product_8<L: Lane>(c: &[L; 8], d: &[L; 8]) -> [L; 8] {
         let mut h = [L::splat(0.0); 8];
-        product_terms!(h, c, d, [0 1 2 3 4 5 6 7], [0 1 2 3 4 5 6 7]);
+        product_terms!(0, h, c, d, [0 1 2 3 4 5 6 7], [0 1 2 3 4 5 6 7]);
         h
     }
 
     #[inline(always)]
     fn product_12<L: Lane>(c: &[L; 12], d: &[L; 12]) -> [L; 12] {
         let mut h = [L::splat(0.0); 12];
-        product_terms!(h, c, d, [0 1 2 3 4 5 6 7 8 9 10 11], [0 1 2 3 4 5 6 7 8 9 10 11]);
+        product_terms!(0, h, c, d, [0 1 2 3 4 5 6 7 8 9 10 11], [0 1 2 3 4 5 6 7 8 9 10 11]);
+        h
+    }
+
+    /// Rows `0‥8` of the product at `N = 16` (module docs: why apart).
+    #[inline(never)]
+    fn product_16_low<L: Lane>(c: &[L; 16], d: &[L; 16]) -> [L; 8] {
+        let mut h = [L::splat(0.0); 8];
+        product_terms!(0, h, c, d,
+            [0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15],
+            [0 1 2 3 4 5 6 7]
+        );
+        h
+    }
+
+    /// Rows `8‥16` of the product at `N = 16`.
+    #[inline(never)]
+    fn product_16_high<L: Lane>(c: &[L; 16], d: &[L; 16]) -> [L; 8] {
+        let mut h = [L::splat(0.0); 8];
+        product_terms!(8, h, c, d,
+            [0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15],
+            [8 9 10 11 12 13 14 15]
+        );
         h
     }
 
     #[inline(always)]
     fn product_16<L: Lane>(c: &[L; 16], d: &[L; 16]) -> [L; 16] {
-        let mut h = [L::splat(0.0); 16];
-        product_terms!(
-            h, c, d,
-            [0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15],
-            [0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15]
-        );
-        h
+        let low = product_16_low(c, d);
+        let high = product_16_high(c, d);
+        core::array::from_fn(|k| if k < 8 { low[k] } else { high[k - 8] })
     }
 
     /// The unrolled product if `N` has a codelet, else `None`.
