@@ -318,27 +318,21 @@ mod unrolled {
         h
     }
 
-    /// Rows `0‥8` of the product at `N = 16` (module docs: why apart).
-    #[inline(never)]
-    fn product_16_low<L: Lane>(c: &[L; 16], d: &[L; 16]) -> [L; 8] {
-        let mut h = [L::splat(0.0); 8];
-        product_terms!(0, h, c, d,
-            [0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15],
-            [0 1 2 3 4 5 6 7]
-        );
-        h
+    /// A function, not inlined, for rows `off ..` (the second list) of
+    /// the product at `N = 16` (module docs: why apart).
+    macro_rules! product_16_rows {
+        ($name:ident, $off:literal, $ks:tt) => {
+            #[inline(never)]
+            fn $name<L: Lane>(c: &[L; 16], d: &[L; 16]) -> [L; 8] {
+                let mut h = [L::splat(0.0); 8];
+                product_terms!($off, h, c, d, [0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15], $ks);
+                h
+            }
+        };
     }
 
-    /// Rows `8‥16` of the product at `N = 16`.
-    #[inline(never)]
-    fn product_16_high<L: Lane>(c: &[L; 16], d: &[L; 16]) -> [L; 8] {
-        let mut h = [L::splat(0.0); 8];
-        product_terms!(8, h, c, d,
-            [0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15],
-            [8 9 10 11 12 13 14 15]
-        );
-        h
-    }
+    product_16_rows!(product_16_low, 0, [0 1 2 3 4 5 6 7]);
+    product_16_rows!(product_16_high, 8, [8 9 10 11 12 13 14 15]);
 
     #[inline(always)]
     fn product_16<L: Lane>(c: &[L; 16], d: &[L; 16]) -> [L; 16] {

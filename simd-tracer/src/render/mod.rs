@@ -1607,9 +1607,10 @@ mod tests {
             Filter::tent(2.5).expect("a valid tent"),
             Filter::gaussian_with_stddev(0.8).expect("a valid Gaussian"),
         ];
-        for filter in &filters {
-            let margin = filter.splat_margin_px();
-            let splat = Splat {
+        // The splat of a whole tile with `filter`'s margin, no scratch.
+        let splat_of = |filter| {
+            let margin = Filter::splat_margin_px(filter);
+            Splat {
                 filter,
                 margin,
                 ring: Ring {
@@ -1618,7 +1619,11 @@ mod tests {
                     height: TILE_SIZE as usize,
                 },
                 scratch_len: 0,
-            };
+            }
+        };
+        for filter in &filters {
+            let splat = splat_of(filter);
+            let margin = splat.margin;
             let reach = (2 * margin + 1) as usize;
             assert!(reach <= LANES, "{filter:?}");
             let (dx, dy) = (offsets(0.37), offsets(1.91));
@@ -1639,18 +1644,8 @@ mod tests {
             }
         }
         let wide = Filter::gaussian_with_stddev(2.0).expect("a valid Gaussian");
-        let margin = wide.splat_margin_px();
-        assert!(2 * margin + 1 > LANES as u32);
-        let splat = Splat {
-            filter: &wide,
-            margin,
-            ring: Ring {
-                margin: margin as usize,
-                width: TILE_SIZE as usize,
-                height: TILE_SIZE as usize,
-            },
-            scratch_len: 0,
-        };
+        let splat = splat_of(&wide);
+        assert!(2 * splat.margin + 1 > LANES as u32);
         assert!(splat.packet_weights((f32x8::ZERO, f32x8::ZERO)).is_none());
     }
 
