@@ -60,8 +60,9 @@
 //! A cropped splat render traces the window grown by `M` (on the packet
 //! grid, clipped to the film) and flushes into the window only. A window
 //! pixel's contributions are the full render's, in the same order: the
-//! samples that reach it are all traced, the cut tiles keep their packets'
-//! row-major order, and a tile of the full render missing from the crop
+//! samples that reach it are all traced, the cut tiles keep the full
+//! tiles' order of their packets (`packet_origins`: squares on the
+//! film's grid), and a tile of the full render missing from the crop
 //! holds no sample that reaches the window (adding its zeros would change
 //! no bit: sums start at `+0`, never become `−0`). So crops are exact
 //! (tested). Samples are counted (and rejected) in the pixel that traced
