@@ -656,11 +656,11 @@ fn render_tile<T: Transport>(
                     if finite.contains(lane) {
                         let into = (&mut *tile, &mut scratch[..]);
                         match &weights {
-                            Some(weights) => splat.add_with(
+                            Some(weights) => splat.spread(
                                 transport.film(),
                                 into,
                                 (lx, ly),
-                                (weights, lane),
+                                (&weights.rows[lane], &weights.columns[lane]),
                                 &samples[lane],
                             ),
                             None => splat.add(
@@ -959,7 +959,8 @@ impl<'a> Splat<'a> {
     /// from that pixel's centre), skipping zero weights: the footprints
     /// wider than 8 lanes (`M` ≤ [`MAX_SPLAT_MARGIN_PX`]), whose weights
     /// are computed per sample, 8 columns at a time; narrower ones (the
-    /// Gaussian's and the default tent's) take [`Splat::add_with`].
+    /// Gaussian's and the default tent's) are spread with their packet's
+    /// weights ([`Splat::packet_weights`]).
     fn add<F: Film>(
         &self,
         film: &F,
@@ -968,7 +969,7 @@ impl<'a> Splat<'a> {
         (dx, dy): (f32, f32),
         sample: &F::Sample,
     ) {
-        let reach = (2 * self.margin + 1) as usize;
+        let reach = self.reach();
         let weights = |offset: f32| {
             let mut weights = [0.0f32; SPLAT_WEIGHT_SLOTS];
             for (chunk, slots) in weights.chunks_exact_mut(LANES).enumerate() {
@@ -980,13 +981,7 @@ impl<'a> Splat<'a> {
             weights
         };
         let (rows, columns) = (weights(dy), weights(dx));
-        self.spread(
-            film,
-            (tile, scratch),
-            (lx, ly),
-            (&rows[..reach], &columns[..reach]),
-            sample,
-        );
+        self.spread(film, (tile, scratch), (lx, ly), (&rows, &columns), sample);
     }
 
     /// The footprint weights of a packet's 8 samples at once, at offsets
@@ -998,7 +993,7 @@ impl<'a> Splat<'a> {
     /// the columns: 2 (2M + 1) of them a packet instead of 16, none
     /// waiting on another.
     fn packet_weights(&self, (dx, dy): (f32x8, f32x8)) -> Option<PacketWeights> {
-        let reach = (2 * self.margin + 1) as usize;
+        let reach = self.reach();
         if reach > LANES {
             return None;
         }
@@ -1019,25 +1014,9 @@ impl<'a> Splat<'a> {
         })
     }
 
-    /// Adds `sample` to the tile's pixel `(lx, ly)` and its apron with the
-    /// packet's weights of its lane ([`Splat::packet_weights`]).
-    fn add_with<F: Film>(
-        &self,
-        film: &F,
-        (tile, scratch): (&mut Tile<F::Pixel>, &mut [f32]),
-        (lx, ly): (u32, u32),
-        (weights, lane): (&PacketWeights, usize),
-        sample: &F::Sample,
-    ) {
-        let reach = (2 * self.margin + 1) as usize;
-        let (rows, columns) = (&weights.rows[lane], &weights.columns[lane]);
-        self.spread(
-            film,
-            (tile, scratch),
-            (lx, ly),
-            (&rows[..reach], &columns[..reach]),
-            sample,
-        );
+    /// The footprint's width, px: `2M + 1`.
+    fn reach(&self) -> usize {
+        (2 * self.margin + 1) as usize
     }
 
     /// The weights of footprint columns (or rows) `first .. first + 8` for a
@@ -1048,8 +1027,9 @@ impl<'a> Splat<'a> {
     }
 
     /// Adds `sample` with weight `rows[j] · columns[i]` to apron pixel
-    /// `(lx + i, ly + j)` (the apron is shifted by `M` in both axes): the
-    /// tile's own pixel or its ring slot, skipping zero weights.
+    /// `(lx + i, ly + j)` (the apron is shifted by `M` in both axes), for
+    /// `i, j` below the footprint's width: the tile's own pixel or its ring
+    /// slot, skipping zero weights.
     fn spread<F: Film>(
         &self,
         film: &F,
@@ -1058,6 +1038,11 @@ impl<'a> Splat<'a> {
         (rows, columns): (&[f32], &[f32]),
         sample: &F::Sample,
     ) {
+        let reach = self.reach();
+        let (rows, columns) = (
+            &rows[..reach.min(rows.len())],
+            &columns[..reach.min(columns.len())],
+        );
         if self.scratch_len > 0 {
             let (width, _) = self.apron();
             let len = self.scratch_len;
