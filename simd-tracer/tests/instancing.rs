@@ -22,6 +22,7 @@ use simd_tracer::scene::{MeshPlacement, Scene, SceneBuilder};
 use simd_tracer::shading::light_sampler::DirectionalLight;
 use simd_tracer::shading::material::{Albedo, Bsdf, CoatParams, Material, diffuse_fresnel};
 use simd_tracer::shading::microfacet::Microfacet;
+use simd_tracer::shading::surface::{Surface, SurfacePacket};
 use simd_tracer::simd::LaneMask;
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::transport::FourierTransport;
@@ -274,6 +275,117 @@ fn rays_hit_transformed_instances_at_the_analytic_distance_and_normal() -> TestR
             }
         }
         assert!(checked > 300, "{name}: {checked} hits checked");
+    }
+    Ok(())
+}
+
+/// Smooth instances shade with their vertex normals interpolated in object
+/// space, then mapped by `M⁻ᵀ` and normalized, as Mitsuba's `instance`
+/// maps its shape group's shading normal: every lane of packets of rays
+/// at two placed unit spheres (outward normals: the unit positions)
+/// against that formula in `f64`, under each transform. A packet's
+/// shading records, read in two passes, equal the lanes' own records bit
+/// for bit, in packets that mix instances, the scene's own floor and
+/// misses. Negative control: interpolating the mapped vertex normals
+/// instead (the order before) is off by far more than the tolerance under
+/// the non-uniform maps.
+#[test]
+fn smooth_instances_interpolate_their_normals_before_the_map() -> TestResult {
+    const TOLERANCE: f64 = 1e-5;
+    let mut rng = Rng(5);
+    for (name, transform) in transforms()? {
+        let (mut b, grey) = builder()?;
+        b.add_mesh_data(
+            &cube_mesh(),
+            &MeshPlacement {
+                transform: &Transform::scale(Vec3::new(20.0, 0.1, 20.0))?
+                    .then(&Transform::translate(Vec3::Y * -4.0)?)?,
+                material: grey,
+                flip_normals: false,
+                face_normals: false,
+            },
+        )?;
+        let sphere = b.add_instanced_mesh(vec![(sphere_mesh(24), grey)])?;
+        let centres = [Vec3::new(-3.0, 0.0, 0.0), Vec3::new(3.0, 0.5, -1.0)];
+        for &c in &centres {
+            b.add_instance(sphere, placement(placed_at(&transform, c)?))?;
+        }
+        let scene = b.build()?;
+        let instances = scene
+            .instances()
+            .ok_or("the sphere should stay instanced")?;
+        let triangles = instances.meshes().first().ok_or("mesh")?.triangles();
+        let m = transform.affine().matrix3;
+        let normal_map = glam::DMat3::from_cols(
+            m.x_axis.as_dvec3(),
+            m.y_axis.as_dvec3(),
+            m.z_axis.as_dvec3(),
+        )
+        .inverse()
+        .transpose();
+        let (mut checked, mut own, mut control) = (0, 0, 0.0f64);
+        for k in 0..100 {
+            let rays: Vec<Ray> = (0..8)
+                .map(|lane| {
+                    // The last lane wide, at the floor or past it.
+                    let spread = if lane == 7 { 8.0 } else { 0.8 };
+                    let target = centres[(k + lane) % 2].as_dvec3()
+                        + DVec3::new(rng.signed(), rng.signed(), rng.signed()) * spread;
+                    let origin = DVec3::new(rng.signed(), 2.0 + rng.signed(), 14.0);
+                    Ray {
+                        origin: origin.as_vec3(),
+                        direction: (target - origin).as_vec3(),
+                        t_max: f32::INFINITY,
+                    }
+                })
+                .collect();
+            let hit = scene.intersect_incoherent(&RayPacket::from_rays(&rays));
+            let records: [_; 8] = std::array::from_fn(|lane| {
+                let record = hit
+                    .hit
+                    .contains(lane)
+                    .then(|| scene.hit_surface(hit.triangle[lane], hit.instance[lane]));
+                record.flatten().unwrap_or(Surface::NONE)
+            });
+            assert_eq!(
+                format!("{:?}", scene.hit_surfaces(&hit, hit.hit)),
+                format!("{:?}", SurfacePacket::from_records(&records)),
+                "{name}"
+            );
+            let normals = scene.hit_smooth_normals(&hit, hit.hit);
+            let (u, v) = (hit.u.to_array(), hit.v.to_array());
+            for lane in 0..8 {
+                if hit.instance[lane] == NO_INSTANCE {
+                    own += usize::from(hit.hit.contains(lane));
+                    assert_eq!(normals[lane], None, "{name}: the floor is flat");
+                    continue;
+                }
+                let got = normals[lane].ok_or("a smooth normal")?.as_dvec3();
+                let vertices = triangles
+                    .get(hit.triangle[lane] as usize)
+                    .ok_or("triangle")?
+                    .map(|p| p.as_dvec3().normalize());
+                let (u, v) = (f64::from(u[lane]), f64::from(v[lane]));
+                let weights = [1.0 - u - v, u, v];
+                let interpolate =
+                    |n: [DVec3; 3]| n.iter().zip(weights).map(|(n, w)| *n * w).sum::<DVec3>();
+                let want = (normal_map * interpolate(vertices)).normalize();
+                assert!(
+                    (got - want).length() < TOLERANCE,
+                    "{name}: {got} against {want}"
+                );
+                let mapped = vertices.map(|n| (normal_map * n).normalize());
+                control = control.max((interpolate(mapped).normalize() - want).length());
+                checked += 1;
+            }
+        }
+        assert!(
+            checked > 250 && own > 10,
+            "{name}: {checked} sphere and {own} floor hits"
+        );
+        if name.contains("non-uniformly") {
+            assert!(control > 100.0 * TOLERANCE, "{name}: control {control}");
+        }
     }
     Ok(())
 }

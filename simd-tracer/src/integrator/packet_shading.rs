@@ -14,7 +14,7 @@ use crate::shading::material::{
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
 use crate::transport::Transport;
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use wide::f32x8;
 
 /// Per-lane uniform numbers of `dimension` (`sampling::sampler`'s
@@ -336,69 +336,57 @@ pub(super) struct ShadingSample {
     pub(super) spectrum: Factors,
 }
 
+/// The lanes [`shading_normals`] shades.
+pub(super) struct SmoothLanes {
+    /// The lanes shaded.
+    pub(super) lanes: LaneMask,
+    /// Those whose geometric normal is the triangle's front (not turned
+    /// towards `wo`).
+    pub(super) front: LaneMask,
+}
+
 /// The shading normals of a packet's hits (module `path`'s convention):
-/// in lanes on smooth triangles, the interpolated vertex normal
-/// `normalize(b0 n0 + b1 n1 + b2 n2)`, turned to the side of `geometric`
-/// (the geometric normal already on the side of `wo`); where that normal
-/// faces away from `wo` (a grazing view of a strongly bent normal), the
-/// geometric normal. Elsewhere `geometric`.
+/// in the lanes of `lanes.lanes` with a smooth normal
+/// ([`Scene::hit_smooth_normals`], on the triangle's front), that normal
+/// turned to the side of `geometric` (the geometric normal already on the
+/// side of `wo`: the front one in the lanes of `lanes.front`); where that
+/// normal faces away from `wo` (a grazing view of a strongly bent normal),
+/// the geometric normal. Elsewhere `geometric`.
 pub(super) fn shading_normals(
-    scene: &Scene,
-    hit: &PacketHit,
-    active: LaneMask,
+    smooth: &[Option<Vec3>; LANES],
+    lanes: SmoothLanes,
     geometric: Vec3x8,
     wo: Vec3x8,
 ) -> Vec3x8 {
-    let (u, v) = (hit.u.to_array(), hit.v.to_array());
-    let geometric_lanes = geometric.to_lanes();
     let wo_lanes = wo.to_lanes();
-    let mut lanes = geometric_lanes;
-    for lane in active.iter() {
-        let Some([n0, n1, n2]) = scene.hit_vertex_normals(hit.triangle[lane], hit.instance[lane])
-        else {
+    let mut normals = geometric.to_lanes();
+    for lane in lanes.lanes.iter() {
+        let Some(n) = smooth[lane] else {
             continue;
         };
-        let interpolated = n0 * (1.0 - u[lane] - v[lane]) + n1 * u[lane] + n2 * v[lane];
-        let Some(n) = interpolated.try_normalize() else {
-            continue;
-        };
-        let g = geometric_lanes[lane];
-        // The vertex normals lie on the front side of the triangle; the
-        // geometric normal here may have been turned to the back.
-        let front = scene
-            .hit_normal(hit.triangle[lane], hit.instance[lane])
-            .is_none_or(|ng| ng.dot(g) >= 0.0);
-        let n = if front { n } else { -n };
+        let n = if lanes.front.contains(lane) { n } else { -n };
         if n.dot(wo_lanes[lane]) > 0.0 {
-            lanes[lane] = n;
+            normals[lane] = n;
         }
     }
-    Vec3x8::from_lanes(&lanes)
+    Vec3x8::from_lanes(&normals)
 }
 
 /// `wo` against the front side of each lane's shading normal, the side on
 /// which a one-sided BSDF scatters (Mitsuba decides it in the shading
-/// frame): in the lanes of `lanes` on smooth triangles, `n · wo` with `n`
-/// the interpolated vertex normal as the vertices give it (on the
-/// triangle's front); elsewhere `cos_geometric`, the unturned geometric
-/// normal's `n_g · wo`.
+/// frame): in the lanes of `lanes` with a smooth normal (on the
+/// triangle's front), `n · wo`; elsewhere `cos_geometric`, the unturned
+/// geometric normal's `n_g · wo`.
 pub(super) fn front_shading_cosines(
-    scene: &Scene,
-    hit: &PacketHit,
+    smooth: &[Option<Vec3>; LANES],
     lanes: LaneMask,
     cos_geometric: f32x8,
     wo: Vec3x8,
 ) -> f32x8 {
-    let (u, v) = (hit.u.to_array(), hit.v.to_array());
     let wo_lanes = wo.to_lanes();
     let mut cosines = cos_geometric.to_array();
     for lane in lanes.iter() {
-        let Some([n0, n1, n2]) = scene.hit_vertex_normals(hit.triangle[lane], hit.instance[lane])
-        else {
-            continue;
-        };
-        let interpolated = n0 * (1.0 - u[lane] - v[lane]) + n1 * u[lane] + n2 * v[lane];
-        if let Some(n) = interpolated.try_normalize() {
+        if let Some(n) = smooth[lane] {
             cosines[lane] = n.dot(wo_lanes[lane]);
         }
     }

@@ -3,7 +3,7 @@
 
 use super::emission::{EmissionSums, Emitted};
 use super::packet_shading::{
-    Shading, consistent_sides, front_shading_cosines, offset_x8, power_heuristic_x8,
+    Shading, SmoothLanes, consistent_sides, front_shading_cosines, offset_x8, power_heuristic_x8,
     shading_normals, uniforms,
 };
 use super::{PathContext, RR_MAX_SURVIVAL, SHADOW_EPSILON};
@@ -376,11 +376,14 @@ impl<S: Copy> PathState<S> {
         // Surfaces that scatter from the front only (Mitsuba's one-sided
         // BSDFs) are black from behind their shading normal: no light
         // sample, no continuation.
-        let smooth = scene.has_vertex_normals();
+        let smooth_normals = scene
+            .has_vertex_normals()
+            .then(|| scene.hit_smooth_normals(hit, active));
+        let smooth = smooth_normals.is_some();
         let front_only = surface.front_only.and(active);
         if !front_only.is_empty() {
-            let cos_view = if smooth {
-                front_shading_cosines(scene, hit, front_only, cos_o, wo)
+            let cos_view = if let Some(smooth) = &smooth_normals {
+                front_shading_cosines(smooth, front_only, cos_o, wo)
             } else {
                 cos_o
             };
@@ -394,8 +397,12 @@ impl<S: Copy> PathState<S> {
         let origin_below = offset_x8(position, -normal);
         // Smooth triangles shade with their interpolated normal; rays
         // still leave from the geometric surface (`departure`).
-        let shading_normal = if smooth {
-            shading_normals(scene, hit, active, normal, wo)
+        let shading_normal = if let Some(smooth) = &smooth_normals {
+            let lanes = SmoothLanes {
+                lanes: active,
+                front: LaneMask::from_simd(front),
+            };
+            shading_normals(smooth, lanes, normal, wo)
         } else {
             normal
         };

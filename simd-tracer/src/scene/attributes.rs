@@ -279,8 +279,15 @@ impl VertexNormals {
     /// The vertex normals of triangle `triangle`, if it is smooth.
     #[inline]
     pub(crate) fn get(&self, triangle: usize) -> Option<[Vec3; 3]> {
-        let [e0, e1, e2] = *self.corners.get(triangle)?;
+        let [e0, e1, e2] = self.corners(triangle)?;
         Some([self.entry(e0)?, self.entry(e1)?, self.entry(e2)?])
+    }
+
+    /// The table entries of triangle `triangle`'s vertex normals, if it is
+    /// smooth (the first of [`VertexNormals::get`]'s two reads).
+    #[inline]
+    pub(crate) fn corners(&self, triangle: usize) -> Option<[u32; 3]> {
+        self.corners.get(triangle).copied()
     }
 
     /// Per triangle, the position of its entries or [`NO_ID`]

@@ -13,9 +13,14 @@
 //!   pointed to, where the cross product of mapped edges would turn over
 //!   (why [`crate::scene::SceneBuilder::add_mesh_data`] swaps two vertices
 //!   when it copies a mirrored mesh);
-//! * vertex normals `normalize(s · M⁻ᵀ nᵢ)` of the mesh's unit vertex
-//!   normals (none with `face_normals`), then interpolated as for the
-//!   scene's own triangles;
+//! * shading normal `normalize(s · M⁻ᵀ (b₀ n₀ + b₁ n₁ + b₂ n₂))`: the
+//!   mesh's unit vertex normals interpolated in object space at the hit's
+//!   barycentrics, then mapped once (none with `face_normals`). Mitsuba's
+//!   `instance` does the same: it maps the shape group's normalized
+//!   shading normal, the same direction. One map and one normalization a
+//!   hit instead of one a vertex; for maps that are not a rotation times
+//!   a uniform scale it is not the interpolation of the mapped vertex
+//!   normals, and Mitsuba's is the one matched;
 //! * area `½ |det M| · |M⁻ᵀ ((b − a) × (c − a))|` (the area of a surface
 //!   element grows by `|det M| · |M⁻ᵀ n̂|`);
 //! * material: the instance's own if it has one, else the mesh's per
@@ -180,6 +185,45 @@ impl InstanceShading {
     }
 }
 
+/// An instanced triangle's vertices and material as
+/// [`Instances::fetch`] read them; [`FetchedTriangle::surface`] makes its
+/// shading record. Two steps so that a packet reads all its lanes'
+/// triangles before it computes with any (`Scene::hit_surfaces`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct FetchedTriangle<'a> {
+    shading: &'a InstanceShading,
+    vertices: [Vec3; 3],
+    material: MaterialId,
+}
+
+impl FetchedTriangle<'_> {
+    /// [`Instances::surface`] of the fetched triangle.
+    pub(super) fn surface(&self, materials: &[Material]) -> Option<Surface> {
+        let [a, b, c] = self.vertices;
+        let mapped = self.shading.normal_matrix * (b - a).cross(c - a);
+        let normal = mapped.try_normalize()?;
+        let area = 0.5 * self.shading.det_abs * mapped.length();
+        Some(Surface::new(
+            normal,
+            area,
+            self.material,
+            materials.get(self.material.index())?,
+        ))
+    }
+}
+
+/// Where a smooth triangle's vertex normals are: its table, its entries
+/// in it, and for an instance the map of their interpolation into the
+/// world (`Scene::hit_smooth_normals`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct SmoothCorners<'a> {
+    pub(super) table: &'a VertexNormals,
+    pub(super) entries: [u32; 3],
+    /// `s · M⁻ᵀ` of an instance; `None` for the scene's own triangles,
+    /// whose normals are in the world already.
+    pub(super) normal_matrix: Option<Mat3>,
+}
+
 /// The instances of a scene: the distinct meshes, a record per instance
 /// and the two-level tree ([`InstanceBvh`]).
 #[derive(Debug, Clone)]
@@ -298,16 +342,20 @@ impl Instances {
         (shading.normal_matrix * (*b - *a).cross(*c - *a)).try_normalize()
     }
 
-    /// The world-space unit vertex normals of a smooth `triangle`
-    /// (`None` for flat ones and with `face_normals`).
-    pub fn vertex_normals(&self, triangle: u32, instance: u32) -> Option<[Vec3; 3]> {
+    /// Where the vertex normals of a smooth `triangle` in instance
+    /// `instance` are (`None` for flat ones and with `face_normals`): the
+    /// mesh's table, the triangle's entries in it, and the map `s · M⁻ᵀ`
+    /// that takes their interpolation into the world (module docs).
+    pub(super) fn smooth_corners(&self, triangle: u32, instance: u32) -> Option<SmoothCorners<'_>> {
         let (shading, mesh, index) = self.at(triangle, instance)?;
         if shading.face_normals {
             return None;
         }
-        let normals = mesh.vertex_normals.get(index)?;
-        let [n0, n1, n2] = normals.map(|n| (shading.normal_matrix * n).try_normalize());
-        Some([n0?, n1?, n2?])
+        Some(SmoothCorners {
+            table: &mesh.vertex_normals,
+            entries: mesh.vertex_normals.corners(index)?,
+            normal_matrix: Some(shading.normal_matrix),
+        })
     }
 
     /// Whether any instance can shade with vertex normals.
@@ -326,13 +374,23 @@ impl Instances {
     /// ([`Surface::new`]); instances never emit, so its light-selection
     /// probability is 0.
     pub fn surface(&self, triangle: u32, instance: u32, materials: &[Material]) -> Option<Surface> {
+        self.fetch(triangle, instance)?.surface(materials)
+    }
+
+    /// What [`Instances::surface`] reads of `triangle` in instance
+    /// `instance`, read from memory and not yet used.
+    pub(super) fn fetch(&self, triangle: u32, instance: u32) -> Option<FetchedTriangle<'_>> {
         let (shading, mesh, index) = self.at(triangle, instance)?;
-        let [a, b, c] = mesh.triangles.get(index)?;
-        let mapped = shading.normal_matrix * (*b - *a).cross(*c - *a);
-        let normal = mapped.try_normalize()?;
-        let area = 0.5 * shading.det_abs * mapped.length();
-        let id = self.material(triangle, instance)?;
-        Some(Surface::new(normal, area, id, materials.get(id.index())?))
+        let material = if shading.material.is_none() {
+            *mesh.triangle_material.get(index)?
+        } else {
+            shading.material
+        };
+        Some(FetchedTriangle {
+            shading,
+            vertices: *mesh.triangles.get(index)?,
+            material,
+        })
     }
 
     /// Bytes held: each distinct mesh once (triangles, shading data, tree)

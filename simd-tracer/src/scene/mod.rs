@@ -29,8 +29,8 @@ use crate::packet::{PacketHit, Ray, RayPacket};
 use crate::scene::attributes::{SparseAttribute, VertexNormals};
 use crate::scene::camera::Camera;
 use crate::scene::instances::{
-    InstancePlacement, InstanceRequest, InstancedMesh, InstancedMeshId, Instances, Instancing,
-    MIN_INSTANCE_USES,
+    FetchedTriangle, InstancePlacement, InstanceRequest, InstancedMesh, InstancedMeshId, Instances,
+    Instancing, MIN_INSTANCE_USES, SmoothCorners,
 };
 use crate::scene::mesh::MeshData;
 use crate::scene::transform::Transform;
@@ -414,7 +414,11 @@ impl Scene {
 
     /// The packet's shading records in the lanes of `active`
     /// ([`Surface::NONE`] elsewhere): one gather when no lane hit an
-    /// instance, else record by record.
+    /// instance, else record by record in two passes: every lane's
+    /// triangle read first, then the records made. On a large scene most
+    /// of these reads miss the caches; made lane by lane, each record
+    /// would wait for its own read, while eight reads issued together
+    /// are in flight at once.
     pub fn hit_surfaces(&self, hit: &PacketHit, active: LaneMask) -> SurfacePacket {
         let instanced = active
             .iter()
@@ -423,13 +427,22 @@ impl Scene {
         if instanced.is_empty() {
             return self.packed_surfaces.gather(&hit.triangle, active);
         }
-        let records: [Surface; LANES] = core::array::from_fn(|lane| {
-            if active.contains(lane) {
-                self.hit_surface(hit.triangle[lane], hit.instance[lane])
-                    .unwrap_or(Surface::NONE)
-            } else {
-                Surface::NONE
+        let fetched: [Option<FetchedTriangle>; LANES] = core::array::from_fn(|lane| {
+            if !instanced.contains(lane) {
+                return None;
             }
+            let instances = self.instances.as_ref()?;
+            instances.fetch(hit.triangle[lane], hit.instance[lane])
+        });
+        let records: [Surface; LANES] = core::array::from_fn(|lane| {
+            let record = if instanced.contains(lane) {
+                fetched[lane].and_then(|f| f.surface(&self.materials))
+            } else if active.contains(lane) {
+                self.surface(hit.triangle[lane] as usize)
+            } else {
+                None
+            };
+            record.unwrap_or(Surface::NONE)
         });
         SurfacePacket::from_records(&records)
     }
@@ -462,13 +475,39 @@ impl Scene {
         self.instances.as_ref()?.normal(triangle, instance)
     }
 
-    /// The unit vertex normals of a smooth hit triangle, in world space.
-    #[inline]
-    pub fn hit_vertex_normals(&self, triangle: u32, instance: u32) -> Option<[Vec3; 3]> {
-        if instance == NO_INSTANCE {
-            return self.vertex_normals(triangle as usize);
-        }
-        self.instances.as_ref()?.vertex_normals(triangle, instance)
+    /// The shading normals of the packet's hits in `lanes` on smooth
+    /// triangles: the vertex normals interpolated at the hit's
+    /// barycentrics `(1 − u − v, u, v)` and normalized, in the world, on
+    /// the triangle's front (for instances mapped after the interpolation,
+    /// [`instances`]' docs); `None` in the other lanes and where the
+    /// interpolation vanishes. Two passes, as [`Scene::hit_surfaces`]:
+    /// every lane's table entries read first, then the normals.
+    pub fn hit_smooth_normals(&self, hit: &PacketHit, lanes: LaneMask) -> [Option<Vec3>; LANES] {
+        let corners: [Option<SmoothCorners>; LANES] = core::array::from_fn(|lane| {
+            let (triangle, instance) = (hit.triangle[lane], hit.instance[lane]);
+            if !lanes.contains(lane) {
+                None
+            } else if instance == NO_INSTANCE {
+                Some(SmoothCorners {
+                    table: &self.vertex_normals,
+                    entries: self.vertex_normals.corners(triangle as usize)?,
+                    normal_matrix: None,
+                })
+            } else {
+                self.instances.as_ref()?.smooth_corners(triangle, instance)
+            }
+        });
+        let (u, v) = (hit.u.to_array(), hit.v.to_array());
+        core::array::from_fn(|lane| {
+            let corners = corners[lane]?;
+            let [n0, n1, n2] = corners.entries.map(|e| corners.table.entry(e));
+            let (u, v) = (u[lane], v[lane]);
+            let interpolated = n0? * (1.0 - u - v) + n1? * u + n2? * v;
+            corners
+                .normal_matrix
+                .map_or(interpolated, |m| m * interpolated)
+                .try_normalize()
+        })
     }
 
     /// lights
