@@ -1050,14 +1050,13 @@ impl<'a> Splat<'a> {
                 if wy == 0.0 {
                     continue;
                 }
-                let row = (ly as usize + j) * width + lx as usize;
-                for (i, &wx) in columns.iter().enumerate() {
+                // The footprint's pixels in this row, consecutive records
+                // of `len` values (those past the scratch's end are none).
+                let start = ((ly as usize + j) * width + lx as usize) * len;
+                let pixels = scratch.get_mut(start..).unwrap_or_default();
+                for (values, &wx) in pixels.chunks_exact_mut(len).zip(columns) {
                     let w = wx * wy;
-                    if w == 0.0 {
-                        continue;
-                    }
-                    let at = (row + i) * len;
-                    if let Some(values) = scratch.get_mut(at..at + len) {
+                    if w != 0.0 {
                         film.accumulate_scratch(values, sample, w);
                     }
                 }
