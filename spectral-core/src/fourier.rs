@@ -147,9 +147,11 @@ impl<L: Lane, const N: usize> FourierSpectrum<L, N> {
     /// dense quadrature.
     #[inline]
     pub fn product(&self, other: &Self) -> Self {
-        match unrolled::product(&self.coeffs, &other.coeffs) {
-            Some(h) => Self::from_coeffs(h),
-            None => self.product_loops(other),
+        let mut h = Self::zero();
+        if unrolled::product(&self.coeffs, &other.coeffs, &mut h.coeffs) {
+            h
+        } else {
+            self.product_loops(other)
         }
     }
 
@@ -298,35 +300,30 @@ mod unrolled {
     }
 
     #[inline(always)]
-    fn product_4<L: Lane>(c: &[L; 4], d: &[L; 4]) -> [L; 4] {
-        let mut h = [L::splat(0.0); 4];
+    fn product_4<L: Lane>(c: &[L; 4], d: &[L; 4], h: &mut [L; 4]) {
         product_terms!(0, h, c, d, [0 1 2 3], [0 1 2 3]);
-        h
     }
 
     #[inline(always)]
-    fn product_8<L: Lane>(c: &[L; 8], d: &[L; 8]) -> [L; 8] {
-        let mut h = [L::splat(0.0); 8];
+    fn product_8<L: Lane>(c: &[L; 8], d: &[L; 8], h: &mut [L; 8]) {
         product_terms!(0, h, c, d, [0 1 2 3 4 5 6 7], [0 1 2 3 4 5 6 7]);
-        h
     }
 
     #[inline(always)]
-    fn product_12<L: Lane>(c: &[L; 12], d: &[L; 12]) -> [L; 12] {
-        let mut h = [L::splat(0.0); 12];
+    fn product_12<L: Lane>(c: &[L; 12], d: &[L; 12], h: &mut [L; 12]) {
         product_terms!(0, h, c, d, [0 1 2 3 4 5 6 7 8 9 10 11], [0 1 2 3 4 5 6 7 8 9 10 11]);
-        h
     }
 
     /// A function, not inlined, for rows `off ..` (the second list) of
-    /// the product at `N = 16` (module docs: why apart).
+    /// the product at `N = 16` (module docs: why apart), accumulated in
+    /// registers and stored once.
     macro_rules! product_16_rows {
         ($name:ident, $off:literal, $ks:tt) => {
             #[inline(never)]
-            fn $name<L: Lane>(c: &[L; 16], d: &[L; 16]) -> [L; 8] {
+            fn $name<L: Lane>(c: &[L; 16], d: &[L; 16], out: &mut [L; 8]) {
                 let mut h = [L::splat(0.0); 8];
                 product_terms!($off, h, c, d, [0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15], $ks);
-                h
+                *out = h;
             }
         };
     }
@@ -335,19 +332,27 @@ mod unrolled {
     product_16_rows!(product_16_high, 8, [8 9 10 11 12 13 14 15]);
 
     #[inline(always)]
-    fn product_16<L: Lane>(c: &[L; 16], d: &[L; 16]) -> [L; 16] {
-        let low = product_16_low(c, d);
-        let high = product_16_high(c, d);
-        core::array::from_fn(|k| if k < 8 { low[k] } else { high[k - 8] })
+    fn product_16<L: Lane>(c: &[L; 16], d: &[L; 16], h: &mut [L; 16]) {
+        let (low, high) = h.split_at_mut(8);
+        if let (Ok(low), Ok(high)) = (low.try_into(), high.try_into()) {
+            product_16_low(c, d, low);
+            product_16_high(c, d, high);
+        }
     }
 
-    /// The unrolled product if `N` has a codelet, else `None`.
+    /// The unrolled product into `h` (zero on entry) if `N` has a codelet;
+    /// `false` (and `h` untouched) if not.
     #[inline(always)]
-    pub(super) fn product<L: Lane, const N: usize>(c: &[L; N], d: &[L; N]) -> Option<[L; N]> {
+    pub(super) fn product<L: Lane, const N: usize>(c: &[L; N], d: &[L; N], h: &mut [L; N]) -> bool {
         macro_rules! codelet {
             ($codelet:ident) => {
-                <[L; N]>::try_from(&$codelet(c[..].try_into().ok()?, d[..].try_into().ok()?)[..])
-                    .ok()
+                match (c[..].try_into(), d[..].try_into(), (&mut h[..]).try_into()) {
+                    (Ok(c), Ok(d), Ok(h)) => {
+                        $codelet(c, d, h);
+                        true
+                    }
+                    _ => false,
+                }
             };
         }
         match N {
@@ -355,7 +360,7 @@ mod unrolled {
             8 => codelet!(product_8),
             12 => codelet!(product_12),
             16 => codelet!(product_16),
-            _ => None,
+            _ => false,
         }
     }
 }
@@ -542,7 +547,9 @@ mod tests {
             libm::cos(j as f64 * 0.7 - 0.5) / (1.0 + j as f64)
         }));
         let (fast, slow) = (a.product(&b), a.product_loops(&b));
-        assert!(unrolled::product(&a.coeffs, &b.coeffs).is_some());
+        let mut h = [0.0; N];
+        assert!(unrolled::product(&a.coeffs, &b.coeffs, &mut h));
+        assert_eq!(h, fast.coeffs);
         for j in 0..N {
             assert!(
                 (fast.coeffs[j] - slow.coeffs[j]).abs() < 1e-14,
@@ -558,7 +565,7 @@ mod tests {
         unrolled_matches_loops::<12>();
         unrolled_matches_loops::<16>();
         let c = [1.0f64; 5];
-        assert!(unrolled::product(&c, &c).is_none());
+        assert!(!unrolled::product(&c, &c, &mut [0.0; 5]));
     }
 
     #[test]
