@@ -53,7 +53,8 @@
 
 use super::rng::{hash32, hash32_x8, mix64, to_unit_f32, unit_f32x8};
 use crate::simd::LANES;
-use wide::{f32x8, u32x8};
+use wide::bytemuck::cast;
+use wide::{f32x8, i8x32, u8x32, u32x8};
 
 /// Dimensions with Sobol direction numbers: van der Corput plus the first
 /// 127 rows of Joe and Kuo's table.
@@ -178,18 +179,44 @@ fn laine_karras_x8(x: u32x8, seed: u32x8) -> u32x8 {
     x
 }
 
-/// `u32::reverse_bits` on 8 lanes: swap halves, bytes, nibbles, pairs, bits.
+/// `u32::reverse_bits` on 8 lanes: the bytes of each lane in reverse
+/// order, and the bits of each byte reversed, by three byte-table lookups
+/// within 128-bit halves (`vpshufb`, [`u8x32::swizzle_half`]): one that
+/// moves bytes, two that map a byte's low and high nibbles to the reversed
+/// high and low nibbles. Seven operations where the swaps of halves,
+/// bytes, nibbles, pairs and bits took seventeen.
 #[inline(always)]
 fn reverse_bits_x8(x: u32x8) -> u32x8 {
-    let swap = |x: u32x8, mask: u32, shift: u32| {
-        let m = u32x8::splat(mask);
-        ((x >> shift) & m) | ((x & m) << shift)
+    /// Per 16-byte half: lane `k`'s bytes `3 2 1 0` from `4k + 3 … 4k`.
+    const BYTE_ORDER: [i8; 32] = {
+        let mut order = [0i8; 32];
+        let mut at = 0;
+        while at < 32 {
+            order[at] = ((at % 16) / 4 * 4 + 3 - at % 4) as i8;
+            at += 1;
+        }
+        order
     };
-    let x = (x >> 16_u32) | (x << 16_u32);
-    let x = swap(x, 0x00ff_00ff, 8);
-    let x = swap(x, 0x0f0f_0f0f, 4);
-    let x = swap(x, 0x3333_3333, 2);
-    swap(x, 0x5555_5555, 1)
+    /// `rev4(i)`, the 4-bit reversal of nibble `i`, in the low or the high
+    /// nibble of a byte, repeated for both halves.
+    const fn nibble_table(shift: u32) -> [u8; 32] {
+        let mut table = [0u8; 32];
+        let mut at = 0;
+        while at < 32 {
+            let i = (at % 16) as u8;
+            let reversed = ((i & 1) << 3) | ((i & 2) << 1) | ((i & 4) >> 1) | ((i & 8) >> 3);
+            table[at] = reversed << shift;
+            at += 1;
+        }
+        table
+    }
+    let low_nibble = u8x32::splat(0x0f);
+    let bytes: u8x32 = cast(i8x32::swizzle_half(cast(x), i8x32::new(BYTE_ORDER)));
+    let low = bytes & low_nibble;
+    let high = cast::<u32x8, u8x32>(cast::<u8x32, u32x8>(bytes) >> 4_u32) & low_nibble;
+    let reversed = u8x32::new(nibble_table(4)).swizzle_half(cast(low))
+        | u8x32::new(nibble_table(0)).swizzle_half(cast(high));
+    cast(reversed)
 }
 
 /// The nested uniform scramble of the 32-bit fraction `x` under `seed`.
@@ -494,12 +521,18 @@ mod tests {
                 }
             }
         }
-        let x = u32x8::new(core::array::from_fn(|l| {
-            0x1234_5678u32.rotate_left(l as u32 * 5)
-        }));
-        let reversed = reverse_bits_x8(x).to_array();
-        for (lane, value) in x.to_array().iter().enumerate() {
-            assert_eq!(reversed[lane], value.reverse_bits());
+        // The bit reversal lane by lane, on single bits, their complements
+        // and hashed words.
+        let words = (0..32u32)
+            .flat_map(|bit| [1 << bit, !(1 << bit)])
+            .chain((0..4096u32).map(hash32))
+            .collect::<Vec<u32>>();
+        for chunk in words.chunks_exact(LANES) {
+            let x = u32x8::new(core::array::from_fn(|l| chunk[l]));
+            let reversed = reverse_bits_x8(x).to_array();
+            for (lane, value) in chunk.iter().enumerate() {
+                assert_eq!(reversed[lane], value.reverse_bits(), "{value:#x}");
+            }
         }
     }
 }
