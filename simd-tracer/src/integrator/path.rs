@@ -796,15 +796,14 @@ impl<S: Copy> PathState<S> {
         let weight = blocked.to_simd().select(f32x8::ZERO, nee.weight);
         if weight.simd_gt(f32x8::ZERO).any() {
             let environment = nee.environment.to_simd();
-            if !nee.environment.is_empty() {
-                let le = environment_spectra(
-                    transport,
-                    scene,
-                    wavelengths,
-                    nee.environment,
-                    &nee.environment_uv,
-                );
-                let weight = environment.select(weight, f32x8::ZERO);
+            // The map is read for the unblocked lanes only: a blocked
+            // sample adds nothing, and on a large map each read waits on
+            // memory.
+            let seen = nee.environment.and_not(blocked);
+            if !seen.is_empty() {
+                let le =
+                    environment_spectra(transport, scene, wavelengths, seen, &nee.environment_uv);
+                let weight = seen.to_simd().select(weight, f32x8::ZERO);
                 self.emitted
                     .add_direct(transport, &nee.through_bsdf, &le, weight);
             }
