@@ -210,12 +210,16 @@ fn reverse_bits_x8(x: u32x8) -> u32x8 {
         }
         table
     }
+    /// A low nibble's reversal in the high nibble, a high nibble's in the
+    /// low one (tables made at compile time).
+    const LOW_TO_HIGH: [u8; 32] = nibble_table(4);
+    const HIGH_TO_LOW: [u8; 32] = nibble_table(0);
     let low_nibble = u8x32::splat(0x0f);
     let bytes: u8x32 = cast(i8x32::swizzle_half(cast(x), i8x32::new(BYTE_ORDER)));
     let low = bytes & low_nibble;
     let high = cast::<u32x8, u8x32>(cast::<u8x32, u32x8>(bytes) >> 4_u32) & low_nibble;
-    let reversed = u8x32::new(nibble_table(4)).swizzle_half(cast(low))
-        | u8x32::new(nibble_table(0)).swizzle_half(cast(high));
+    let reversed = u8x32::new(LOW_TO_HIGH).swizzle_half(cast(low))
+        | u8x32::new(HIGH_TO_LOW).swizzle_half(cast(high));
     cast(reversed)
 }
 
