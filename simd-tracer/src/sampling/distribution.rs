@@ -15,8 +15,16 @@
 //! in `[0, 1)` is inverted to the cell `i` with `P_i ≤ u < P_{i+1}` and
 //!
 //! ```text
-//! x = (i + (u − P_i) / (P_{i+1} − P_i)) / n,     with density p(x) = w_i / w̄.
+//! x = (i + (u − P_i) / (P_{i+1} − P_i)) / n,     with density p(x) = n (P_{i+1} − P_i).
 //! ```
+//!
+//! The density is taken from the stored CDF, not from the weights: the
+//! inversion chooses cell `i` with probability exactly `P_{i+1} − P_i` (the
+//! stored, rounded edges) and spreads it uniformly over a cell of width
+//! `1/n`, so `n (P_{i+1} − P_i)` is the density of what is sampled, and
+//! `w_i / w̄` only its value before rounding (see "Precision"). Keeping no
+//! table of densities also saves a dependent load per sample: the edges
+//! `P_i` and `P_{i+1}` are the ones the search has just read.
 //!
 //! `i` is the *largest* index with `P_i ≤ u`, so `P_{i+1} > u ≥ P_i`: a
 //! cell of zero weight has `P_{i+1} = P_i` and is never chosen, even when
@@ -47,20 +55,28 @@
 //! classes `PiecewiseConstant1D` and `PiecewiseConstant2D` of
 //! `util/sampling.h`), with three differences: weights must be finite and
 //! non-negative and not all zero (pbrt takes absolute values and falls back
-//! to a uniform density), the density per cell is stored instead of the
-//! function and its integral, and the sampled coordinate is nudged into the
-//! chosen cell after rounding (below).
+//! to a uniform density), the density of a cell is its CDF step times `n`
+//! (pbrt stores the function and its integral and divides), and the
+//! sampled coordinate is nudged into the chosen cell after rounding
+//! (below).
 //!
 //! # Precision
 //!
 //! Weights and tables are `f32`; the running sums of the CDF and the
 //! normalisation are accumulated in `f64` and rounded once, so the CDF is
 //! non-decreasing, starts at exactly 0, ends at exactly 1, and a cell of zero
-//! weight has a zero-width step. A cell whose weight is below about `2⁻²⁴`
-//! of the total may round to a zero-width step: it is then never sampled
-//! although its density is positive (a bias below `2⁻²⁴` of the integral).
-//! A cell's density is at most `n` (its weight is at most the total), so no
-//! table overflows. Coordinates are `f32`, whose spacing just below 1 is
+//! weight has a zero-width step. The edges are rounded to within `2⁻²⁵`,
+//! so a step, and the density `n (P_{i+1} − P_i)` (the difference of two
+//! `f32` is exact in `f64`, then rounded once to `f32`), is within
+//! `2⁻²⁴ n` of `w_i / w̄`: a relative difference that matters only for
+//! cells far below the mean, and never a bias, since the density is that
+//! of the rounded edges that the inversion uses. A cell whose weight is
+//! below about `2⁻²⁴` of the total may round to a zero-width step: it is
+//! then never sampled *and* has density 0, so a strategy combined with
+//! this one by multiple importance sampling takes all of its weight there
+//! (a stored `w_i / w̄ > 0` would give that strategy less than its share
+//! for directions this one never draws). A cell's density is at most `n`
+//! (the steps sum to 1), so nothing overflows. Coordinates are `f32`, whose spacing just below 1 is
 //! `2⁻²⁴`: one dimension has at most [`MAX_CELLS_1D`] `= 2²⁴` cells, so every
 //! cell holds a representable coordinate; the sampled `x` is moved by one
 //! unit in the last place if rounding put it into a neighbouring cell, so
@@ -107,7 +123,8 @@
 //! guide costs 4 bytes per CDF edge.
 //!
 //! What remains are two dependent loads per sample in a large row (the
-//! guide's bucket, then the edges it names), each a likely miss. A packet
+//! guide's bucket, then the edges it names, which also give the density),
+//! each a likely miss. A packet
 //! draws its lanes' points together ([`Distribution2D::sample_batch`]):
 //! every lane's bucket is loaded before any lane searches, so the lanes'
 //! misses overlap instead of queueing lane after lane.
@@ -127,20 +144,11 @@ pub const MAX_CELLS_2D: usize = crate::spectra::texture::MAX_TEXELS;
 /// upper end of every sampled coordinate.
 const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
-/// How far a cell's CDF step may differ from its density over `n` in
-/// [`Distribution1D::validate`]: `2⁻²²`. Both round from the same `f64`
-/// value, the step by at most `2⁻²⁴` (two CDF entries in `[0, 1]`, each
-/// within half an ulp, `2⁻²⁵`), the density over `n` by at most `2⁻²⁴`
-/// (relative rounding of a value at most 1), so `2⁻²³` at most; the
-/// tolerance doubles that.
-const STEP_TOLERANCE: f64 = 1.0 / (1u32 << 22) as f64;
-
 /// A piecewise-constant density over `[0, 1)` (module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Distribution1D {
-    /// Density of each cell, `w_i / w̄`.
-    pdf: Vec<f32>,
-    /// CDF at the `n + 1` cell edges, 0 … 1.
+    /// CDF at the `n + 1` cell edges, 0 … 1; cell `i`'s density is
+    /// `n (P_{i+1} − P_i)` (module docs).
     cdf: Vec<f32>,
     /// The CDF's guide, `n + 1` counts (module docs, "Guide tables").
     guide: Vec<u32>,
@@ -156,9 +164,8 @@ pub struct Distribution2D {
     height: usize,
     /// Over the rows (`y`), weights the row sums.
     marginal: Distribution1D,
-    /// Conditional density of each cell given its row, `width` per row.
-    conditional_pdf: Vec<f32>,
-    /// Conditional CDF of each row, `width + 1` edges per row.
+    /// Conditional CDF of each row, `width + 1` edges per row (a cell's
+    /// conditional density is `width` times its step).
     conditional_cdf: Vec<f32>,
     /// The guide of each row's conditional CDF, `width + 1` counts per row.
     conditional_guide: Vec<u32>,
@@ -177,21 +184,13 @@ fn check_weights(weights: &[f32], name: impl Fn(usize) -> String) -> Result<(), 
     }
 }
 
-/// Appends the densities and CDF of checked `weights` (at least one) of
-/// positive sum `total` (summed in this order) to `pdf` and `cdf`.
-fn tabulate<T: Copy + Into<f64>>(
-    weights: &[T],
-    total: f64,
-    pdf: &mut Vec<f32>,
-    cdf: &mut Vec<f32>,
-) {
-    let n = weights.len() as f64;
+/// Appends the CDF of checked `weights` (at least one) of positive sum
+/// `total` (summed in this order) to `cdf`.
+fn tabulate<T: Copy + Into<f64>>(weights: &[T], total: f64, cdf: &mut Vec<f32>) {
     let mut running = 0.0f64;
     cdf.push(0.0);
     for (i, &w) in weights.iter().enumerate() {
-        let w: f64 = w.into();
-        running += w;
-        pdf.push((w / total * n) as f32);
+        running += w.into();
         cdf.push(if i + 1 == weights.len() {
             1.0
         } else {
@@ -224,6 +223,20 @@ fn guide_of(cdf: &[f32]) -> Vec<u32> {
     let mut guide = Vec::with_capacity(cdf.len());
     tabulate_guide(cdf, &mut guide);
     guide
+}
+
+/// The density of `cell` of the `n` cells of `cdf` (`n + 1` edges):
+/// `n (P_{cell+1} − P_cell)`, the difference exact in `f64` and the
+/// product rounded once (module docs); 0 outside the table.
+#[inline]
+fn step_density(cdf: &[f32], cell: usize) -> f32 {
+    match (cdf.get(cell), cdf.get(cell + 1)) {
+        (Some(&lo), Some(&hi)) => {
+            let n = (cdf.len() - 1) as f64;
+            ((f64::from(hi) - f64::from(lo)) * n) as f32
+        }
+        _ => 0.0,
+    }
 }
 
 /// The cell of `n` that holds `x`, as a real number (`⌊x n⌋`, exact: a
@@ -305,20 +318,20 @@ fn cell_in_bucket(cdf: &[f32], u: f32, (lo, hi): (usize, usize)) -> usize {
 /// Inverts the CDF at `u` (clamped to `[0, 1)`, NaN to 0) through its
 /// guide: the coordinate, its density and its cell. Empty tables give
 /// `(0, 0, 0)`.
-fn sample_cells(pdf: &[f32], cdf: &[f32], guide: &[u32], u: f32) -> (f32, f32, usize) {
+fn sample_cells(cdf: &[f32], guide: &[u32], u: f32) -> (f32, f32, usize) {
     let u = clamp_unit(u);
-    sample_in_bucket(pdf, cdf, u, guide_bucket(cdf, guide, u))
+    sample_in_bucket(cdf, u, guide_bucket(cdf, guide, u))
 }
 
 /// [`sample_cells`] of a clamped `u` whose guide bucket is `bucket`.
 #[inline]
-fn sample_in_bucket(pdf: &[f32], cdf: &[f32], u: f32, bucket: (usize, usize)) -> (f32, f32, usize) {
-    let n = pdf.len();
+fn sample_in_bucket(cdf: &[f32], u: f32, bucket: (usize, usize)) -> (f32, f32, usize) {
+    let n = cdf.len().saturating_sub(1);
     let cell = cell_in_bucket(cdf, u, bucket);
-    let (Some(&lo), Some(&hi), Some(&density)) = (cdf.get(cell), cdf.get(cell + 1), pdf.get(cell))
-    else {
+    let (Some(&lo), Some(&hi)) = (cdf.get(cell), cdf.get(cell + 1)) else {
         return (0.0, 0.0, 0);
     };
+    let density = step_density(cdf, cell);
     let du = if hi > lo {
         (f64::from(u) - f64::from(lo)) / (f64::from(hi) - f64::from(lo))
     } else {
@@ -327,21 +340,25 @@ fn sample_in_bucket(pdf: &[f32], cdf: &[f32], u: f32, bucket: (usize, usize)) ->
     (point_in_cell(cell, du, n), density, cell)
 }
 
-/// The density at `x` of the cells `pdf` (0 outside `[0, 1)`).
-fn pdf_at(pdf: &[f32], x: f32) -> f32 {
-    cell_of(x, pdf.len())
-        .and_then(|cell| pdf.get(cell).copied())
-        .unwrap_or(0.0)
+/// The density at `x` of the cells of `cdf` (0 outside `[0, 1)`).
+fn pdf_at(cdf: &[f32], x: f32) -> f32 {
+    cell_of(x, cdf.len().saturating_sub(1)).map_or(0.0, |cell| step_density(cdf, cell))
 }
 
-/// Checks one table of cells (see [`Distribution1D::validate`]).
-fn validate_cells(pdf: &[f32], cdf: &[f32], guide: &[u32]) -> Result<(), String> {
-    let n = pdf.len();
+/// Checks one table of `n` cells (see [`Distribution1D::validate`]).
+fn validate_cells(n: usize, cdf: &[f32], guide: &[u32]) -> Result<(), String> {
     if n == 0 || n > MAX_CELLS_1D {
         return Err(format!("{n} cells: outside 1 … {MAX_CELLS_1D}"));
     }
     if cdf.len() != n + 1 {
         return Err(format!("{} CDF entries for {n} cells", cdf.len()));
+    }
+    if guide.len() != cdf.len() {
+        return Err(format!(
+            "{} guide entries for {} CDF entries",
+            guide.len(),
+            cdf.len()
+        ));
     }
     if cdf.first() != Some(&0.0) || cdf.last() != Some(&1.0) {
         return Err(format!(
@@ -359,22 +376,6 @@ fn validate_cells(pdf: &[f32], cdf: &[f32], guide: &[u32]) -> Result<(), String>
             cdf[i],
             cdf[i + 1]
         ));
-    }
-    for (i, (&density, edges)) in pdf.iter().zip(cdf.windows(2)).enumerate() {
-        let (lo, hi) = (f64::from(edges[0]), f64::from(edges[1]));
-        if !(density.is_finite() && density >= 0.0) {
-            return Err(format!("cell {i}: density {density}"));
-        }
-        if hi > lo && density == 0.0 {
-            return Err(format!("cell {i}: a CDF step of {} at density 0", hi - lo));
-        }
-        let expected = f64::from(density) / n as f64;
-        if ((hi - lo) - expected).abs() > STEP_TOLERANCE {
-            return Err(format!(
-                "cell {i}: a CDF step of {} for density {density} over {n} cells",
-                hi - lo
-            ));
-        }
     }
     if guide != guide_of(cdf) {
         return Err("the CDF's guide table is stale".to_owned());
@@ -402,24 +403,23 @@ impl Distribution1D {
         if !(total.is_finite() && total > 0.0) {
             return Err(format!("all {} weights are zero", weights.len()));
         }
-        let mut pdf = Vec::with_capacity(weights.len());
         let mut cdf = Vec::with_capacity(weights.len() + 1);
-        tabulate(weights, total, &mut pdf, &mut cdf);
+        tabulate(weights, total, &mut cdf);
         let guide = guide_of(&cdf);
-        Ok(Self { pdf, cdf, guide })
+        Ok(Self { cdf, guide })
     }
 
     /// Inverts the CDF at `u` (clamped to `[0, 1)`; NaN counts as 0):
     /// `x` in `[0, 1)`, the density at `x`, and the cell holding `x`, whose
     /// weight is positive.
     pub fn sample(&self, u: f32) -> (f32, f32, usize) {
-        sample_cells(&self.pdf, &self.cdf, &self.guide, u)
+        sample_cells(&self.cdf, &self.guide, u)
     }
 
-    /// The density at `x`: its cell's weight over the mean weight, 0
-    /// outside `[0, 1)`.
+    /// The density at `x`: `n` times its cell's CDF step (about its weight
+    /// over the mean weight; module docs), 0 outside `[0, 1)`.
     pub fn pdf(&self, x: f32) -> f32 {
-        pdf_at(&self.pdf, x)
+        pdf_at(&self.cdf, x)
     }
 
     /// The number of cells.
@@ -428,22 +428,20 @@ impl Distribution1D {
         reason = "a distribution has at least one cell"
     )]
     pub fn len(&self) -> usize {
-        self.pdf.len()
+        self.cdf.len().saturating_sub(1)
     }
 
-    /// Checks the invariants: 1 … [`MAX_CELLS_1D`] cells and one more CDF
-    /// entry, the CDF non-decreasing from exactly 0 to exactly 1, every
-    /// density finite and non-negative, every CDF step its cell's density
-    /// over `n` (within rounding), no step at density 0, and the guide
+    /// Checks the invariants: 1 … [`MAX_CELLS_1D`] cells, the CDF
+    /// non-decreasing from exactly 0 to exactly 1 (no NaN), and the guide
     /// that of the CDF.
     pub fn validate(&self) -> Result<(), String> {
-        validate_cells(&self.pdf, &self.cdf, &self.guide)
+        validate_cells(self.len(), &self.cdf, &self.guide)
     }
 
     /// Heap and inline bytes.
     fn memory_bytes(&self) -> usize {
         size_of::<Self>()
-            + (self.pdf.capacity() + self.cdf.capacity()) * size_of::<f32>()
+            + self.cdf.capacity() * size_of::<f32>()
             + self.guide.capacity() * size_of::<u32>()
     }
 }
@@ -480,21 +478,15 @@ impl Distribution2D {
             .map(|row| row.iter().map(|&w| f64::from(w)).sum())
             .collect();
         let marginal = Distribution1D::from_checked(&row_sums)?;
-        let mut conditional_pdf = Vec::with_capacity(cells);
         let mut conditional_cdf = Vec::with_capacity(height * (width + 1));
         let mut conditional_guide = Vec::with_capacity(height * (width + 1));
         let uniform = vec![1.0f32; width];
         for (row, &sum) in weights.chunks_exact(width).zip(&row_sums) {
             let start = conditional_cdf.len();
             if sum > 0.0 {
-                tabulate(row, sum, &mut conditional_pdf, &mut conditional_cdf);
+                tabulate(row, sum, &mut conditional_cdf);
             } else {
-                tabulate(
-                    &uniform,
-                    width as f64,
-                    &mut conditional_pdf,
-                    &mut conditional_cdf,
-                );
+                tabulate(&uniform, width as f64, &mut conditional_cdf);
             }
             tabulate_guide(
                 conditional_cdf.get(start..).unwrap_or(&[]),
@@ -505,18 +497,9 @@ impl Distribution2D {
             width,
             height,
             marginal,
-            conditional_pdf,
             conditional_cdf,
             conditional_guide,
         })
-    }
-
-    /// The conditional densities of row `row` (empty if out of range).
-    fn row_pdf(&self, row: usize) -> &[f32] {
-        let start = row.saturating_mul(self.width);
-        self.conditional_pdf
-            .get(start..start.saturating_add(self.width))
-            .unwrap_or(&[])
     }
 
     /// The conditional CDF of row `row` (empty if out of range).
@@ -543,12 +526,7 @@ impl Distribution2D {
     /// [`Self::pdf`] gives at that point, bit for bit.
     pub fn sample(&self, u: [f32; 2]) -> ([f32; 2], f32) {
         let (y, pdf_y, row) = self.marginal.sample(u[1]);
-        let (x, pdf_x, _) = sample_cells(
-            self.row_pdf(row),
-            self.row_cdf(row),
-            self.row_guide(row),
-            u[0],
-        );
+        let (x, pdf_x, _) = sample_cells(self.row_cdf(row), self.row_guide(row), u[0]);
         ([x, y], pdf_y * pdf_x)
     }
 
@@ -577,19 +555,20 @@ impl Distribution2D {
         });
         buckets.map(|bucket| {
             bucket.map(|(u, y, pdf_y, row, bucket)| {
-                let (x, pdf_x, _) =
-                    sample_in_bucket(self.row_pdf(row), self.row_cdf(row), u, bucket);
+                let (x, pdf_x, _) = sample_in_bucket(self.row_cdf(row), u, bucket);
                 ([x, y], pdf_y * pdf_x)
             })
         })
     }
 
-    /// The density per unit area at `point` `(x, y)`: its cell's weight over
-    /// the mean weight, 0 outside the unit square.
+    /// The density per unit area at `point` `(x, y)`: the product of its
+    /// row's and its cell's densities from their CDF steps (about its
+    /// cell's weight over the mean weight; module docs), 0 outside the unit
+    /// square.
     pub fn pdf(&self, point: [f32; 2]) -> f32 {
         let [x, y] = point;
         match cell_of(y, self.height) {
-            Some(row) => self.marginal.pdf(y) * pdf_at(self.row_pdf(row), x),
+            Some(row) => self.marginal.pdf(y) * pdf_at(self.row_cdf(row), x),
             None => 0.0,
         }
     }
@@ -613,32 +592,28 @@ impl Distribution2D {
             .validate()
             .map_err(|e| format!("marginal: {e}"))?;
         let edges = height * (width + 1);
-        if self.conditional_pdf.len() != cells
-            || self.conditional_cdf.len() != edges
-            || self.conditional_guide.len() != edges
-        {
+        if self.conditional_cdf.len() != edges || self.conditional_guide.len() != edges {
             return Err(format!(
-                "conditional tables of {} densities, {} CDF entries and {} guide entries for \
+                "conditional tables of {} CDF entries and {} guide entries for \
                  {width}×{height} cells",
-                self.conditional_pdf.len(),
                 self.conditional_cdf.len(),
                 self.conditional_guide.len()
             ));
         }
         for row in 0..height {
-            validate_cells(self.row_pdf(row), self.row_cdf(row), self.row_guide(row))
+            validate_cells(width, self.row_cdf(row), self.row_guide(row))
                 .map_err(|e| format!("row {row}: {e}"))?;
         }
         Ok(())
     }
 
     /// Bytes held: the struct, the marginal and the conditional tables
-    /// with their guides (`12 (W + 1) H` bytes plus the marginal's `12 H`,
-    /// about 12 bytes per cell).
+    /// with their guides (`8 (W + 1) H` bytes plus the marginal's `8 H`,
+    /// about 8 bytes per cell).
     pub fn memory_bytes(&self) -> usize {
         size_of::<Self>() - size_of::<Distribution1D>()
             + self.marginal.memory_bytes()
-            + (self.conditional_pdf.capacity() + self.conditional_cdf.capacity()) * size_of::<f32>()
+            + self.conditional_cdf.capacity() * size_of::<f32>()
             + self.conditional_guide.capacity() * size_of::<u32>()
     }
 }
@@ -810,6 +785,45 @@ mod tests {
         }
     }
 
+    /// A cell's density is `n` times its CDF step: within `f32` rounding
+    /// of its weight over the mean weight where the step is large, the
+    /// densities integrate to 1, and a cell whose positive weight rounds
+    /// to a zero-width step (below `2⁻²⁴` of the total) has density 0
+    /// and is never sampled, so another strategy weighted against this
+    /// one by MIS covers it alone (module docs, "Precision").
+    #[test]
+    fn densities_are_the_probabilities_of_the_cells() {
+        // Cell 2's weight is 2⁻³⁰ of the total: below the CDF's resolution.
+        let weights = [3.0, 1.0, 4.0 / (1u64 << 30) as f32, 4.0, 0.0, 8.0];
+        let d = Distribution1D::new(&weights).unwrap();
+        let n = weights.len();
+        let total: f64 = weights.iter().map(|&w| f64::from(w)).sum();
+        let mut integral = 0.0f64;
+        for (cell, &w) in weights.iter().enumerate() {
+            let centre = ((cell as f64 + 0.5) / n as f64) as f32;
+            let density = d.pdf(centre);
+            let step = f64::from(d.cdf[cell + 1]) - f64::from(d.cdf[cell]);
+            assert_eq!(density, (step * n as f64) as f32, "cell {cell}");
+            integral += f64::from(density) / n as f64;
+            if cell != 2 {
+                let expected = f64::from(w) / total * n as f64;
+                assert!(
+                    (f64::from(density) - expected).abs() <= 1e-6 * n as f64,
+                    "cell {cell}: {density} against {expected}"
+                );
+            }
+        }
+        assert!((integral - 1.0).abs() < 1e-6, "{integral}");
+        assert!(weights[2] > 0.0);
+        assert_eq!(d.pdf(2.5 / n as f32), 0.0);
+        for i in 0..100_000 {
+            assert_ne!(d.sample(i as f32 / 100_000.0).2, 2);
+        }
+        for u in [d.cdf[2], d.cdf[3]] {
+            assert_ne!(d.sample(u).2, 2);
+        }
+    }
+
     /// Rounding a coordinate to `f32` never leaves its cell, up to the
     /// largest number of cells, where cells are one `f32` wide near 1.
     #[test]
@@ -933,15 +947,16 @@ mod tests {
         let mut short = d.clone();
         short.cdf[4] = 0.99;
         assert!(short.validate().unwrap_err().contains("not from 0 to 1"));
+        // An edge moved without its guide.
         let mut step_at_zero = d.clone();
         step_at_zero.cdf[3] = 0.6;
-        assert!(step_at_zero.validate().is_err());
+        assert!(step_at_zero.validate().unwrap_err().contains("guide"));
         let mut sizes = d.clone();
         sizes.cdf.pop();
-        assert!(sizes.validate().unwrap_err().contains("CDF entries"));
-        let mut shifted = d.clone();
-        shifted.cdf[1] += 0.01;
-        assert!(shifted.validate().unwrap_err().contains("step"));
+        assert!(sizes.validate().unwrap_err().contains("guide entries"));
+        let mut not_a_number = d.clone();
+        not_a_number.cdf[2] = f32::NAN;
+        assert!(not_a_number.validate().unwrap_err().contains("decreases"));
         let d2 = Distribution2D::new(TABLE_WIDTH, TABLE_HEIGHT, &table()).unwrap();
         d2.validate().unwrap();
         let mut row = d2.clone();
@@ -1048,9 +1063,9 @@ mod tests {
     #[test]
     fn memory_counts_the_tables() {
         let d = Distribution2D::new(TABLE_WIDTH, TABLE_HEIGHT, &table()).unwrap();
-        // Densities, CDF edges and guide counts, 4 bytes each.
-        let tables = 4 * (TABLE_WIDTH * TABLE_HEIGHT + 2 * (TABLE_WIDTH + 1) * TABLE_HEIGHT);
-        let marginal = 4 * (3 * TABLE_HEIGHT + 2);
+        // CDF edges and guide counts, 4 bytes each.
+        let tables = 4 * 2 * (TABLE_WIDTH + 1) * TABLE_HEIGHT;
+        let marginal = 4 * 2 * (TABLE_HEIGHT + 1);
         assert!(d.memory_bytes() >= tables + marginal);
         assert!(d.memory_bytes() <= tables + marginal + 256);
     }
