@@ -145,10 +145,12 @@ pub(super) fn gather_fourier<const N: usize>(
         }
     }
     let mut coeffs = [f32x8::ZERO; N];
-    for (chunk, row) in rows.iter().enumerate().take(chunks) {
+    // Chunk by chunk of the result (`chunks` of them), the transposed
+    // columns stored in place.
+    for (chunk, row) in coeffs.chunks_mut(LANES).zip(&rows) {
         let columns = f32x8::transpose(*row);
-        for (coefficient, column) in coeffs.iter_mut().skip(chunk * LANES).zip(columns) {
-            *coefficient = column;
+        for (coefficient, column) in chunk.iter_mut().zip(&columns) {
+            *coefficient = *column;
         }
     }
     if let Some(first) = coeffs.first_mut() {
