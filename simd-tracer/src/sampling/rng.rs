@@ -58,7 +58,7 @@ pub fn mix64(mut z: u64) -> u64 {
 
 /// RXS-M-XS: the output permutation of a 32-bit state.
 #[inline(always)]
-fn rxs_m_xs(state: u32) -> u32 {
+const fn rxs_m_xs(state: u32) -> u32 {
     let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(RXS_M_XS_MULTIPLIER);
     (word >> 22) ^ word
 }
@@ -73,7 +73,7 @@ fn rxs_m_xs_x8(state: u32x8) -> u32x8 {
 
 /// `pcg_hash` (Jarzynski and Olano 2020): a bijection of 32-bit words.
 #[inline(always)]
-pub(super) fn hash32(x: u32) -> u32 {
+pub(super) const fn hash32(x: u32) -> u32 {
     rxs_m_xs(x.wrapping_mul(PCG_MULTIPLIER).wrapping_add(HASH_INCREMENT))
 }
 

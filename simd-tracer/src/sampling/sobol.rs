@@ -229,10 +229,33 @@ pub fn owen_scramble(x: u32, seed: u32) -> u32 {
     laine_karras(x.reverse_bits(), seed).reverse_bits()
 }
 
+/// The part of `dimension`'s scramble seed shared by every pixel,
+/// `hash32(dimension ⊕ salt)`: from a table for the Sobol dimensions (a
+/// hash fewer a draw), hashed past them.
+#[inline(always)]
+fn dimension_key(dimension: u32) -> u32 {
+    match DIMENSION_KEYS.get(dimension as usize) {
+        Some(&key) => key,
+        None => hash32(dimension ^ DIMENSION_SALT),
+    }
+}
+
+/// [`dimension_key`] of the first [`SOBOL_DIMENSIONS`] dimensions, made at
+/// compile time.
+static DIMENSION_KEYS: [u32; SOBOL_DIMENSIONS] = {
+    let mut keys = [0u32; SOBOL_DIMENSIONS];
+    let mut d = 0;
+    while d < SOBOL_DIMENSIONS {
+        keys[d] = hash32(d as u32 ^ DIMENSION_SALT);
+        d += 1;
+    }
+    keys
+};
+
 /// The scramble seed of `dimension` for a pixel's seed.
 #[inline(always)]
 fn dimension_seed(pixel_seed: u32, dimension: u32) -> u32 {
-    hash32(pixel_seed ^ hash32(dimension ^ DIMENSION_SALT))
+    hash32(pixel_seed ^ dimension_key(dimension))
 }
 
 /// The part of a scramble key shared by every pixel: the render's seed,
@@ -331,7 +354,7 @@ impl SobolPacket {
     /// [`SobolStream::sample`] of every lane.
     #[inline]
     pub fn sample_x8(&self, dimension: u32) -> f32x8 {
-        let seed = hash32_x8(self.pixel_seed ^ u32x8::splat(hash32(dimension ^ DIMENSION_SALT)));
+        let seed = hash32_x8(self.pixel_seed ^ u32x8::splat(dimension_key(dimension)));
         let bits = match usize::try_from(dimension) {
             Ok(d) if d < SOBOL_DIMENSIONS => {
                 let reversed = u32x8::splat(sobol_bits(self.index, d).reverse_bits());
