@@ -225,18 +225,12 @@ fn guide_of(cdf: &[f32]) -> Vec<u32> {
     guide
 }
 
-/// The density of `cell` of the `n` cells of `cdf` (`n + 1` edges):
-/// `n (P_{cell+1} − P_cell)`, the difference exact in `f64` and the
-/// product rounded once (module docs); 0 outside the table.
+/// The density of a cell of `n` whose CDF edges are `lo` and `hi`:
+/// `n (hi − lo)`, the difference exact in `f64` and the product rounded
+/// once (module docs).
 #[inline]
-fn step_density(cdf: &[f32], cell: usize) -> f32 {
-    match (cdf.get(cell), cdf.get(cell + 1)) {
-        (Some(&lo), Some(&hi)) => {
-            let n = (cdf.len() - 1) as f64;
-            ((f64::from(hi) - f64::from(lo)) * n) as f32
-        }
-        _ => 0.0,
-    }
+fn step_density(lo: f32, hi: f32, n: usize) -> f32 {
+    ((f64::from(hi) - f64::from(lo)) * n as f64) as f32
 }
 
 /// The cell of `n` that holds `x`, as a real number (`⌊x n⌋`, exact: a
@@ -331,7 +325,7 @@ fn sample_in_bucket(cdf: &[f32], u: f32, bucket: (usize, usize)) -> (f32, f32, u
     let (Some(&lo), Some(&hi)) = (cdf.get(cell), cdf.get(cell + 1)) else {
         return (0.0, 0.0, 0);
     };
-    let density = step_density(cdf, cell);
+    let density = step_density(lo, hi, n);
     let du = if hi > lo {
         (f64::from(u) - f64::from(lo)) / (f64::from(hi) - f64::from(lo))
     } else {
@@ -342,7 +336,11 @@ fn sample_in_bucket(cdf: &[f32], u: f32, bucket: (usize, usize)) -> (f32, f32, u
 
 /// The density at `x` of the cells of `cdf` (0 outside `[0, 1)`).
 fn pdf_at(cdf: &[f32], x: f32) -> f32 {
-    cell_of(x, cdf.len().saturating_sub(1)).map_or(0.0, |cell| step_density(cdf, cell))
+    let n = cdf.len().saturating_sub(1);
+    match cell_of(x, n).map(|cell| (cdf.get(cell), cdf.get(cell + 1))) {
+        Some((Some(&lo), Some(&hi))) => step_density(lo, hi, n),
+        _ => 0.0,
+    }
 }
 
 /// Checks one table of `n` cells (see [`Distribution1D::validate`]).
