@@ -3,7 +3,7 @@
 
 use super::packet_traversal::PacketRays;
 use super::triangle::{PreparedTriangle, weight};
-use super::{Bvh, BvhLayout, in_step, index_u32};
+use super::{Bvh, BvhLayout, RAYS_IN_STEP, in_step, index_u32};
 use crate::ids::{NO_INSTANCE, NO_TRIANGLE};
 use crate::packet::{PacketHit, RayPacket};
 use crate::simd::{LANES, LaneMask};
@@ -246,11 +246,19 @@ impl Bvh {
     /// Occlusion of a packet's active lanes through the 8-wide tree, each
     /// its single-ray walk, two rays in step.
     pub fn occluded_packet_wide(&self, packet: &RayPacket) -> LaneMask {
-        let blocked = in_step(
-            packet,
-            |rays, stacks| self.wide.occluded_many(rays, stacks),
-            |ray, stack| self.occluded_wide(ray, stack),
-        );
+        let blocked = if self.prefetches() {
+            in_step(
+                packet,
+                |rays, stacks| self.wide.occluded_many::<RAYS_IN_STEP, true>(rays, stacks),
+                |ray, stack| self.wide.occluded(ray, stack),
+            )
+        } else {
+            in_step(
+                packet,
+                |rays, stacks| self.wide.occluded_many::<RAYS_IN_STEP, false>(rays, stacks),
+                |ray, stack| self.wide.occluded(ray, stack),
+            )
+        };
         (0..LANES)
             .filter(|&lane| blocked[lane] == Some(true))
             .fold(LaneMask::NONE, LaneMask::with)

@@ -430,6 +430,21 @@ impl<T: Copy> InlineStack<T> {
         }
     }
 
+    /// Entries held inline (those spilled at pathological depths are not
+    /// counted).
+    #[inline(always)]
+    fn inline_len(&self) -> usize {
+        self.len
+    }
+
+    /// The inline entries above the first `len`, in push order (the ones
+    /// pushed since [`Self::inline_len`] was `len`, when none were popped
+    /// in between); empty if fewer are held.
+    #[inline(always)]
+    fn inline_since(&self, len: usize) -> &[T] {
+        self.inline.get(len..self.len).unwrap_or_default()
+    }
+
     #[inline(always)]
     fn pop(&mut self) -> Option<T> {
         if let Some(top) = self.spill.pop() {
@@ -653,16 +668,32 @@ impl Bvh {
     /// each its single-ray walk, two rays in step. Same output convention
     /// as [`Bvh::intersect_packet`].
     pub fn intersect_packet_wide(&self, packet: &RayPacket) -> PacketHit {
-        let found = in_step(
-            packet,
-            |rays, stacks| {
-                self.wide
-                    .intersect_many(rays, stacks)
-                    .map(|h| self.hit_of_slot(h))
-            },
-            |ray, stack| self.intersect_wide(ray, stack),
-        );
-        packet_hit(packet, &found.map(Option::flatten))
+        let found = if self.prefetches() {
+            in_step(
+                packet,
+                |rays, stacks| self.wide.intersect_many::<RAYS_IN_STEP, true>(rays, stacks),
+                |ray, stack| self.wide.intersect(ray, stack),
+            )
+        } else {
+            in_step(
+                packet,
+                |rays, stacks| {
+                    self.wide
+                        .intersect_many::<RAYS_IN_STEP, false>(rays, stacks)
+                },
+                |ray, stack| self.wide.intersect(ray, stack),
+            )
+        };
+        packet_hit(packet, &found.map(|h| self.hit_of_slot(h.flatten())))
+    }
+
+    /// Whether walks in step through the 8-wide tree prefetch the children
+    /// they push (`wide_tree` module docs, "Rays in step"): for the large
+    /// trees that keep only the 8-wide tree ([`WIDE_ONLY_MIN_TRIANGLES`],
+    /// tens of MB and more), whose walks wait for memory; smaller trees
+    /// stay in the caches, where the hints only cost instructions.
+    fn prefetches(&self) -> bool {
+        self.layout == BvhLayout::WideOnly
     }
 }
 
