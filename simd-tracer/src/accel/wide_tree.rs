@@ -93,15 +93,13 @@
 //! as it is pushed, so that when the walk pops it, steps later, its lines
 //! are in the cache or on the way. An ordinary early load did not do this:
 //! a load that misses holds retirement, and the reorder buffer fills
-//! behind it. Measured (docs/performance.md, "Prefetching a wide node's
-//! hit children"): 3–6 % less CPU time on the 1.3 M-triangle icospheres,
-//! 2 % on plyfield. The instanced bunnies' mesh tree (69 453 triangles)
-//! stays in the caches and was 2 % slower with the hints, which only cost
-//! instructions there, so smaller trees and single walks do not prefetch
-//! (`step` and `occlusion_step` take it as a constant). Prefetching the
-//! nearest child as well, every other line, into the L2 only, and three
-//! rays in step with prefetching were no faster or slower. Results are
-//! the same bit for bit: a prefetch changes no value.
+//! behind it. The hints pay on the million-triangle scenes, whose trees
+//! exceed the caches; on a tree that stays cached (the instanced bunnies'
+//! mesh) they only cost instructions, so smaller trees and single walks
+//! do not prefetch (`step` and `occlusion_step` take it as a constant).
+//! The figures, and the variants that were no faster, are in
+//! docs/performance.md, "Prefetching a wide node's hit children". Results
+//! are the same bit for bit: a prefetch changes no value.
 
 use super::{
     Bvh2, Bvh2Node, InlineStack, PreparedTriangle, ScalarHit, cross, dot, edge_weights, inside_x8,
