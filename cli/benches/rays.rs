@@ -62,6 +62,15 @@ fn load(name: &str) -> Result<(Scene, Vec<RayPacket>, usize), String> {
     Ok((scene, packets, rays.len()))
 }
 
+/// The number of `packets`' rays that hit something: the closest-hit
+/// query of a render's bounce rays, one packet after the other.
+fn closest_hits(scene: &Scene, packets: &[RayPacket]) -> usize {
+    packets
+        .iter()
+        .map(|packet| scene.intersect_incoherent(black_box(packet)).hit.count())
+        .sum()
+}
+
 fn rays(c: &mut Criterion) {
     for name in SCENES {
         let (scene, packets, count) = match load(name) {
@@ -73,25 +82,13 @@ fn rays(c: &mut Criterion) {
         };
         // The share of rays that hit something, to set beside the
         // `hit_fraction` tools/ray_bench.py records for Mitsuba.
-        let hits: usize = packets
-            .iter()
-            .map(|packet| scene.intersect_incoherent(packet).hit.count())
-            .sum();
         eprintln!(
             "rays/{name}: {count} rays, {:.4} of them hit",
-            hits as f64 / count as f64
+            closest_hits(&scene, &packets) as f64 / count as f64
         );
         let mut group = c.benchmark_group(format!("rays/{name}"));
         group.throughput(Throughput::Elements(count as u64));
-        group.bench_function("closest", |b| {
-            b.iter(|| {
-                let mut hits = 0usize;
-                for packet in &packets {
-                    hits += scene.intersect_incoherent(black_box(packet)).hit.count();
-                }
-                hits
-            })
-        });
+        group.bench_function("closest", |b| b.iter(|| closest_hits(&scene, &packets)));
         group.bench_function("shadow", |b| {
             b.iter(|| {
                 let mut blocked = 0usize;
