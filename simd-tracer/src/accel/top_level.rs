@@ -15,9 +15,10 @@
 //! The binary top level is collapsed by the wide tree's rule
 //! ([`super::wide_tree::collapse`]: the child of largest surface area is
 //! opened until a node has 8 children), except that every inner binary node
-//! opens: a leaf of the wide tree is a binary leaf, whose instances (one as
-//! a rule) are consecutive top-level slots (`Bvh2::primitive_indices`), so
-//! a leaf child names its first slot and its count and needs no blocks.
+//! opens: a leaf of the wide tree is a binary leaf, whose instance (one a
+//! leaf: [`super::instances`] module docs) is a top-level slot
+//! (`Bvh2::primitive_indices`), so a leaf child names its first slot and
+//! its count and needs no blocks.
 //!
 //! # Traversal
 //!
@@ -274,5 +275,14 @@ impl TopLevel {
     /// Number of nodes.
     pub(super) fn node_count(&self) -> usize {
         self.nodes.len()
+    }
+
+    /// The number of slots of every leaf child.
+    pub(super) fn leaf_counts(&self) -> impl Iterator<Item = u16> + '_ {
+        self.nodes.iter().flat_map(|node| {
+            (0..WIDE_WIDTH)
+                .filter(|&k| node.used & (1 << k) != 0 && node.count[k] > 0)
+                .map(|k| node.count[k])
+        })
     }
 }
