@@ -941,14 +941,24 @@ impl<'a> Splat<'a> {
         if self.scratch_len == 0 {
             return;
         }
-        let (width, _) = self.apron();
-        for (index, values) in scratch.chunks_exact(self.scratch_len).enumerate() {
-            let pixel = match self.ring.place(index % width, index / width) {
-                Ok(own) => tile.pixels.get_mut(own),
-                Err(slot) => tile.ring.get_mut(slot),
-            };
-            if let Some(pixel) = pixel {
-                film.add_scratch(pixel, values);
+        let (width, height) = self.apron();
+        let len = self.scratch_len;
+        // Rows and columns counted, not derived from the scratch index: a
+        // division per pixel (and `chunks_exact`'s own, by a length known
+        // only at run time) costs more than the add it locates.
+        for ay in 0..height {
+            for ax in 0..width {
+                let at = (ay * width + ax) * len;
+                let Some(values) = scratch.get(at..at + len) else {
+                    return;
+                };
+                let pixel = match self.ring.place(ax, ay) {
+                    Ok(own) => tile.pixels.get_mut(own),
+                    Err(slot) => tile.ring.get_mut(slot),
+                };
+                if let Some(pixel) = pixel {
+                    film.add_scratch(pixel, values);
+                }
             }
         }
     }
@@ -1051,12 +1061,16 @@ impl<'a> Splat<'a> {
                     continue;
                 }
                 // The footprint's pixels in this row, consecutive records
-                // of `len` values (those past the scratch's end are none).
+                // of `len` values (those past the scratch's end are none),
+                // located by offset: `chunks_exact_mut` by a length known
+                // only at run time divides once per row.
                 let start = ((ly as usize + j) * width + lx as usize) * len;
-                let pixels = scratch.get_mut(start..).unwrap_or_default();
-                for (values, &wx) in pixels.chunks_exact_mut(len).zip(columns) {
+                for (i, &wx) in columns.iter().enumerate() {
                     let w = wx * wy;
-                    if w != 0.0 {
+                    let at = start + i * len;
+                    if w != 0.0
+                        && let Some(values) = scratch.get_mut(at..at + len)
+                    {
                         film.accumulate_scratch(values, sample, w);
                     }
                 }
