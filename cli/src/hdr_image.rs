@@ -651,7 +651,7 @@ mod tests {
         AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, Text,
         WritableImage,
     };
-    use std::path::PathBuf;
+    use test_support::ScratchDir;
 
     /// An RGBE file: the standard header with `extra` lines, the resolution
     /// line, then `data`.
@@ -673,11 +673,9 @@ mod tests {
         parse_rgbe(bytes).unwrap_err()
     }
 
-    /// A scratch folder of this test process.
-    fn scratch(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("fspec-hdr-{}-{name}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    /// A scratch folder of this test, removed when the test drops it.
+    fn scratch(name: &str) -> ScratchDir {
+        ScratchDir::new("fspec-hdr", name).unwrap()
     }
 
     #[test]
@@ -966,7 +964,6 @@ mod tests {
         write_exr(&path, channels.to_vec(), (2, 1));
         let image = load_rgb_image(&path).unwrap();
         assert_eq!(image.texels, [[7.0; 3], [8.0; 3]]);
-        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]
@@ -1013,7 +1010,6 @@ mod tests {
             message.contains("needs channels R, G, B, or Y (found Z)"),
             "{message}"
         );
-        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]
@@ -1033,7 +1029,6 @@ mod tests {
         // The PNG decoder's values are `f32` fractions of 255.
         let d = |v: u8| srgb_decode(f64::from(f32::from(v) / 255.0)) as f32;
         assert_eq!(image.texels, [[1.0, 0.0, d(128)], [d(10), d(200), 1.0]]);
-        std::fs::remove_dir_all(dir).unwrap();
     }
 
     /// `tests/data/two-colours-8x8.jpg` (written by Mitsuba 3.9.1's
@@ -1095,7 +1090,6 @@ mod tests {
         assert!(message.contains("cannot read"), "{message}");
         let message = load_rgb_image(&dir).unwrap_err().to_string();
         assert!(message.contains("is a directory"), "{message}");
-        std::fs::remove_dir_all(dir).unwrap();
     }
 
     /// The Mitsuba test scene's environment map (an equirectangular EXR,

@@ -296,15 +296,13 @@ mod tests {
 
     #[test]
     fn black_spectrum_has_a_finite_report() {
-        let dir = std::env::temp_dir().join(format!("fspec-black-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = test_support::ScratchDir::new("fspec-black", "report").unwrap();
         let path = dir.join("black.csv");
         std::fs::write(&path, "400,0\n700,0\n").unwrap();
         let (label, report, extras) = build_report(&args(path.to_str().unwrap(), 4)).unwrap();
         let text = render_text(&label, &report, &extras);
         assert!(!text.contains("NaN"), "{text}");
         assert!(text.contains("#000000"));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

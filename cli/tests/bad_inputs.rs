@@ -15,8 +15,9 @@ use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::RenderSettings;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
+use test_support::ScratchDir;
 
 /// A tiny, fast render.
 const SMALL: [&str; 6] = ["--width", "8", "--height", "8", "--spp", "1"];
@@ -25,7 +26,7 @@ fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn test_dir(name: &str) -> TestResult<PathBuf> {
+fn test_dir(name: &str) -> TestResult<ScratchDir> {
     common::test_dir("bad-inputs", name)
 }
 

@@ -24,6 +24,7 @@ use spectral_core::color::LinearSrgb;
 use spectral_core::xyz::XyzRoute;
 use std::fs;
 use std::path::{Path, PathBuf};
+use test_support::ScratchDir;
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
@@ -106,8 +107,7 @@ fn failing_blocks(a: &[f64], b: &[f64], reference: &[f64]) -> Vec<(usize, f64)> 
 }
 
 fn load(text: &str, name: &str) -> TestResult<Scene> {
-    let dir = std::env::temp_dir().join(format!("fspec-envref-{}-{name}", std::process::id()));
-    fs::create_dir_all(&dir)?;
+    let dir = ScratchDir::new("fspec-envref", name)?;
     let path = dir.join("scene.toml");
     let assets = root().join("scenes/assets");
     fs::write(

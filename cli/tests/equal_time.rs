@@ -6,7 +6,8 @@
 //! `fspec render` that the measurement chose.
 
 use assert_cmd::Command;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use test_support::ScratchDir;
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
@@ -14,13 +15,8 @@ fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn out_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "fspec-equal-time-test-{}-{name}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+fn out_dir(name: &str) -> TestResult<ScratchDir> {
+    Ok(ScratchDir::new("fspec-equal-time-test", name)?)
 }
 
 /// Renders the built-in Cornell box at 8 × 8 into `dir/name`.
@@ -61,7 +57,7 @@ fn csv(path: &Path) -> TestResult<Vec<Vec<String>>> {
 
 #[test]
 fn equal_time_table_medians_and_plot() -> TestResult {
-    let dir = out_dir("table");
+    let dir = out_dir("table")?;
     std::fs::create_dir_all(&dir)?;
     render(&dir, "ref.exr", 64, 100)?;
     render(&dir, "even.exr", 32, 101)?;
@@ -154,7 +150,7 @@ fn fails_with(dir: &Path, text: &str, message: &str) -> TestResult {
 
 #[test]
 fn bad_manifests_and_images_fail_with_one_line() -> TestResult {
-    let dir = out_dir("bad");
+    let dir = out_dir("bad")?;
     std::fs::create_dir_all(&dir)?;
     render(&dir, "ref.exr", 2, 1)?;
     std::fs::copy(dir.join("ref.exr"), dir.join("even.exr"))?;
@@ -218,7 +214,7 @@ fn render_bytes(dir: &Path, name: &str, args: &[&str]) -> TestResult<Vec<u8>> {
 /// for control variates (which cannot splat) importance sampling.
 #[test]
 fn render_defaults_to_the_measured_best_film() -> TestResult {
-    let dir = out_dir("defaults");
+    let dir = out_dir("defaults")?;
     std::fs::create_dir_all(&dir)?;
     let default = render_bytes(&dir, "default.exr", &[])?;
     assert_eq!(

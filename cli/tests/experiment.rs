@@ -4,7 +4,8 @@
 //! bad arguments fail with exit code 2. The full runs are not tests.
 
 use assert_cmd::Command;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use test_support::ScratchDir;
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
@@ -12,13 +13,8 @@ fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn out_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "fspec-experiment-test-{}-{name}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+fn out_dir(name: &str) -> TestResult<ScratchDir> {
+    Ok(ScratchDir::new("fspec-experiment-test", name)?)
 }
 
 /// Smoke sizes of the rendering experiments: 8 × 8 pixels, 4 spp, a 4-spp
@@ -115,7 +111,7 @@ fn assert_png(path: &Path) -> TestResult {
 
 #[test]
 fn colorchecker_json_has_exactly_the_documented_schema() -> TestResult {
-    let dir = out_dir("json");
+    let dir = out_dir("json")?;
     let output = fspec()
         .args(["experiment", "colorchecker", "--json", "--runs", "2"])
         .args(["--max-samples", "8", "--out"])
@@ -197,7 +193,7 @@ fn colorchecker_json_has_exactly_the_documented_schema() -> TestResult {
 
 #[test]
 fn colorchecker_takes_led_b4_and_a_csv_illuminant() -> TestResult {
-    let dir = out_dir("illuminants");
+    let dir = out_dir("illuminants")?;
     std::fs::create_dir_all(&dir)?;
     let csv = dir.join("flat_lamp.csv");
     std::fs::write(&csv, "wavelength_nm,value\n380,1\n780,1\n")?;
@@ -231,7 +227,7 @@ fn colorchecker_takes_led_b4_and_a_csv_illuminant() -> TestResult {
 
 #[test]
 fn conversions_smoke_run_writes_finite_tables_and_plots() -> TestResult {
-    let dir = out_dir("conversions");
+    let dir = out_dir("conversions")?;
     fspec()
         .args(["experiment", "conversions"])
         .args(SMOKE)
@@ -303,7 +299,7 @@ fn conversions_smoke_run_writes_finite_tables_and_plots() -> TestResult {
 
 #[test]
 fn truncation_ringing_and_memory_smoke_runs() -> TestResult {
-    let dir = out_dir("beyond");
+    let dir = out_dir("beyond")?;
     for name in ["truncation", "ringing", "memory"] {
         fspec()
             .args(["experiment", name])
@@ -353,7 +349,7 @@ fn truncation_ringing_and_memory_smoke_runs() -> TestResult {
 
 #[test]
 fn bad_arguments_exit_with_code_2() -> TestResult {
-    let dir = out_dir("bad");
+    let dir = out_dir("bad")?;
     let missing_csv = dir.join("no-such-lamp.csv");
     let missing_csv = missing_csv.to_str().ok_or("path")?;
     let cases: [&[&str]; 14] = [

@@ -5,7 +5,8 @@ mod common;
 
 use common::{TestResult, entries};
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use test_support::ScratchDir;
 
 use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer, LayerAttributes,
@@ -20,7 +21,7 @@ use spectral_core::color::{LinearSrgb, Xyz};
 
 type ExrImage = Image<Layer<AnyChannels<FlatSamples>>>;
 
-fn test_dir(name: &str) -> TestResult<PathBuf> {
+fn test_dir(name: &str) -> TestResult<ScratchDir> {
     common::test_dir("image-out", name)
 }
 

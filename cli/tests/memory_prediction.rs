@@ -16,7 +16,7 @@ mod linux {
     use clap::Parser;
     use fspec_cli::render_cmd::{self, MemoryPrediction, RenderArgs};
     use std::fs;
-    use std::path::PathBuf;
+    use test_support::ScratchDir;
 
     type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
@@ -47,13 +47,8 @@ mod linux {
         Ok(kib * KIB)
     }
 
-    fn dir(name: &str) -> TestResult<PathBuf> {
-        let dir = std::env::temp_dir().join(format!("fspec-memory-{}-{name}", std::process::id()));
-        if dir.exists() {
-            fs::remove_dir_all(&dir)?;
-        }
-        fs::create_dir_all(&dir)?;
-        Ok(dir)
+    fn dir(name: &str) -> TestResult<ScratchDir> {
+        Ok(ScratchDir::new("fspec-memory", name)?)
     }
 
     /// Renders with `args` (paths relative to `dir`); returns the prediction

@@ -616,7 +616,8 @@ fn negative_control_fails(scene: &str, name: &str, value: &str) -> TestResult {
     let text = with_default(&fs::read_to_string(&path)?, name, value)?;
     let text = absolute_references(&text, "name=\"filename\" value=\"", dir)?;
     let text = absolute_references(&text, "<include filename=\"", dir)?;
-    let variant = test_dir("conformance", scene)?.join(format!("{scene}.xml"));
+    let scratch = test_dir("conformance", scene)?;
+    let variant = scratch.join(format!("{scene}.xml"));
     fs::write(&variant, text)?;
     let tolerance = case.noise.tolerance();
     let comparison = Comparison::new(&ours(&variant, SEED)?, &reference(scene)?)?;

@@ -11,12 +11,13 @@ use common::{TestResult, entries};
 use fspec_cli::scene_file::{LoadedScene, MitsubaOptions, load_mitsuba_scene};
 use std::fs;
 use std::path::{Path, PathBuf};
+use test_support::ScratchDir;
 
 fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn test_dir(name: &str) -> TestResult<PathBuf> {
+fn test_dir(name: &str) -> TestResult<ScratchDir> {
     common::test_dir("mitsuba-import", name)
 }
 

@@ -15,12 +15,13 @@ use spectral_core::observer::{Observer, StandardObserver};
 use spectral_core::registry::Builtin;
 use std::fs;
 use std::path::{Path, PathBuf};
+use test_support::ScratchDir;
 
 fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn test_dir(name: &str) -> TestResult<PathBuf> {
+fn test_dir(name: &str) -> TestResult<ScratchDir> {
     common::test_dir("observers", name)
 }
 

@@ -18,17 +18,13 @@ use spectral_core::sampling::WavelengthStrategy;
 use spectral_core::xyz::XyzRoute;
 use std::fs;
 use std::path::{Path, PathBuf};
+use test_support::ScratchDir;
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
-/// A fresh, empty directory for one test.
-fn test_dir(suite: &str, name: &str) -> TestResult<PathBuf> {
-    let dir = std::env::temp_dir().join(format!("fspec-{suite}-{}-{name}", std::process::id()));
-    if dir.exists() {
-        fs::remove_dir_all(&dir)?;
-    }
-    fs::create_dir_all(&dir)?;
-    Ok(dir)
+/// A fresh, empty directory for one test, removed when the test drops it.
+fn test_dir(suite: &str, name: &str) -> TestResult<ScratchDir> {
+    Ok(ScratchDir::new(&format!("fspec-{suite}"), name)?)
 }
 
 fn scenes_dir() -> PathBuf {
@@ -145,14 +141,16 @@ fn ply_meshes_under_an_environment_map_agree_in_fourier_and_sampled() -> TestRes
     Ok(())
 }
 
-/// A scene file in a fresh directory with the scenes' assets reachable.
-fn scene(name: &str, text: &str) -> TestResult<PathBuf> {
+/// A scene file in a fresh directory with the scenes' assets reachable:
+/// the directory, which the test keeps until it is done with the file, and
+/// the file.
+fn scene(name: &str, text: &str) -> TestResult<(ScratchDir, PathBuf)> {
     let dir = test_dir("real-scenes", name)?;
     let assets = scenes_dir().join("assets");
     let text = text.replace("ASSETS", &assets.display().to_string());
     let path = dir.join(format!("{name}.toml"));
     fs::write(&path, text)?;
-    Ok(path)
+    Ok((dir, path))
 }
 
 const HEAD: &str = r#"
@@ -173,7 +171,7 @@ spectrum = "d65"
 /// the file's line `line_of` and containing `needle`.
 fn error_at(name: &str, body: &str, line_of: &str, needle: &str) -> TestResult {
     let text = format!("{HEAD}{body}");
-    let path = scene(name, &text)?;
+    let (_dir, path) = scene(name, &text)?;
     let line = text
         .lines()
         .position(|l| l.contains(line_of))
@@ -374,7 +372,7 @@ fn environment_map_errors_name_the_key() -> TestResult {
     ];
     for (name, body, line_of, needle) in cases {
         let text = format!("{head}{cube}{body}");
-        let path = scene(name, &text)?;
+        let (_dir, path) = scene(name, &text)?;
         let line = text
             .lines()
             .position(|l| l.contains(line_of))
@@ -403,7 +401,7 @@ fn instances_share_a_named_mesh_or_flatten_into_copies() -> TestResult {
     let body = "[[shapes]]\ntype = \"sphere\"\nmaterial = \"grey\"\nname = \"ball\"\ninstanced_only = true\n\
                 [[instances]]\nmesh = \"ball\"\ntransform = [{ translate = [-2, 0, 0] }]\n\
                 [[instances]]\nmesh = \"ball\"\ntransform = [{ scale = [-1, 1, 1] }, { translate = [2, 0, 0] }]\n";
-    let path = scene("instances", &format!("{HEAD}{body}"))?;
+    let (_dir, path) = scene("instances", &format!("{HEAD}{body}"))?;
     let outwards = |centroid: glam::Vec3, normal: glam::Vec3| {
         let centre = glam::Vec3::new(centroid.x.signum() * 2.0, 0.0, 0.0);
         assert!(

@@ -12,7 +12,8 @@ use exr::prelude::{
     AnyChannels, AttributeValue, FlatSamples, Image, Layer, ReadChannels, ReadLayers, Text, read,
 };
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use test_support::ScratchDir;
 
 type ExrImage = Image<Layer<AnyChannels<FlatSamples>>>;
 
@@ -20,7 +21,7 @@ fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn test_dir(name: &str) -> TestResult<PathBuf> {
+fn test_dir(name: &str) -> TestResult<ScratchDir> {
     common::test_dir("render-cli", name)
 }
 

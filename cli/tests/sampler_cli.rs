@@ -2,8 +2,9 @@
 //! independent for control variates), the scene file's key, and bad names
 //! refused with one error line.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+use test_support::ScratchDir;
 
 use fspec_cli::scene_file::load_scene_file;
 use simd_tracer::sampling::sampler::SamplerKind;
@@ -14,12 +15,8 @@ fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn out_dir(name: &str) -> TestResult<PathBuf> {
-    let dir =
-        std::env::temp_dir().join(format!("fspec-sampler-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir)?;
-    Ok(dir)
+fn out_dir(name: &str) -> TestResult<ScratchDir> {
+    Ok(ScratchDir::new("fspec-sampler-test", name)?)
 }
 
 fn render_bytes(dir: &Path, name: &str, scene: &str, args: &[&str]) -> TestResult<Vec<u8>> {

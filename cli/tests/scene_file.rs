@@ -6,6 +6,7 @@ use std::error::Error;
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use test_support::ScratchDir;
 
 use fspec_cli::scene_file::{LoadedScene, RenderDefaults, load_obj_scene, load_scene_file};
 use simd_tracer::film::Buffer;
@@ -22,14 +23,9 @@ use spectral_core::xyz::XyzRoute;
 
 type TestResult<T = ()> = Result<T, Box<dyn Error>>;
 
-/// A fresh, empty directory for one test.
-fn test_dir(name: &str) -> TestResult<PathBuf> {
-    let dir = std::env::temp_dir().join(format!("fspec-scene-{}-{name}", std::process::id()));
-    if dir.exists() {
-        fs::remove_dir_all(&dir)?;
-    }
-    fs::create_dir_all(&dir)?;
-    Ok(dir)
+/// A fresh, empty directory for one test, removed when the test drops it.
+fn test_dir(name: &str) -> TestResult<ScratchDir> {
+    Ok(ScratchDir::new("fspec-scene", name)?)
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> TestResult<PathBuf> {
@@ -1157,13 +1153,15 @@ fn scene_files_never_panic_on_odd_values() -> TestResult {
 // ---------------------------------------------------------------------------
 
 /// A scene directory with the committed networks and thickness texture
-/// copied next to `text`; returns the scene path.
-fn neural_scene(test: &str, text: &str) -> TestResult<PathBuf> {
+/// copied next to `text`: the directory, which the test keeps until it is
+/// done with the scene, and the scene's path.
+fn neural_scene(test: &str, text: &str) -> TestResult<(ScratchDir, PathBuf)> {
     let dir = test_dir(test)?;
     for file in ["film-400nm.nn", "film-100-800nm.nn", "thickness.png"] {
         fs::copy(scenes_dir().join("assets").join(file), dir.join(file))?;
     }
-    write(&dir, "scene.toml", text)
+    let path = write(&dir, "scene.toml", text)?;
+    Ok((dir, path))
 }
 
 #[test]
@@ -1177,7 +1175,7 @@ fn neural_materials_load_in_every_form() -> TestResult {
          [[quads]]\nvertices = [[0, -1, -1], [1, -1, -1], [1, 0, -1], [0, 0, -1]]\nmaterial = \"b\"\n\
          [[quads]]\nvertices = [[0, 0, -1], [1, 0, -1], [1, 1, -1], [0, 1, -1]]\nmaterial = \"c\"\n"
     );
-    let path = neural_scene("neural-ok", &text)?;
+    let (_dir, path) = neural_scene("neural-ok", &text)?;
     let loaded = load_scene_file(&path)?;
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
     assert_renders("neural", loaded)?;
@@ -1227,7 +1225,7 @@ fn neural_material_errors_name_the_key() -> TestResult {
     ];
     for (i, (keys, needle, key, detail)) in cases.iter().enumerate() {
         let text = format!("{BASE}\n[materials.n]\ntype = \"neural\"\n{keys}\n");
-        let path = neural_scene(&format!("neural-bad-{i}"), &text)?;
+        let (_dir, path) = neural_scene(&format!("neural-bad-{i}"), &text)?;
         let message = error_of(&path)?;
         let at = if *needle == "type = \"neural\"" {
             // Table-level errors point at the table header's line or its type.
@@ -1252,7 +1250,7 @@ fn neural_thickness_outside_the_training_range_warns() -> TestResult {
         "{BASE}\n[materials.n]\ntype = \"neural\"\nnetwork = \"film-100-800nm.nn\"\nthickness_nm = 1500\n\
          [[quads]]\nvertices = [[-1, -1, -1], [0, -1, -1], [0, 0, -1], [-1, 0, -1]]\nmaterial = \"n\"\n"
     );
-    let path = neural_scene("neural-warn", &text)?;
+    let (_dir, path) = neural_scene("neural-warn", &text)?;
     let loaded = load_scene_file(&path)?;
     assert!(
         loaded

@@ -32,13 +32,14 @@ use simd_tracer::spectra::texture::{FilterMode, TextureSampling, UvTransform, Wr
 use spectral_core::color::Xyz;
 use spectral_core::{FourierSpectrum, SpectralRange, Spectrum, TabulatedSpectrum};
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use test_support::ScratchDir;
 
 fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn test_dir(name: &str) -> TestResult<PathBuf> {
+fn test_dir(name: &str) -> TestResult<ScratchDir> {
     common::test_dir("spectral-textures", name)
 }
 

@@ -2,6 +2,7 @@
 
 use assert_cmd::Command;
 use std::path::PathBuf;
+use test_support::ScratchDir;
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
@@ -9,12 +10,13 @@ fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn temp_file(name: &str, contents: &str) -> TestResult<PathBuf> {
-    let dir = std::env::temp_dir().join(format!("fspec-cli-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
+/// The file `name` holding `contents`, in a folder of its own that is
+/// removed when the test drops it.
+fn temp_file(name: &str, contents: &str) -> TestResult<(ScratchDir, PathBuf)> {
+    let dir = ScratchDir::new("fspec-spectrum-test", name)?;
     let path = dir.join(name);
     std::fs::write(&path, contents)?;
-    Ok(path)
+    Ok((dir, path))
 }
 
 #[test]
@@ -59,7 +61,8 @@ fn json_has_exactly_the_documented_keys() {
 #[test]
 fn csv_file_reference_is_the_exact_integral() {
     // A constant 1 over the whole range has Y = 1 exactly.
-    let path = temp_file("flat.csv", "# flat\nwavelength_nm,value\n360,1\n830,1\n").unwrap();
+    let (_dir, path) =
+        temp_file("flat.csv", "# flat\nwavelength_nm,value\n360,1\n830,1\n").unwrap();
     let output = fspec()
         .args(["spectrum", path.to_str().unwrap(), "--json"])
         .output()
@@ -133,7 +136,7 @@ fn bad_inputs_exit_2_with_one_clear_line() {
         ("columns.csv", "400,1,2\n", "line 1: 3 cells, expected 2"),
     ];
     for (name, contents, needle) in cases {
-        let path = temp_file(name, contents).unwrap();
+        let (_dir, path) = temp_file(name, contents).unwrap();
         assert_bad_input(&["spectrum", path.to_str().unwrap()], needle).unwrap();
         let stderr_lines = fspec()
             .args(["spectrum", path.to_str().unwrap()])

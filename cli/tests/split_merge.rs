@@ -17,13 +17,14 @@ use assert_cmd::Command;
 use common::{TestResult, entries};
 use fspec_cli::partial_file::PartialFilm;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use test_support::ScratchDir;
 
 fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn test_dir(name: &str) -> TestResult<PathBuf> {
+fn test_dir(name: &str) -> TestResult<ScratchDir> {
     common::test_dir("split-merge", name)
 }
 

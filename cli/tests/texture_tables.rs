@@ -6,7 +6,8 @@
 
 use std::error::Error;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use test_support::ScratchDir;
 
 use fspec_cli::scene_file::load_scene_file;
 use simd_tracer::film::Buffer;
@@ -25,14 +26,9 @@ use spectral_core::xyz::XyzRoute;
 
 type TestResult<T = ()> = Result<T, Box<dyn Error>>;
 
-/// A fresh, empty directory for one test.
-fn test_dir(name: &str) -> TestResult<PathBuf> {
-    let dir = std::env::temp_dir().join(format!("fspec-texture-{}-{name}", std::process::id()));
-    if dir.exists() {
-        fs::remove_dir_all(&dir)?;
-    }
-    fs::create_dir_all(&dir)?;
-    Ok(dir)
+/// A fresh, empty directory for one test, removed when the test drops it.
+fn test_dir(name: &str) -> TestResult<ScratchDir> {
+    Ok(ScratchDir::new("fspec-texture", name)?)
 }
 
 /// Writes an 8-bit PNG of `color` (grey or RGB).
@@ -54,7 +50,7 @@ fn write_png(
 }
 
 /// A directory with `rgb.png` (2 × 2 colour) and `grey.png` (2 × 1 grey).
-fn texture_dir(name: &str) -> TestResult<PathBuf> {
+fn texture_dir(name: &str) -> TestResult<ScratchDir> {
     let dir = test_dir(name)?;
     write_png(
         &dir.join("rgb.png"),

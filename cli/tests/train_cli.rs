@@ -5,7 +5,7 @@
 use assert_cmd::Command;
 use simd_tracer::spectra::angular::Network;
 use std::fs;
-use std::path::PathBuf;
+use test_support::ScratchDir;
 
 type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
@@ -13,13 +13,9 @@ fn fspec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fspec"))
 }
 
-fn test_dir(name: &str) -> TestResult<PathBuf> {
-    let dir = std::env::temp_dir().join(format!("fspec-train-{}-{name}", std::process::id()));
-    if dir.exists() {
-        fs::remove_dir_all(&dir)?;
-    }
-    fs::create_dir_all(&dir)?;
-    Ok(dir)
+/// A fresh, empty directory for one test, removed when the test drops it.
+fn test_dir(name: &str) -> TestResult<ScratchDir> {
+    Ok(ScratchDir::new("fspec-train", name)?)
 }
 
 #[test]

@@ -8,9 +8,15 @@
 //! [`replay_corpus`] runs every committed input of a fuzz target
 //! (`fuzz/corpus/<target>/`) through the target's body, so the seeds and
 //! every crash turned regression input run in CI on stable Rust.
+//!
+//! [`ScratchDir`] is a test's own folder on disk, removed when the test is
+//! done with it.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
+
+mod scratch_dir;
+pub use scratch_dir::{KEEP_VARIABLE, ScratchDir};
 
 /// The committed corpus of a fuzz target: `fuzz/corpus/<target>` of this
 /// workspace.
@@ -126,11 +132,10 @@ mod tests {
 
     #[test]
     fn an_empty_corpus_is_an_error() -> Result<(), Box<dyn std::error::Error>> {
-        let dir = std::env::temp_dir().join(format!("test-support-empty-{}", std::process::id()));
+        let dir = ScratchDir::new("test-support", "empty-corpus")?;
         std::fs::create_dir_all(dir.join("subdirectory"))?;
         // A subdirectory is not a corpus file.
-        let result = replay_dir(dir.clone(), |_| {});
-        std::fs::remove_dir_all(&dir)?;
+        let result = replay_dir(dir.to_path_buf(), |_| {});
         assert!(matches!(result, Err(ReplayError::Empty(_))), "{result:?}");
         Ok(())
     }

@@ -526,13 +526,11 @@ mod tests {
 
     #[test]
     fn cache_round_trip() {
-        let dir = std::env::temp_dir().join(format!("fspec-exp-cache-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = test_support::ScratchDir::new("fspec-exp-cache", "round-trip").unwrap();
         let xyz = vec![Xyz::new(0.5, 0.25, 0.125); 4];
         let path = cache_path(&dir, "x", 2, 8, 1);
         write_cache(&path, 2, &xyz).unwrap();
         assert_eq!(read_cache(&path, 2).unwrap(), xyz);
         assert!(read_cache(&path, 3).is_none());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -1,19 +1,16 @@
 //! Helpers shared by the CLI integration tests.
 
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use test_support::ScratchDir;
 
 /// The result type of the tests.
 pub type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
-/// A fresh, empty directory for one test of `suite`.
-pub fn test_dir(suite: &str, name: &str) -> TestResult<PathBuf> {
-    let dir = std::env::temp_dir().join(format!("fspec-{suite}-{}-{name}", std::process::id()));
-    if dir.exists() {
-        fs::remove_dir_all(&dir)?;
-    }
-    fs::create_dir_all(&dir)?;
-    Ok(dir)
+/// A fresh, empty directory for one test of `suite`, removed when the
+/// test drops it.
+pub fn test_dir(suite: &str, name: &str) -> TestResult<ScratchDir> {
+    Ok(ScratchDir::new(&format!("fspec-{suite}"), name)?)
 }
 
 /// Names of the entries of `dir`, sorted.
