@@ -458,9 +458,9 @@ pub fn settings_from(
     args: &RenderArgs,
     defaults: &SceneDefaults,
 ) -> Result<RenderSettings, CliError> {
-    let width = args.width.or(defaults.width).unwrap_or(512);
-    let height = args.height.or(defaults.height).unwrap_or(512);
-    let spp = args.spp.or(defaults.spp).unwrap_or(64);
+    let width = args.width.or(defaults.render.width).unwrap_or(512);
+    let height = args.height.or(defaults.render.height).unwrap_or(512);
+    let spp = args.spp.or(defaults.render.spp).unwrap_or(64);
     if width == 0 || height == 0 || spp == 0 {
         return Err(CliError::input(
             "--width, --height and --spp must be at least 1",
@@ -471,7 +471,7 @@ pub fn settings_from(
             "{width}×{height} pixels: each side must be at most {MAX_SIDE}"
         )));
     }
-    let max_depth = match args.max_depth.or(defaults.max_depth.map(i64::from)) {
+    let max_depth = match args.max_depth.or(defaults.render.max_depth.map(i64::from)) {
         None => 8,
         Some(-1) => u32::MAX,
         Some(d) if d >= 1 && d <= i64::from(u32::MAX) => d as u32,
@@ -494,7 +494,7 @@ pub fn settings_from(
         return Err(CliError::input("--threads must be at least 1"));
     }
     // The flag wins over the scene's crop window (Mitsuba's film crop).
-    let scene_crop = defaults.crop.map(PixelWindow::from);
+    let scene_crop = defaults.render.crop.map(PixelWindow::from);
     let window = match args.crop {
         Some(window) => Some(
             window
@@ -514,12 +514,12 @@ pub fn settings_from(
             max_depth,
             rr_depth: args
                 .rr_depth
-                .or(defaults.rr_depth)
+                .or(defaults.render.rr_depth)
                 .unwrap_or(DEFAULT_RR_DEPTH),
-            hide_emitters: args.hide_emitters || defaults.hide_emitters.unwrap_or(false),
+            hide_emitters: args.hide_emitters || defaults.render.hide_emitters.unwrap_or(false),
         },
-        seed: args.seed.or(defaults.seed).unwrap_or(0),
-        filter: match (args.filter, defaults.filter) {
+        seed: args.seed.or(defaults.render.seed).unwrap_or(0),
+        filter: match (args.filter, defaults.render.filter) {
             (Some(FilterKind::Box), _) => Filter::Box,
             (Some(FilterKind::Tent), _) => Filter::Tent {
                 radius_px: TENT_RADIUS_PX,
@@ -533,12 +533,12 @@ pub fn settings_from(
         film: args
             .film
             .map(FilmMode::from)
-            .or(defaults.film)
+            .or(defaults.render.film)
             .unwrap_or(default_film(args.transport_kind())),
         sampler: args
             .sampler
             .map(SamplerKind::from)
-            .or(defaults.sampler)
+            .or(defaults.render.sampler)
             .unwrap_or(default_sampler(args.transport_kind())),
     })
 }
@@ -1033,11 +1033,13 @@ impl RenderArgs {
 /// applies).
 fn with_scene_transport(args: &RenderArgs, defaults: &SceneDefaults) -> Option<RenderArgs> {
     let kind = defaults
+        .render
         .transport
         .as_deref()
         .filter(|_| args.transport.is_none())
         .and_then(|name| TransportKind::from_str(name, false).ok());
     let sampling = defaults
+        .render
         .sampling
         .as_deref()
         .filter(|_| args.sampling.is_none())
@@ -1907,6 +1909,7 @@ pub fn render(
     // The frame: the scene's crop window, or the whole film; a part's
     // --crop lies inside it.
     let frame = defaults
+        .render
         .crop
         .map(PixelWindow::from)
         .unwrap_or_else(|| PixelWindow::full(settings.width, settings.height));
@@ -1998,7 +2001,7 @@ fn resolve_coeffs(
 ) -> Result<(RenderArgs, Option<String>), CliError> {
     let choice = args
         .coeffs
-        .or(defaults.coeffs)
+        .or(defaults.render.coeffs)
         .unwrap_or(CoeffsChoice::Auto);
     let (coeffs, note) = match (choice, args.transport_kind()) {
         (CoeffsChoice::Fixed(n), _) => (n, None),
@@ -2047,7 +2050,7 @@ fn observer_choice(
     if let Some(path) = &args.sensor {
         return load_sensor_csv(path).map(ObserverChoice::Sensor);
     }
-    Ok(defaults.observer.clone().unwrap_or_default())
+    Ok(defaults.render.observer.clone().unwrap_or_default())
 }
 
 /// The final line: time, samples/s, rejected samples, predicted peak
@@ -2082,6 +2085,7 @@ pub fn summary_line(summary: &RenderSummary) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene_file::RenderDefaults;
     use clap::Parser;
 
     #[derive(Parser)]
@@ -2143,7 +2147,10 @@ mod tests {
     #[test]
     fn the_scene_transport_fills_in_a_missing_flag() {
         let scene = SceneDefaults {
-            transport: Some("hybrid".into()),
+            render: RenderDefaults {
+                transport: Some("hybrid".into()),
+                ..RenderDefaults::default()
+            },
             ..SceneDefaults::default()
         };
         let Some(filled) = with_scene_transport(&args(&[]), &scene) else {
@@ -2175,7 +2182,10 @@ mod tests {
     #[test]
     fn the_scene_sampling_fills_in_a_missing_flag() {
         let scene = SceneDefaults {
-            sampling: Some("visible".into()),
+            render: RenderDefaults {
+                sampling: Some("visible".into()),
+                ..RenderDefaults::default()
+            },
             ..SceneDefaults::default()
         };
         let Some(filled) = with_scene_transport(&args(&["--transport", "hybrid"]), &scene) else {
@@ -2189,8 +2199,11 @@ mod tests {
         let flag = args(&["--transport", "sampled", "--sampling", "uniform"]);
         assert!(with_scene_transport(&flag, &scene).is_none());
         let both = SceneDefaults {
-            transport: Some("sampled".into()),
-            sampling: Some("lights".into()),
+            render: RenderDefaults {
+                transport: Some("sampled".into()),
+                sampling: Some("lights".into()),
+                ..RenderDefaults::default()
+            },
             ..SceneDefaults::default()
         };
         let Some(filled) = with_scene_transport(&args(&[]), &both) else {

@@ -2,6 +2,7 @@
 //! scene file, a Mitsuba 3 XML scene file or a bare OBJ.
 
 use crate::error::CliError;
+use crate::scene_file::{InstanceCount, RenderDefaults};
 use crate::spectrum_file::{SpectrumSource as CliSpectrum, resolve};
 use simd_tracer::scene::SceneBuilder;
 use simd_tracer::scene::builtin::{SCENES, SceneOptions, builtin_scene};
@@ -9,41 +10,15 @@ use simd_tracer::spectra::SpectrumSource;
 use spectral_core::SpectralRange;
 use std::path::Path;
 
-/// Render settings a scene file may set (CLI flags override them).
+/// What a scene file sets for a render: its `[render]` defaults, which
+/// command-line flags override, and the instances it places (a built-in
+/// scene sets nothing).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SceneDefaults {
-    /// What the channels measure.
-    pub observer: Option<crate::sensor_file::ObserverChoice>,
-    /// Width, pixels.
-    pub width: Option<u32>,
-    /// Height, pixels.
-    pub height: Option<u32>,
-    /// Samples per pixel.
-    pub spp: Option<u32>,
-    /// Max depth.
-    pub max_depth: Option<u32>,
-    /// Seed.
-    pub seed: Option<u64>,
-    /// Camera rays do not see emitters.
-    pub hide_emitters: Option<bool>,
-    /// How samples reach pixels.
-    pub film: Option<simd_tracer::film::FilmMode>,
-    /// Independent or Sobol numbers.
-    pub sampler: Option<simd_tracer::sampling::sampler::SamplerKind>,
-    /// Depth from which Russian roulette may end paths.
-    pub rr_depth: Option<u32>,
-    /// Pixel filter.
-    pub filter: Option<crate::scene_file::FilterChoice>,
-    /// The part of the film rendered.
-    pub crop: Option<crate::scene_file::CropWindow>,
+    /// The file's `[render]` settings.
+    pub render: RenderDefaults,
     /// Instances placed (kept as instances or flattened at build).
-    pub instances: crate::scene_file::InstanceCount,
-    /// The transport's name (`[render] transport`).
-    pub transport: Option<String>,
-    /// The wavelength sampling's name (`[render] sampling`).
-    pub sampling: Option<String>,
-    /// Fourier coefficients, a number or `auto`.
-    pub coeffs: Option<crate::coefficient_choice::CoeffsChoice>,
+    pub instances: InstanceCount,
 }
 
 /// The builder, defaults and warnings of the scene named by `argument`.
@@ -80,22 +55,8 @@ pub fn resolve_scene(
         }
     };
     let defaults = SceneDefaults {
-        observer: loaded.render.observer.clone(),
-        width: loaded.render.width,
-        height: loaded.render.height,
-        spp: loaded.render.spp,
-        max_depth: loaded.render.max_depth,
-        seed: loaded.render.seed,
-        hide_emitters: loaded.render.hide_emitters,
-        film: loaded.render.film,
-        sampler: loaded.render.sampler,
-        rr_depth: loaded.render.rr_depth,
-        filter: loaded.render.filter,
-        crop: loaded.render.crop,
+        render: loaded.render,
         instances: loaded.instances,
-        transport: loaded.render.transport.clone(),
-        sampling: loaded.render.sampling.clone(),
-        coeffs: loaded.render.coeffs,
     };
     Ok((loaded.builder, defaults, loaded.warnings))
 }

@@ -342,7 +342,7 @@ fn observer_of(
 ) -> Result<spectral_core::observer::Observer, CliError> {
     let choice = match &settings.observer {
         Some(name) => ObserverChoice::standard(name)?,
-        None => defaults.observer.clone().unwrap_or_default(),
+        None => defaults.render.observer.clone().unwrap_or_default(),
     };
     choice.observer()
 }

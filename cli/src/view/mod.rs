@@ -131,11 +131,11 @@ impl ViewServer {
             scene: args.scene.clone(),
             width: args
                 .width
-                .or(defaults.width)
+                .or(defaults.render.width)
                 .unwrap_or(settings::DEFAULT_SIDE),
             height: args
                 .height
-                .or(defaults.height)
+                .or(defaults.render.height)
                 .unwrap_or(settings::DEFAULT_SIDE),
             transport: default_transport(),
             exposure_stops: 0.0,
