@@ -37,7 +37,7 @@ niceness=${FUZZ_NICE:-19}
 [[ $niceness =~ ^[0-9]+$ ]] || usage
 
 cd "$(dirname "$0")"
-all_targets=(csv_spectrum scene_toml scene_xml coefficient_exr obj obj_parallel traversal sine_mlp mese product_xyz ply serialized rgbe partial_film equal_time_manifest)
+all_targets=(csv_spectrum scene_toml scene_xml coefficient_exr obj obj_parallel traversal sine_mlp mese product_xyz ply serialized rgbe partial_film equal_time_manifest sensor_csv spectral_exr rgb_image)
 read -r -a targets <<<"${FUZZ_TARGETS:-${all_targets[*]}}"
 
 nice -n "$niceness" cargo fuzz build --sanitizer none -O

@@ -62,19 +62,22 @@
 //! scanline declares another length than the image's width. OpenEXR values
 //! that are NaN or infinite are an error naming the texel; negative values
 //! are clamped to 0 and counted ([`RgbImage::negative_clamped`]) so the
-//! caller can warn. RGBE and PNG values are never negative.
+//! caller can warn. RGBE and PNG values are never negative. A palette PNG
+//! whose pixels name an entry past the end of its palette is refused (the
+//! PNG specification makes it an error; decoded, it would be black).
 //!
 //! Errors are a [`CliError`] whose message starts with the file's path:
 //! `sky.hdr: scanline 3 of 512: the data ends early (truncated file)`.
 
 use crate::error::CliError;
 use crate::texture_file::{
-    EXR_MAGIC, PNG_MAGIC, decode_exr_channels, decode_png, error, read_exr_header, read_file_start,
+    EXR_MAGIC, PNG_MAGIC, decode_exr_channels, decode_png_from, error, read_exr_header,
+    read_file_start,
 };
 use simd_tracer::spectra::texture::MAX_TEXELS;
 use spectral_core::color::srgb_decode;
 use std::fs::File;
-use std::io::BufReader;
+use std::io::{BufRead, BufReader, Seek};
 use std::path::Path;
 
 /// A linear RGB image.
@@ -440,15 +443,30 @@ pub fn load_rgb_image(path: &Path) -> Result<RgbImage, CliError> {
 pub fn load_rgb_image_as(path: &Path, encoding: Encoding) -> Result<RgbImage, CliError> {
     let (magic, filled) = read_file_start(path)?;
     let start = magic.get(..filled).unwrap_or(&[]);
+    let file = File::open(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
+    decode_rgb_image(BufReader::new(file), start, path, encoding)
+}
+
+/// [`load_rgb_image_as`] of the file in `reader`, at its start, whose first
+/// bytes are `start` (up to 8); `path` names it in messages.
+fn decode_rgb_image(
+    mut reader: impl BufRead + Seek,
+    start: &[u8],
+    path: &Path,
+    encoding: Encoding,
+) -> Result<RgbImage, CliError> {
     if start.starts_with(RADIANCE_MAGIC_PREFIX) {
-        let bytes = std::fs::read(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
+        let mut bytes = Vec::new();
+        reader
+            .read_to_end(&mut bytes)
+            .map_err(|e| error(path, format!("cannot read: {e}")))?;
         parse_rgbe(&bytes).map_err(|e| error(path, e))
     } else if start.starts_with(&EXR_MAGIC) {
-        load_exr(path)
+        decode_exr(reader, path)
     } else if start == PNG_MAGIC {
-        load_png(path, encoding)
+        decode_png_rgb(reader, path, encoding)
     } else if start.starts_with(&JPEG_MAGIC) {
-        load_jpeg(path, encoding)
+        decode_jpeg(reader, path, encoding)
     } else {
         Err(error(
             path,
@@ -457,10 +475,14 @@ pub fn load_rgb_image_as(path: &Path, encoding: Encoding) -> Result<RgbImage, Cl
     }
 }
 
-/// Values `v / 255` of a JPEG file, decoded as `encoding` says.
-fn load_jpeg(path: &Path, encoding: Encoding) -> Result<RgbImage, CliError> {
-    let file = File::open(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
-    let mut decoder = jpeg_decoder::Decoder::new(BufReader::new(file));
+/// Values `v / 255` of the JPEG file in `reader`, decoded as `encoding`
+/// says.
+fn decode_jpeg(
+    reader: impl BufRead,
+    path: &Path,
+    encoding: Encoding,
+) -> Result<RgbImage, CliError> {
+    let mut decoder = jpeg_decoder::Decoder::new(reader);
     decoder
         .read_info()
         .map_err(|e| error(path, format!("bad JPEG: {e}")))?;
@@ -514,10 +536,9 @@ fn decode_value(v: f32, encoding: Encoding) -> f32 {
     }
 }
 
-/// The first part of an OpenEXR file: `R`, `G`, `B`, else `Y` as grey.
-fn load_exr(path: &Path) -> Result<RgbImage, CliError> {
-    let file = File::open(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
-    let mut reader = BufReader::new(file);
+/// The first part of the OpenEXR file in `reader`: `R`, `G`, `B`, else
+/// `Y` as grey.
+fn decode_exr(mut reader: impl BufRead + Seek, path: &Path) -> Result<RgbImage, CliError> {
     read_exr_header(&mut reader, path)?;
     let image = decode_exr_channels(reader, path)?;
     let (width, height) = (image.width, image.height);
@@ -583,9 +604,14 @@ fn load_exr(path: &Path) -> Result<RgbImage, CliError> {
     })
 }
 
-/// A PNG file, sRGB-decoded to linear (grey as grey, alpha ignored).
-fn load_png(path: &Path, encoding: Encoding) -> Result<RgbImage, CliError> {
-    let pixels = decode_png(path)?;
+/// The PNG file in `reader`, sRGB-decoded to linear (grey as grey, alpha
+/// ignored).
+fn decode_png_rgb(
+    reader: impl BufRead + Seek,
+    path: &Path,
+    encoding: Encoding,
+) -> Result<RgbImage, CliError> {
+    let pixels = decode_png_from(reader, path)?;
     let decode = |v: f32| decode_value(v, encoding);
     let texels = pixels
         .values
@@ -641,6 +667,71 @@ pub fn fuzz_rgbe(bytes: &[u8]) {
         }
         (Err(_), Ok(_)) => panic!("the parser accepted a header its header reader refuses"),
         (_, Err(message)) => assert!(!message.is_empty()),
+    }
+}
+
+/// The texels (samples, for OpenEXR: texels × channels over all parts)
+/// that an image's header declares, where its format's header can be read:
+/// for the fuzz entry point's size limit.
+fn declared_size(bytes: &[u8]) -> Option<u64> {
+    let area = |width: usize, height: usize| (width as u64).saturating_mul(height as u64);
+    if bytes.starts_with(RADIANCE_MAGIC_PREFIX) {
+        parse_rgbe_header(bytes)
+            .ok()
+            .map(|header| area(header.width, header.height))
+    } else if bytes.starts_with(&EXR_MAGIC) {
+        let meta = exr::meta::MetaData::read_from_buffered(bytes, false).ok()?;
+        Some(meta.headers.iter().fold(0u64, |total, header| {
+            let channels = header.channels.list.len().max(1) as u64;
+            let (width, height) = header.layer_size.into();
+            total.saturating_add(area(width, height).saturating_mul(channels))
+        }))
+    } else if bytes.starts_with(&PNG_MAGIC) {
+        let reader = png::Decoder::new(std::io::Cursor::new(bytes))
+            .read_info()
+            .ok()?;
+        Some(area(
+            reader.info().width as usize,
+            reader.info().height as usize,
+        ))
+    } else if bytes.starts_with(&JPEG_MAGIC) {
+        let mut decoder = jpeg_decoder::Decoder::new(bytes);
+        decoder.read_info().ok()?;
+        let info = decoder.info()?;
+        Some(area(usize::from(info.width), usize::from(info.height)))
+    } else {
+        None
+    }
+}
+
+/// Fuzz entry point: arbitrary bytes as an image file of any of the four
+/// formats (recognised by its first bytes, as from a file), read in memory
+/// with the values sRGB-decoded and raw. Checks that nothing panics and
+/// that every `Ok` is consistent: a size with no zero side, `width ×
+/// height` texels, every component finite and non-negative, and no more
+/// clamped values than components. Inputs whose header declares more than
+/// [`FUZZ_MAX_TEXELS`] are skipped (see there).
+pub fn fuzz_rgb_image(bytes: &[u8]) {
+    if declared_size(bytes).is_some_and(|size| size > FUZZ_MAX_TEXELS as u64) {
+        return;
+    }
+    let start = bytes.get(..8).unwrap_or(bytes);
+    for encoding in [Encoding::Srgb, Encoding::Raw] {
+        let reader = std::io::Cursor::new(bytes);
+        let Ok(image) = decode_rgb_image(reader, start, Path::new("fuzz"), encoding) else {
+            continue;
+        };
+        let texels = image.width as usize * image.height as usize;
+        assert!(image.width > 0 && image.height > 0);
+        assert_eq!(image.texels.len(), texels);
+        assert!(
+            image
+                .texels
+                .iter()
+                .flatten()
+                .all(|c| c.is_finite() && *c >= 0.0)
+        );
+        assert!(image.negative_clamped <= 3 * texels);
     }
 }
 
@@ -1029,6 +1120,56 @@ mod tests {
         // The PNG decoder's values are `f32` fractions of 255.
         let d = |v: u8| srgb_decode(f64::from(f32::from(v) / 255.0)) as f32;
         assert_eq!(image.texels, [[1.0, 0.0, d(128)], [d(10), d(200), 1.0]]);
+    }
+
+    /// A palette PNG of `width × 1` pixels at `depth` bits, the indices
+    /// packed as `row` holds them.
+    fn palette_png(path: &Path, width: u32, depth: png::BitDepth, palette: &[u8], row: &[u8]) {
+        let file = File::create(path).unwrap();
+        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, 1);
+        encoder.set_color(png::ColorType::Indexed);
+        encoder.set_depth(depth);
+        encoder.set_palette(palette.to_vec());
+        let mut writer = encoder.write_header().unwrap();
+        writer.write_image_data(row).unwrap();
+        writer.finish().unwrap();
+    }
+
+    /// Palette PNGs expand to their entries' colours at every bit depth, and
+    /// a pixel naming an entry past the palette (an error by the PNG
+    /// specification, which the decoder would expand to black) is refused.
+    #[test]
+    fn palette_pngs_expand_and_entries_past_the_palette_are_refused() {
+        let dir = scratch("palette");
+        let d = |v: u8| srgb_decode(f64::from(f32::from(v) / 255.0)) as f32;
+        let palette = [255, 0, 0, 0, 128, 255, 10, 20, 30];
+        // Two bits a pixel, three entries: indices 0, 1, 2, 0.
+        let good = dir.join("good.png");
+        palette_png(&good, 4, png::BitDepth::Two, &palette, &[0b00_01_10_00]);
+        let image = load_rgb_image(&good).unwrap();
+        let [red, blue, dark] =
+            [0, 3, 6].map(|at| [d(palette[at]), d(palette[at + 1]), d(palette[at + 2])]);
+        assert_eq!(image.texels, [red, blue, dark, red]);
+        // The last pixel names entry 3 of 3.
+        let bad = dir.join("bad.png");
+        palette_png(&bad, 4, png::BitDepth::Two, &palette, &[0b00_01_10_11]);
+        let message = load_rgb_image(&bad).unwrap_err().to_string();
+        assert!(
+            message.contains("pixel (3, 0) names palette entry 3, but the palette has 3"),
+            "{message}"
+        );
+        // Eight bits a pixel: entry 200 of 3.
+        let bad = dir.join("bad-8.png");
+        palette_png(&bad, 2, png::BitDepth::Eight, &palette, &[2, 200]);
+        let message = load_rgb_image(&bad).unwrap_err().to_string();
+        assert!(
+            message.contains("pixel (1, 0) names palette entry 200"),
+            "{message}"
+        );
+        // One bit a pixel and two entries: every index names an entry.
+        let full = dir.join("full.png");
+        palette_png(&full, 3, png::BitDepth::One, &palette[..6], &[0b101_00000]);
+        assert_eq!(load_rgb_image(&full).unwrap().texels, [blue, red, blue]);
     }
 
     /// `tests/data/two-colours-8x8.jpg` (written by Mitsuba 3.9.1's

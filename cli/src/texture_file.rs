@@ -27,7 +27,8 @@
 //!
 //! Files larger than [`MAX_TEXTURE_FILE_BYTES`] are refused before anything
 //! is read, images of more than [`MAX_TEXELS`] texels after reading the
-//! header and before decoding the pixels.
+//! header and before decoding the pixels. A palette PNG whose pixels name
+//! an entry past the end of its palette is refused.
 //!
 //! Errors are a [`CliError`] whose message starts with the texture's path:
 //! `scenes/wood.png: not a PNG or OpenEXR file`.
@@ -162,11 +163,17 @@ pub(crate) struct Pixels {
 /// expanded, refusing images over [`MAX_TEXELS`] from the header.
 pub(crate) fn decode_png(path: &Path) -> Result<Pixels, CliError> {
     let file = File::open(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
-    // 16-bit RGBA at the texel limit: 8 bytes per texel.
-    let limits = png::Limits {
-        bytes: MAX_TEXELS.saturating_mul(8),
-    };
-    let mut decoder = png::Decoder::new_with_limits(BufReader::new(file), limits);
+    decode_png_from(BufReader::new(file), path)
+}
+
+/// [`decode_png`] of the PNG file in `reader`, at its start; `path` names
+/// it in messages.
+pub(crate) fn decode_png_from(
+    mut reader: impl BufRead + Seek,
+    path: &Path,
+) -> Result<Pixels, CliError> {
+    check_palette_indices(&mut reader, path)?;
+    let mut decoder = png::Decoder::new_with_limits(reader, png_limits());
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder
         .read_info()
@@ -222,6 +229,66 @@ pub(crate) fn decode_png(path: &Path) -> Result<Pixels, CliError> {
         channels,
         values,
     })
+}
+
+/// The PNG decoder's memory limit: 16-bit RGBA at the texel limit, 8 bytes
+/// per texel.
+fn png_limits() -> png::Limits {
+    png::Limits {
+        bytes: MAX_TEXELS.saturating_mul(8),
+    }
+}
+
+/// Refuses a palette PNG whose pixels name entries past the end of its
+/// palette, then rewinds `reader`. The PNG specification makes such a
+/// pixel an error (ISO/IEC 15948:2003, 11.2.3, `PLTE`), and the decoder's
+/// expansion would turn it into a black texel without a word, so the
+/// indices are checked on the undecoded rows first (a second decode, of
+/// palette images only, which are small).
+fn check_palette_indices(reader: &mut (impl BufRead + Seek), path: &Path) -> Result<(), CliError> {
+    let mut png = png::Decoder::new_with_limits(&mut *reader, png_limits())
+        .read_info()
+        .map_err(|e| error(path, format!("bad PNG: {e}")))?;
+    let info = png.info();
+    let bits = info.bit_depth as usize;
+    let entries = info.palette.as_ref().map_or(0, |p| p.len() / 3);
+    if info.color_type == png::ColorType::Indexed && entries < 1 << bits {
+        let (width, height) = (info.width as usize, info.height as usize);
+        check_texels(path, width, height)?;
+        let size = png
+            .output_buffer_size()
+            .ok_or_else(|| error(path, "PNG too large"))?;
+        let mut buffer = vec![0u8; size];
+        let frame = png
+            .next_frame(&mut buffer)
+            .map_err(|e| error(path, format!("bad PNG data: {e}")))?;
+        let per_byte = 8 / bits;
+        let mask = (1usize << bits) - 1;
+        for y in 0..height {
+            let start = y * frame.line_size;
+            let Some(line) = buffer.get(start..start + width.div_ceil(per_byte)) else {
+                return Err(error(path, "PNG rows are shorter than expected"));
+            };
+            for x in 0..width {
+                // Indices fill each byte from its most significant bits.
+                let shift = 8 - bits * (x % per_byte + 1);
+                let index = usize::from(line[x / per_byte]) >> shift & mask;
+                if index >= entries {
+                    return Err(error(
+                        path,
+                        format!(
+                            "bad PNG: pixel ({x}, {y}) names palette entry {index}, \
+                             but the palette has {entries}"
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    reader
+        .seek(SeekFrom::Start(0))
+        .map(|_| ())
+        .map_err(|e| error(path, format!("cannot read: {e}")))
 }
 
 fn load_png(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Texture, CliError> {

@@ -132,6 +132,55 @@ fn rgbe_corpus() -> TestResult {
     Ok(())
 }
 
+#[test]
+fn rgb_image_corpus() -> TestResult {
+    let count = replay_corpus("rgb_image", fspec_cli::hdr_image::fuzz_rgb_image)?;
+    assert!(count >= 10, "only {count} seeds");
+    Ok(())
+}
+
+/// The seeds of `tools/rgb_image_seeds.py` are what their names say, read
+/// from their files as a scene's maps are: `valid-*` files load, `broken-*`
+/// files are refused with one line that names the file.
+#[test]
+fn rgb_image_seeds_load_or_fail_as_named() -> TestResult {
+    let (mut valid, mut broken) = (0, 0);
+    for entry in std::fs::read_dir(corpus_dir("rgb_image"))? {
+        let path = entry?.path();
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let loaded = fspec_cli::hdr_image::load_rgb_image(&path);
+        if name.starts_with("valid-") {
+            let image = loaded.map_err(|e| format!("{name}: {e}"))?;
+            assert!(image.width > 0 && image.height > 0, "{name}");
+            assert_eq!(
+                image.texels.len(),
+                image.width as usize * image.height as usize,
+                "{name}"
+            );
+            valid += 1;
+        } else {
+            let message = match loaded {
+                Ok(image) => {
+                    return Err(format!("{name}: loaded {}x{}", image.width, image.height).into());
+                }
+                Err(e) => e.to_string(),
+            };
+            assert!(
+                message.starts_with(&path.display().to_string()),
+                "{message}"
+            );
+            assert!(!message.trim_end().contains('\n'), "{message}");
+            broken += 1;
+        }
+    }
+    // Every format among the valid seeds, and broken ones besides.
+    assert!(valid >= 6 && broken >= 5, "{valid} valid, {broken} broken");
+    Ok(())
+}
+
 /// The hand-written seeds are what their names say: `valid-*` files parse,
 /// `broken-*` files are refused.
 #[test]
