@@ -710,7 +710,8 @@ fn declared_size(bytes: &[u8]) -> Option<u64> {
 /// that every `Ok` is consistent: a size with no zero side, `width ×
 /// height` texels, every component finite and non-negative, and no more
 /// clamped values than components. Inputs whose header declares more than
-/// [`FUZZ_MAX_TEXELS`] are skipped (see there).
+/// 2¹⁸ texels (OpenEXR: samples) are skipped, as in [`fuzz_rgbe`], so that
+/// a tiny input cannot make a decoder allocate gigabytes.
 pub fn fuzz_rgb_image(bytes: &[u8]) {
     if declared_size(bytes).is_some_and(|size| size > FUZZ_MAX_TEXELS as u64) {
         return;
