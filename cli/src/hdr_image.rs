@@ -655,14 +655,7 @@ pub fn fuzz_rgbe(bytes: &[u8]) {
                 (image.width as usize, image.height as usize),
                 (header.width, header.height)
             );
-            assert_eq!(image.texels.len(), header.width * header.height);
-            assert!(
-                image
-                    .texels
-                    .iter()
-                    .flatten()
-                    .all(|c| c.is_finite() && *c >= 0.0)
-            );
+            assert_consistent(&image);
             assert_eq!(image.negative_clamped, 0);
         }
         (Err(_), Ok(_)) => panic!("the parser accepted a header its header reader refuses"),
@@ -722,18 +715,25 @@ pub fn fuzz_rgb_image(bytes: &[u8]) {
         let Ok(image) = decode_rgb_image(reader, start, Path::new("fuzz"), encoding) else {
             continue;
         };
-        let texels = image.width as usize * image.height as usize;
-        assert!(image.width > 0 && image.height > 0);
-        assert_eq!(image.texels.len(), texels);
-        assert!(
-            image
-                .texels
-                .iter()
-                .flatten()
-                .all(|c| c.is_finite() && *c >= 0.0)
-        );
-        assert!(image.negative_clamped <= 3 * texels);
+        assert_consistent(&image);
     }
+}
+
+/// What the fuzz entry points check of every image a reader accepts: no
+/// zero side, `width × height` texels, every component finite and
+/// non-negative, and no more clamped values than components.
+fn assert_consistent(image: &RgbImage) {
+    let texels = image.width as usize * image.height as usize;
+    assert!(image.width > 0 && image.height > 0);
+    assert_eq!(image.texels.len(), texels);
+    assert!(
+        image
+            .texels
+            .iter()
+            .flatten()
+            .all(|c| c.is_finite() && *c >= 0.0)
+    );
+    assert!(image.negative_clamped <= 3 * texels);
 }
 
 #[cfg(test)]
@@ -1245,14 +1245,7 @@ mod tests {
         }
         let image = load_rgb_image(path).unwrap();
         assert_eq!(image.width, 2 * image.height, "equirectangular");
-        assert_eq!(image.texels.len(), (image.width * image.height) as usize);
-        assert!(
-            image
-                .texels
-                .iter()
-                .flatten()
-                .all(|c| c.is_finite() && *c >= 0.0)
-        );
+        assert_consistent(&image);
         // The exr crate's own RGBA reader gives the same values.
         let width = image.width as usize;
         let reference = exr::prelude::read_first_rgba_layer_from_file(

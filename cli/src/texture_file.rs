@@ -200,17 +200,11 @@ pub(crate) fn decode_png_from(
             ));
         }
     };
-    let size = reader
-        .output_buffer_size()
-        .ok_or_else(|| error(path, "PNG too large"))?;
-    let mut buffer = vec![0u8; size];
-    let frame = reader
-        .next_frame(&mut buffer)
-        .map_err(|e| error(path, format!("bad PNG data: {e}")))?;
+    let (buffer, line_size) = next_png_frame(&mut reader, path)?;
     let row_bytes = width as usize * channels * bytes_per_sample;
     let mut values = Vec::with_capacity(width as usize * height as usize * channels);
     for row in 0..height as usize {
-        let start = row * frame.line_size;
+        let start = row * line_size;
         let Some(line) = buffer.get(start..start + row_bytes) else {
             return Err(error(path, "PNG rows are shorter than expected"));
         };
@@ -229,6 +223,22 @@ pub(crate) fn decode_png_from(
         channels,
         values,
     })
+}
+
+/// The next frame of `png`, as the decoder's transformations give it:
+/// the rows and the bytes from one row's start to the next's.
+fn next_png_frame<R: BufRead + Seek>(
+    png: &mut png::Reader<R>,
+    path: &Path,
+) -> Result<(Vec<u8>, usize), CliError> {
+    let size = png
+        .output_buffer_size()
+        .ok_or_else(|| error(path, "PNG too large"))?;
+    let mut buffer = vec![0u8; size];
+    let frame = png
+        .next_frame(&mut buffer)
+        .map_err(|e| error(path, format!("bad PNG data: {e}")))?;
+    Ok((buffer, frame.line_size))
 }
 
 /// The PNG decoder's memory limit: 16-bit RGBA at the texel limit, 8 bytes
@@ -255,17 +265,11 @@ fn check_palette_indices(reader: &mut (impl BufRead + Seek), path: &Path) -> Res
     if info.color_type == png::ColorType::Indexed && entries < 1 << bits {
         let (width, height) = (info.width as usize, info.height as usize);
         check_texels(path, width, height)?;
-        let size = png
-            .output_buffer_size()
-            .ok_or_else(|| error(path, "PNG too large"))?;
-        let mut buffer = vec![0u8; size];
-        let frame = png
-            .next_frame(&mut buffer)
-            .map_err(|e| error(path, format!("bad PNG data: {e}")))?;
+        let (buffer, line_size) = next_png_frame(&mut png, path)?;
         let per_byte = 8 / bits;
         let mask = (1usize << bits) - 1;
         for y in 0..height {
-            let start = y * frame.line_size;
+            let start = y * line_size;
             let Some(line) = buffer.get(start..start + width.div_ceil(per_byte)) else {
                 return Err(error(path, "PNG rows are shorter than expected"));
             };
