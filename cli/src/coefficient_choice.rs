@@ -11,7 +11,7 @@
 //! of the two, so the default reads the scene.
 //!
 //! **What is measured.** For every emission spectrum `e` of the scene
-//! (emissive materials, point and directional lights, a constant
+//! (emissive materials, point, spot and directional lights, a constant
 //! environment) and every reflectance `ρ` (Lambertian and coated albedos,
 //! the elastic part of fluorescent layers), the colour of the one-bounce
 //! product `ρ e` and of the light seen directly (`ρ = 1`) as the Fourier

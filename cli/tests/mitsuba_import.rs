@@ -164,6 +164,37 @@ fn malformed_files_name_their_line() -> TestResult {
         "    <shape type=\"sphere\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"2, 0, 0\"/></bsdf></shape>",
     );
     refused("reflectance", &text, 8, &["outside [0, 1]"])?;
+    let spot = |params: &str| scene(&format!("    <emitter type=\"spot\">{params}</emitter>"));
+    refused(
+        "spot-beam",
+        &spot(
+            "<float name=\"cutoff_angle\" value=\"20\"/><float name=\"beam_width\" value=\"25\"/>",
+        ),
+        8,
+        &[
+            "emitter",
+            "spot",
+            "beam width 25°: must be at least 0 and at most the cutoff angle 20°",
+        ],
+    )?;
+    refused(
+        "spot-cutoff",
+        &spot("<float name=\"cutoff_angle\" value=\"-10\"/>"),
+        8,
+        &["cutoff angle -10°"],
+    )?;
+    refused(
+        "spot-singular",
+        &spot("<transform name=\"to_world\"><scale value=\"0\"/></transform>"),
+        8,
+        &["transform"],
+    )?;
+    refused(
+        "spot-texture",
+        &spot("<texture type=\"checkerboard\" name=\"texture\"/>"),
+        8,
+        &["parameter \"texture\" is not supported"],
+    )?;
     Ok(())
 }
 
@@ -287,7 +318,7 @@ fn unused_definitions_warn_and_lenient_substitutes() -> TestResult {
     <texture type="checkerboard" id="also-unused"/>
     <shape type="rectangle"><bsdf type="hair"><float name="eumelanin" value="1"/></bsdf></shape>
     <shape type="sphere"><float name="radius" value="0.5"/><float name="wobble" value="1"/></shape>
-    <emitter type="spot"/>
+    <emitter type="projector"/>
     <emitter type="constant"/>"#,
     );
     let path = write(&dir, "s.xml", &text)?;
@@ -303,7 +334,7 @@ fn unused_definitions_warn_and_lenient_substitutes() -> TestResult {
         "s.xml:9: <texture id=\"also-unused\"> is defined but never used",
         "s.xml:10: bsdf type \"hair\" is not supported; rendered as a grey diffuse BSDF",
         "s.xml:11: shape \"sphere\": parameter \"wobble\" is not supported; ignored",
-        "s.xml:12: emitter type \"spot\" is not supported; the emitter is skipped",
+        "s.xml:12: emitter type \"projector\" is not supported; the emitter is skipped",
     ] {
         assert!(warnings.contains(needle), "{needle:?} not in\n{warnings}");
     }

@@ -1,5 +1,5 @@
 //! Scene files with the pieces of real scenes: PLY and serialized meshes,
-//! analytic shapes, transforms, instances, point and directional lights,
+//! analytic shapes, transforms, instances, point, spot and directional lights,
 //! environment maps. The example `scenes/ply-meshes.toml` renders alike in
 //! the Fourier and the sampled transports; each new key's errors are one
 //! line naming the file, the line and the key.
@@ -305,9 +305,39 @@ fn new_keys_refuse_bad_values_with_one_line() -> TestResult {
         ),
         (
             "light-type",
-            "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\n[[lights]]\ntype = \"spot\"\n",
-            "spot",
+            "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\n[[lights]]\ntype = \"laser\"\n",
+            "laser",
             "unknown light type",
+        ),
+        (
+            "spot-beam",
+            "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\n[[lights]]\ntype = \"spot\"\nposition = [0, 2.5, 0]\ntarget = [0.25, 0, 0]\ncutoff_deg = 30\nbeam_width_deg = 40\nintensity = \"d65\"\n",
+            "beam_width_deg",
+            "beam width 40°: must be at least 0 and at most the cutoff angle 30°",
+        ),
+        (
+            "spot-cutoff",
+            "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\n[[lights]]\ntype = \"spot\"\nposition = [0, 2.5, 0]\ntarget = [0.25, 0, 0]\ncutoff_deg = 200\nintensity = \"d65\"\n",
+            "cutoff_deg",
+            "cutoff angle 200°: must be above 0 and at most 180",
+        ),
+        (
+            "spot-both-axes",
+            "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\n[[lights]]\ntype = \"spot\"\nposition = [0, 2.5, 0]\ndirection = [0, -1, 0]\ntarget = [0.25, 0, 0]\nintensity = \"d65\"\n",
+            "target = [0.25",
+            "not both",
+        ),
+        (
+            "spot-no-axis",
+            "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\n[[lights]]\ntype = \"spot\"\nposition = [0, 2.5, 0]\nintensity = \"d65\"\n",
+            "[[lights]]",
+            "`target = [x, y, z]`",
+        ),
+        (
+            "spot-zero-axis",
+            "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\n[[lights]]\ntype = \"spot\"\nposition = [0, 2.5, 0]\ntarget = [0, 2.5, 0]\nintensity = \"d65\"\n",
+            "target = [0, 2.5",
+            "zero length",
         ),
         (
             "light-zero",
@@ -331,6 +361,52 @@ fn new_keys_refuse_bad_values_with_one_line() -> TestResult {
     for (name, body, line, needle) in cases {
         error_at(name, body, line, needle)?;
     }
+    Ok(())
+}
+
+/// A TOML spot light against the point light it widens into and against
+/// Mitsuba's default beam width: a spot whose cutoff and beam are 180°
+/// renders its point light bit for bit; one without `beam_width_deg`
+/// renders as one with ¾ of its cutoff, bit for bit. Negative controls: a
+/// 40° cone differs from the point light, a 20° beam from the default.
+#[test]
+fn spot_lights_widen_into_point_lights_and_take_the_default_beam() -> TestResult {
+    let head = HEAD.replace("[environment]\nspectrum = \"d65\"\n", "");
+    let wall =
+        "[[shapes]]\ntype = \"rectangle\"\nmaterial = \"grey\"\ntransform = [{ scale = 3 }]\n";
+    let light = |kind_and_cone: &str| {
+        format!(
+            "{head}{wall}[[lights]]\n{kind_and_cone}\nposition = [0.5, 0.5, 2]\nintensity = \"d65\"\nscale = 4\n"
+        )
+    };
+    let image = |name: &str, text: &str| -> TestResult<Vec<Xyz>> {
+        let (_dir, path) = scene(name, text)?;
+        let scene = load(&path)?;
+        let range = scene.range();
+        let fourier = FourierTransport::<8>::new(range, Buffer::Spectral, XyzRoute::Zeroth)?;
+        render_xyz(&fourier, &scene, 4, 7)
+    };
+    let point = image("point", &light("type = \"point\""))?;
+    let wide = image(
+        "spot-180",
+        &light("type = \"spot\"\ntarget = [0, 0, 0]\ncutoff_deg = 180\nbeam_width_deg = 180"),
+    )?;
+    assert!(point == wide, "a spot of 180° is not its point light");
+    let cone = image(
+        "spot-40",
+        &light("type = \"spot\"\ntarget = [0, 0, 0]\ncutoff_deg = 40"),
+    )?;
+    assert!(cone != point, "a spot of 40° renders as a point light");
+    let explicit = image(
+        "spot-40-30",
+        &light("type = \"spot\"\ntarget = [0, 0, 0]\ncutoff_deg = 40\nbeam_width_deg = 30"),
+    )?;
+    assert!(cone == explicit, "the default beam is not ¾ of the cutoff");
+    let narrow = image(
+        "spot-40-20",
+        &light("type = \"spot\"\ntarget = [0, 0, 0]\ncutoff_deg = 40\nbeam_width_deg = 20"),
+    )?;
+    assert!(cone != narrow, "the beam width changes nothing");
     Ok(())
 }
 

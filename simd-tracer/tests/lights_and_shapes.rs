@@ -1,5 +1,6 @@
-//! Analytic checks of the light types and the smooth shapes: point and
-//! directional lights against the inverse-square and cosine laws, the
+//! Analytic checks of the light types and the smooth shapes: point, spot
+//! and directional lights against the inverse-square and cosine laws (and
+//! a spot's angular profile), the
 //! tessellated sphere's smooth shading against the exact sphere (with the
 //! faceted sphere as the negative control), the shading-normal guard, and
 //! the environment map against the constant environment and a closed-form
@@ -17,6 +18,7 @@ use simd_tracer::scene::transform::Transform;
 use simd_tracer::scene::{MeshPlacement, Scene, SceneBuilder};
 use simd_tracer::shading::light_sampler::{DirectionalLight, PointLight};
 use simd_tracer::shading::material::Material;
+use simd_tracer::shading::spot_cone::{SpotCone, SpotConeSettings};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::environment::{EnvironmentImage, EnvironmentMap};
 use simd_tracer::transport::{FourierTransport, SampledTransport, Transport};
@@ -99,6 +101,78 @@ fn floor_scene(rho: f64, from: Vec3, at: Vec3) -> TestResult<SceneBuilder> {
     Ok(b)
 }
 
+/// Spot light: `L = ρ/π · I f(α) cos θ / d²` at the floor point below the
+/// camera, with the spot's axis turned `α` away from that point: flat in
+/// the beam, linear in the angle across the ramp, black past the cutoff.
+/// Negative controls: the profile linear in `cos α` (pbrt's kind of ramp)
+/// and a plain point light, each off by more than the tolerance in the ramp.
+#[test]
+fn spot_light_follows_its_cone_profile() -> TestResult {
+    let (rho, intensity, scale) = (0.6, 2.0, 1.5f32);
+    let (cutoff_deg, beam_width_deg) = (40.0f64, 20.0f64);
+    let light = Vec3::new(0.4, 1.5, -0.3);
+    let to_floor = (-light).normalize();
+    // A unit vector perpendicular to the direction to the floor point, the
+    // axis about which the spot is turned away from it.
+    let turn_axis = to_floor.cross(Vec3::X).normalize();
+    let d2 = f64::from(light.length_squared());
+    let cos = f64::from(light.y) / d2.sqrt();
+    let point = rho / PI * intensity * f64::from(scale) * cos / d2;
+    // Angles at least 5° from the profile's kinks: the pixels' footprint on
+    // the floor spans about ±2° seen from the light.
+    for (alpha_deg, profile) in [(10.0f64, 1.0), (30.0, 0.5), (35.0, 0.25), (50.0, 0.0)] {
+        let axis =
+            glam::Quat::from_axis_angle(turn_axis, (alpha_deg as f32).to_radians()) * to_floor;
+        let (x, y) = axis.any_orthonormal_pair();
+        let cone = SpotCone::new(&SpotConeSettings {
+            world_to_local: Mat3::from_cols(x, y, axis).transpose(),
+            cutoff_deg,
+            beam_width_deg,
+        })?;
+        let mut b = floor_scene(rho, Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO)?;
+        let spectrum = b.add_spectrum("I", SpectrumSource::Constant(intensity))?;
+        b.add_point_light(PointLight {
+            position: light,
+            intensity: spectrum,
+            scale,
+            cone: Some(cone),
+        });
+        let scene = b.build()?;
+        let expected = point * profile;
+        let alpha = alpha_deg.to_radians();
+        let (cos_cutoff, cos_beam) = (
+            cutoff_deg.to_radians().cos(),
+            beam_width_deg.to_radians().cos(),
+        );
+        let cos_linear = ((alpha.cos() - cos_cutoff) / (cos_beam - cos_cutoff)).clamp(0.0, 1.0);
+        let mut runs = vec![(
+            "fourier",
+            render_y(&fourier()?, &scene, &settings(4, 16, 2, false))?,
+        )];
+        if alpha_deg == 30.0 {
+            runs.push((
+                "sampled",
+                render_y(&sampled(), &scene, &settings(4, 256, 2, false))?,
+            ));
+        }
+        for (name, (mean, error)) in runs {
+            let tolerance = 4.0 * error + 2e-3 * point;
+            assert!(
+                (mean - expected).abs() < tolerance,
+                "{name} at {alpha_deg}°: {mean} vs {expected} (σ {error})"
+            );
+            if profile > 0.0 && profile < 1.0 {
+                assert!(
+                    (mean - point * cos_linear).abs() > tolerance,
+                    "{alpha_deg}°"
+                );
+                assert!((mean - point).abs() > tolerance, "{alpha_deg}°");
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Point light: `L = ρ/π · I cos θ / d²` at the floor point below the camera.
 #[test]
 fn point_light_follows_the_inverse_square_law() -> TestResult {
@@ -110,6 +184,7 @@ fn point_light_follows_the_inverse_square_law() -> TestResult {
         position: light,
         intensity: spectrum,
         scale,
+        cone: None,
     });
     let scene = b.build()?;
     let d2 = f64::from(light.length_squared());
@@ -271,6 +346,7 @@ fn bent_shading_normals_do_not_leak_light_through_a_surface() -> TestResult {
             position: light,
             intensity: i,
             scale: 1.0,
+            cone: None,
         });
         b.set_camera(Camera::look_at(
             Vec3::new(0.0, 2.0, 0.0),

@@ -11,7 +11,7 @@
 //!
 //! Only references are rewritten: a spectrum an emitter shares with a
 //! reflectance stays for the reflectance. Emitters are the materials with
-//! an emission, point and directional lights, and a constant environment;
+//! an emission, point (and spot) and directional lights, and a constant environment;
 //! an environment map's texels are RGB illuminants of their own and stay.
 
 use crate::ids::SpectrumId;

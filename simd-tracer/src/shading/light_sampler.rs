@@ -5,7 +5,8 @@
 //! pbrt-v4's power light sampler does:
 //!
 //! * triangles: `Σ A π L̄` (doubled when two-sided);
-//! * point light of intensity `I`: `4π Ī`;
+//! * point light of intensity `I`: `4π Ī`; a spot light `Ω Ī`, `Ω` its
+//!   cone's integrated profile ([`SpotCone::solid_angle_sr`]);
 //! * directional light of irradiance `E`: `π r² Ē`, `r` the radius of the
 //!   scene's bounding sphere (the power crossing the scene);
 //! * environment map: `π r² · 4π L̄`, `L̄` its mean radiance over the sphere.
@@ -18,7 +19,9 @@
 //!
 //! Point and directional lights are delta lights: reached only by NEE
 //! (no MIS; their sample's "pdf" is the selection probability and the
-//! emission factor carries `1/d²` for points). The environment map is
+//! emission factor carries `1/d²` for points, times the cone's profile
+//! for spots: a spot sample outside its cone is `None`, no shadow ray).
+//! The environment map is
 //! sampled from its piecewise-constant luminance distribution
 //! ([`EnvironmentMap::sampling_weights`]) with the solid-angle pdf
 //! `P · p(u, v) / (2π² sin θ)`, combined with BSDF sampling by MIS when a
@@ -26,20 +29,24 @@
 
 use crate::ids::SpectrumId;
 use crate::sampling::distribution::Distribution2D;
+use crate::shading::spot_cone::SpotCone;
 use crate::spectra::SceneSpectrum;
 use crate::spectra::environment::EnvironmentMap;
 use glam::Vec3;
 use std::f64::consts::PI;
 
-/// A point light: radiant intensity `scale · I(λ)` in every direction.
+/// A point light: radiant intensity `scale · I(λ)` in every direction, or
+/// `scale · I(λ) · f(θ)` within a spot light's cone.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PointLight {
     /// Position.
     pub position: Vec3,
-    /// Intensity spectrum `I`.
+    /// Intensity spectrum `I` (the peak intensity of a spot).
     pub intensity: SpectrumId,
     /// Multiplier.
     pub scale: f32,
+    /// The cone of a spot light; `None` emits equally in every direction.
+    pub cone: Option<SpotCone>,
 }
 
 /// A directional light: irradiance `scale · E(λ)` on surfaces facing it,
@@ -84,7 +91,8 @@ pub struct OtherLightSample {
     pub pdf: f32,
     /// Whether the light is a delta light (no MIS).
     pub delta: bool,
-    /// Multiplier of the emission: `scale / d²` (point), `scale`
+    /// Multiplier of the emission: `scale / d²` (point; times `f(θ)` for
+    /// a spot), `scale`
     /// (directional), 1 (environment).
     pub factor: f32,
     /// The emission.
@@ -150,7 +158,10 @@ impl LightSampler {
         let mut powers = Vec::new();
         for light in lights.points {
             others.push(OtherLight::Point(*light));
-            powers.push(4.0 * PI * f64::from(light.scale) * mean(light.intensity)?);
+            let solid_angle_sr = light
+                .cone
+                .map_or(4.0 * PI, |cone| f64::from(cone.solid_angle_sr()));
+            powers.push(solid_angle_sr * f64::from(light.scale) * mean(light.intensity)?);
         }
         for light in lights.directional {
             others.push(OtherLight::Directional(*light));
@@ -248,7 +259,7 @@ impl LightSampler {
         self.others.len()
     }
 
-    /// The emission spectra of the point and directional lights (the
+    /// The emission spectra of the point (and spot) and directional lights (the
     /// environment's spectrum is [`crate::scene::Scene::environment`]).
     pub fn emission_spectra(&self) -> impl Iterator<Item = SpectrumId> + '_ {
         self.others.iter().filter_map(|light| match light {
@@ -342,12 +353,16 @@ impl LightSampler {
                 let to = light.position - origin;
                 let distance_sq = to.length_squared();
                 let distance = distance_sq.sqrt();
-                (distance_sq > 0.0 && distance_sq.is_finite()).then(|| OtherLightSample {
+                if !(distance_sq > 0.0 && distance_sq.is_finite()) {
+                    return None;
+                }
+                let falloff = light.cone.map_or(1.0, |cone| cone.falloff(-to));
+                (falloff > 0.0).then(|| OtherLightSample {
                     wi: to / distance,
                     distance,
                     pdf: pmf,
                     delta: true,
-                    factor: light.scale / distance_sq,
+                    factor: light.scale * falloff / distance_sq,
                     emission: LightEmission::Spectrum(light.intensity),
                 })
             }
@@ -555,6 +570,7 @@ mod tests {
                 position: Vec3::new(0.5, 2.0, -1.0),
                 intensity: SpectrumId(0),
                 scale: 3.0,
+                cone: None,
             }],
             directional: &[DirectionalLight {
                 direction: Vec3::new(0.0, -1.0, 0.0),

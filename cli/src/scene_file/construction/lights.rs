@@ -1,5 +1,6 @@
-//! Lights that are not emissive surfaces: point and directional lights
-//! (delta lights with an intensity or irradiance spectrum and a scale),
+//! Lights that are not emissive surfaces: point, spot and directional
+//! lights (delta lights with an intensity or irradiance spectrum and a
+//! scale; a spot's cone is `simd_tracer::shading::spot_cone`),
 //! and equirectangular environment maps (RGBE, OpenEXR or PNG images of
 //! linear radiance, upsampled per texel as RGB illuminants:
 //! `simd_tracer::spectra::environment`; spectral OpenEXRs and coefficient
@@ -13,6 +14,7 @@ use crate::spectral_image::load_environment_coefficients;
 use glam::{Mat3, Vec3};
 use simd_tracer::ids::SpectrumId;
 use simd_tracer::shading::light_sampler::{DirectionalLight, PointLight};
+use simd_tracer::shading::spot_cone::SpotCone;
 use simd_tracer::spectra::environment::{
     EnvironmentImage, EnvironmentMap, SpectralEnvironmentImage,
 };
@@ -36,6 +38,24 @@ impl Construction<'_> {
             position,
             intensity,
             scale,
+            cone: None,
+        });
+        self.lights += 1;
+    }
+
+    /// Adds a spot light at `position` with its cone.
+    pub(crate) fn spot_light(
+        &mut self,
+        position: Vec3,
+        emission: (SpectrumId, f32),
+        cone: SpotCone,
+    ) {
+        let (intensity, scale) = emission;
+        self.builder.add_point_light(PointLight {
+            position,
+            intensity,
+            scale,
+            cone: Some(cone),
         });
         self.lights += 1;
     }

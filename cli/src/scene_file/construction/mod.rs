@@ -24,7 +24,7 @@
 //!   functions.
 //! * `meshes`: triangles, quads, OBJ/MTL, PLY and serialized files,
 //!   analytic shapes, transforms and instances.
-//! * `lights`: point and directional lights, environment maps.
+//! * `lights`: point, spot and directional lights, environment maps.
 //! * `textures`: image textures and checkerboards with their sampling.
 
 mod lights;

@@ -7,6 +7,10 @@
 //!   `scale` (1), `to_world` (a rotation); the lookup conventions are
 //!   `simd_tracer::spectra::environment`'s.
 //! * `point`: `intensity` (W/sr), at `position` or at `to_world`'s origin.
+//! * `spot`: `intensity` (W/sr, at the centre of the cone), `cutoff_angle`
+//!   (20°), `beam_width` (¾ of the cutoff), at `to_world`'s origin and
+//!   along its local `+z` (`src/emitters/spot.cpp`; the profile is
+//!   `simd_tracer::shading::spot_cone`'s). No projection `texture`.
 //! * `directional`: `irradiance` (W/m²), travelling along `direction` or
 //!   along `to_world`'s local `+z`.
 //!
@@ -23,9 +27,16 @@ use crate::error::CliError;
 use crate::scene_file::construction::MapSettings;
 use glam::{Mat3, Vec3};
 use simd_tracer::ids::SpectrumId;
+use simd_tracer::shading::spot_cone::{SpotCone, SpotConeSettings};
 
 /// Mitsuba's default emitted quantity (radiance, intensity, irradiance).
 const DEFAULT_EMISSION: f64 = 1.0;
+
+/// `spot`'s default cutoff angle in degrees (`src/emitters/spot.cpp`).
+const SPOT_DEFAULT_CUTOFF_DEG: f64 = 20.0;
+
+/// `spot`'s default beam width as a share of its cutoff angle (ibid.).
+const SPOT_DEFAULT_BEAM_SHARE: f64 = 0.75;
 
 impl<'e> Importer<'e, '_> {
     /// The radiance of an `area` emitter nested in a shape.
@@ -93,6 +104,25 @@ impl<'e> Importer<'e, '_> {
                     None => object.transform("to_world")?.point(Vec3::ZERO),
                 };
                 self.cx.point_light(position, intensity, 1.0);
+            }
+            "spot" => {
+                let intensity =
+                    self.spectrum_id(&object, "intensity", SpectrumUse::Emission, default)?;
+                let to_world = object.transform("to_world")?;
+                let m = to_world.affine().matrix3;
+                let local_to_world =
+                    Mat3::from_cols(m.x_axis.into(), m.y_axis.into(), m.z_axis.into());
+                let cutoff_deg = object.float("cutoff_angle", SPOT_DEFAULT_CUTOFF_DEG)?;
+                let beam_width_deg =
+                    object.float("beam_width", SPOT_DEFAULT_BEAM_SHARE * cutoff_deg)?;
+                let cone = SpotCone::new(&SpotConeSettings {
+                    world_to_local: local_to_world.inverse(),
+                    cutoff_deg,
+                    beam_width_deg,
+                })
+                .map_err(|e| object.error(e))?;
+                self.cx
+                    .spot_light(to_world.point(Vec3::ZERO), (intensity, 1.0), cone);
             }
             "directional" => {
                 let irradiance =

@@ -389,7 +389,7 @@ impl<'e> Importer<'e, '_> {
         let (builder, mut warnings) = self.cx.finish();
         if unlit {
             warnings.push(root.place.message(
-                "the scene has no light (no area, point, directional or environment emitter): it renders black",
+                "the scene has no light (no area, point, spot, directional or environment emitter): it renders black",
             ));
         }
         Ok(LoadedScene {
