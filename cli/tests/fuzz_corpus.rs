@@ -42,6 +42,7 @@ fn scene_toml_seeds_are_scenes() -> TestResult {
         "spectra.toml",
         "checkerboard.toml",
         "lights.toml",
+        "lens.toml",
     ] {
         let loaded = fspec_cli::scene_file::load_scene_file(&corpus_dir("scene_toml").join(seed))
             .map_err(|e| format!("{seed}: {e}"))?;
@@ -61,7 +62,13 @@ fn scene_xml_corpus() -> TestResult {
 /// scenes (no file references) that load and build.
 #[test]
 fn scene_xml_seeds_are_scenes() -> TestResult {
-    for seed in ["minimal.xml", "materials.xml", "textures.xml", "lights.xml"] {
+    for seed in [
+        "minimal.xml",
+        "materials.xml",
+        "textures.xml",
+        "lights.xml",
+        "lens.xml",
+    ] {
         let loaded = fspec_cli::scene_file::load_mitsuba_scene(
             &corpus_dir("scene_xml").join(seed),
             &fspec_cli::scene_file::MitsubaOptions::default(),

@@ -164,6 +164,35 @@ fn malformed_files_name_their_line() -> TestResult {
         "    <shape type=\"sphere\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"2, 0, 0\"/></bsdf></shape>",
     );
     refused("reflectance", &text, 8, &["outside [0, 1]"])?;
+    let lens = |sensor: &str| {
+        scene(LIT_QUAD).replace(
+            "<sensor type=\"perspective\">",
+            &format!("<sensor type=\"thinlens\">{sensor}"),
+        )
+    };
+    refused("lens-missing", &lens(""), 3, &["needs `aperture_radius`"])?;
+    refused(
+        "lens-negative",
+        &lens("<float name=\"aperture_radius\" value=\"-1\"/>"),
+        3,
+        &["aperture_radius -1", "must be finite and >= 0"],
+    )?;
+    refused(
+        "lens-focus",
+        &lens(
+            "<float name=\"aperture_radius\" value=\"0.1\"/><float name=\"focus_distance\" value=\"0\"/>",
+        ),
+        3,
+        &["focus_distance 0"],
+    )?;
+    let scaled = lens("<float name=\"aperture_radius\" value=\"0.1\"/>")
+        .replace("up=\"0, 1, 0\"/>", "up=\"0, 1, 0\"/><scale value=\"2\"/>");
+    refused(
+        "lens-scaled",
+        &scaled,
+        3,
+        &["scale factors in to_world are not allowed"],
+    )?;
     let spot = |params: &str| scene(&format!("    <emitter type=\"spot\">{params}</emitter>"));
     refused(
         "spot-beam",

@@ -170,8 +170,12 @@ spectrum = "d65"
 /// The error of loading a scene `HEAD + body`: one line, exit 2, naming
 /// the file's line `line_of` and containing `needle`.
 fn error_at(name: &str, body: &str, line_of: &str, needle: &str) -> TestResult {
-    let text = format!("{HEAD}{body}");
-    let (_dir, path) = scene(name, &text)?;
+    error_in(name, &format!("{HEAD}{body}"), line_of, needle)
+}
+
+/// The error of loading the scene `text` (as [`error_at`]).
+fn error_in(name: &str, text: &str, line_of: &str, needle: &str) -> TestResult {
+    let (_dir, path) = scene(name, text)?;
     let line = text
         .lines()
         .position(|l| l.contains(line_of))
@@ -407,6 +411,82 @@ fn spot_lights_widen_into_point_lights_and_take_the_default_beam() -> TestResult
         &light("type = \"spot\"\ntarget = [0, 0, 0]\ncutoff_deg = 40\nbeam_width_deg = 20"),
     )?;
     assert!(cone != narrow, "the beam width changes nothing");
+    Ok(())
+}
+
+/// A TOML thin lens: without `focus_distance` it focuses on `target`
+/// (bit for bit the image with the target's distance given), and it blurs:
+/// its image differs from the pinhole's and from a lens focused elsewhere.
+#[test]
+fn a_toml_lens_focuses_on_the_target_by_default() -> TestResult {
+    let body = "[[shapes]]\ntype = \"sphere\"\nmaterial = \"grey\"\nradius = 0.5\n[[shapes]]\ntype = \"rectangle\"\nmaterial = \"grey\"\ntransform = [{ scale = 3 }, { translate = [0, 0, -2] }]\n";
+    let image = |name: &str, lens: &str| -> TestResult<Vec<Xyz>> {
+        let head = HEAD.replace("fov_deg = 40\n", &format!("fov_deg = 40\n{lens}"));
+        let (_dir, path) = scene(name, &format!("{head}{body}"))?;
+        let scene = load(&path)?;
+        let fourier =
+            FourierTransport::<8>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
+        render_xyz(&fourier, &scene, 4, 5)
+    };
+    let default_focus = image("lens-default", "aperture_radius = 0.3\n")?;
+    let given = image("lens-given", "aperture_radius = 0.3\nfocus_distance = 5\n")?;
+    assert!(
+        default_focus == given,
+        "the default focus is not the target's distance"
+    );
+    let pinhole = image("lens-none", "")?;
+    assert!(default_focus != pinhole, "the lens renders as a pinhole");
+    let elsewhere = image(
+        "lens-elsewhere",
+        "aperture_radius = 0.3\nfocus_distance = 3\n",
+    )?;
+    assert!(
+        default_focus != elsewhere,
+        "the focus distance changes nothing"
+    );
+    let closed = image("lens-closed", "aperture_radius = 0\nfocus_distance = 3\n")?;
+    assert!(closed == pinhole, "an aperture of 0 is not the pinhole");
+    Ok(())
+}
+
+#[test]
+fn lens_keys_refuse_bad_values_with_one_line() -> TestResult {
+    let cube = "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\n";
+    for (name, lens, line_of, needle) in [
+        (
+            "lens-negative",
+            "aperture_radius = -0.1\n",
+            "aperture_radius",
+            "must be a number >= 0",
+        ),
+        (
+            "lens-nan",
+            "aperture_radius = nan\n",
+            "aperture_radius",
+            "finite",
+        ),
+        (
+            "lens-huge",
+            "aperture_radius = 1e300\n",
+            "aperture_radius",
+            "too large",
+        ),
+        (
+            "lens-focus-zero",
+            "aperture_radius = 0.1\nfocus_distance = 0\n",
+            "focus_distance",
+            "must be a distance > 0",
+        ),
+        (
+            "lens-focus-negative",
+            "aperture_radius = 0.1\nfocus_distance = -2\n",
+            "focus_distance",
+            "must be a distance > 0",
+        ),
+    ] {
+        let head = HEAD.replace("fov_deg = 40\n", &format!("fov_deg = 40\n{lens}"));
+        error_in(name, &format!("{head}{cube}"), line_of, needle)?;
+    }
     Ok(())
 }
 

@@ -367,7 +367,15 @@ fn render_generation(
         return Err(CliError::input("the scene could not be built"));
     };
     let camera = match &settings.camera {
-        Some(spec) => spec.camera()?,
+        // A moved camera keeps the scene's lens: the same aperture and the
+        // same distance to the plane in focus.
+        Some(spec) => match built.camera.lens() {
+            Some(lens) => spec
+                .camera()?
+                .with_lens(lens.aperture_radius, lens.focus_distance)
+                .map_err(|e| CliError::input(format!("camera: {e}")))?,
+            None => spec.camera()?,
+        },
         None => built.camera,
     };
     built

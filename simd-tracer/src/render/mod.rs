@@ -106,7 +106,8 @@ use crate::integrator::{
     trace_group_from,
 };
 use crate::packet::RayPacket;
-use crate::sampling::sampler::{PIXEL_X, PIXEL_Y, PassKeys, PathSampler, SamplerKind};
+use crate::sampling::disk::concentric_disk_x8;
+use crate::sampling::sampler::{LENS_FIRST, PIXEL_X, PIXEL_Y, PassKeys, PathSampler, SamplerKind};
 use crate::scene::Scene;
 use crate::simd::Vec3x8;
 use crate::simd::{LANES, LaneMask};
@@ -425,8 +426,9 @@ impl<P> Tile<P> {
 /// The camera rays of a packet: lane `l` goes through pixel `lanes[l]` of
 /// `tile` (inactive where `None`) at an offset drawn from the filter
 /// (splatting: uniform in the pixel, the box's) with the lane's path
-/// stream (two numbers, x then y), all 8 lanes at once; with the offsets
-/// from the pixels' centres, px.
+/// stream (two numbers, x then y; a thin lens then draws its aperture
+/// point from two more), all 8 lanes at once; with the offsets from the
+/// pixels' centres, px.
 fn camera_packet<P>(
     scene: &Scene,
     settings: &RenderSettings,
@@ -456,9 +458,17 @@ fn camera_packet<P>(
         settings.width,
         settings.height,
     );
+    let camera = scene.camera();
+    let (origin, direction) = match camera.lens() {
+        None => (Vec3x8::splat(camera.position()), direction),
+        Some(lens) => {
+            let aperture = (path_rngs.draw(LENS_FIRST), path_rngs.draw(LENS_FIRST + 1));
+            camera.lens_ray_x8(lens, direction, concentric_disk_x8(aperture.0, aperture.1))
+        }
+    };
     let live = active.to_simd();
     let packet = RayPacket {
-        origin: Vec3x8::splat(scene.camera().position()).to_array(),
+        origin: Vec3x8::select(live, origin, Vec3x8::splat(camera.position())).to_array(),
         direction: Vec3x8::select(live, direction, Vec3x8::splat(Vec3::Z)).to_array(),
         t_max: live.select(f32x8::splat(f32::INFINITY), f32x8::ZERO),
         active,

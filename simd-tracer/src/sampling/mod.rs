@@ -1,5 +1,6 @@
 //! Random numbers and sampling.
 
+pub mod disk;
 pub mod distribution;
 pub mod rng;
 pub mod sampler;

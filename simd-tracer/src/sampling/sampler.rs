@@ -25,11 +25,15 @@
 //! | + 5 | bounce `k`: the BSDF lobe |
 //! | + 6 | bounce `k`: Russian roulette |
 //! | + 7 | bounce `k`: fluorescent re-emission |
+//! | [`LENS_FIRST`], + 1 | a thin lens's aperture point (hashed) |
 //!
 //! The pixel pair is Sobol's dimensions 0 and 1, a (0, 2)-sequence; light
 //! and BSDF pairs are consecutive dimensions, whose 2D projections Joe
-//! and Kuo optimised. The camera is a pinhole: there are no lens
-//! dimensions. Wavelength numbers past the first four (only the
+//! and Kuo optimised. A thin lens draws its aperture point only when the
+//! camera has one, from two hashed dimensions past the table: a pinhole
+//! camera's renders keep every number they had (the independent sampler
+//! takes its numbers in call order, so a dimension inserted after the
+//! pixel's would have moved all the others). Wavelength numbers past the first four (only the
 //! `uniform`, `stratified` and `visible` strategies with more than four
 //! wavelengths use them) and bounces past the 15th go past the 128
 //! Sobol dimensions and get hashed random numbers (`sobol.rs`).
@@ -81,6 +85,11 @@ pub const WAVELENGTH_DIMENSIONS: u32 = 4;
 pub const BOUNCE_FIRST: u32 = WAVELENGTH_FIRST + WAVELENGTH_DIMENSIONS;
 /// Dimensions per bounce (module docs' table).
 pub const BOUNCE_DIMENSIONS: u32 = 8;
+/// Dimension of a thin lens's aperture point, first of two (module docs):
+/// hashed, 128 below the top, so below the hashed wavelength dimensions
+/// ([`wavelength_dimension`]: the top ones, one per wavelength number, and
+/// a path draws at most 32) and far above any bounce's.
+pub const LENS_FIRST: u32 = u32::MAX - 128;
 
 /// The dimensions of one bounce's decisions (module docs' table).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -263,6 +272,8 @@ mod tests {
                 b.fluorescence,
             ]);
         }
+        all.extend([LENS_FIRST, LENS_FIRST + 1]);
+        all.extend((WAVELENGTH_DIMENSIONS..64).map(wavelength_dimension));
         let count = all.len();
         all.sort_unstable();
         all.dedup();

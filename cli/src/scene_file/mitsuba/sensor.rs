@@ -1,6 +1,12 @@
 //! The sensor (camera, film, reconstruction filter, sampler) and the
 //! integrator, as Mitsuba 3.9.1 reads them.
 //!
+//! * `thinlens`: `perspective`'s parameters and the thin lens's
+//!   `aperture_radius` (required, as in Mitsuba; 0 is a pinhole) and
+//!   `focus_distance` (default: the far clip, 10⁴), the distance of the
+//!   plane in focus (`src/sensors/thinlens.cpp`; the lens model is
+//!   `simd_tracer::scene::camera`'s). A scaled `to_world` is refused, as
+//!   Mitsuba refuses it.
 //! * `perspective`: `to_world` (local `+z` is the viewing direction, `+y`
 //!   up and `+x` the image's left: `src/sensors/perspective.cpp` maps the
 //!   film's `x` to local `−x`), `fov` in degrees along `fov_axis` (`x`, the
@@ -52,6 +58,13 @@ const FILM_35MM_WIDTH_MM: f64 = 36.0;
 const FILM_35MM_HEIGHT_MM: f64 = 24.0;
 /// Mitsuba's default near clip distance.
 const DEFAULT_NEAR_CLIP: f64 = 1e-2;
+/// Mitsuba's default far clip distance, also `thinlens`'s default focus
+/// distance (`src/render/sensor.cpp`, `ProjectiveCamera`).
+const DEFAULT_FAR_CLIP: f64 = 1e4;
+/// How far from 1 the length of a `thinlens`'s `to_world` axis may be:
+/// room for the rounding of composed rotations, far below any deliberate
+/// scale.
+const UNIT_AXIS_TOLERANCE: f32 = 1e-3;
 /// Mitsuba's default tent radius, px.
 const DEFAULT_TENT_RADIUS_PX: f64 = 1.0;
 /// Mitsuba's default Gaussian standard deviation, px.
@@ -73,9 +86,11 @@ impl<'e> Importer<'e, '_> {
     /// The `<sensor>`: camera and render defaults.
     pub(super) fn sensor(&mut self, e: &'e Element) -> Result<(), CliError> {
         let object = Object::new(e)?;
-        if object.plugin != "perspective" {
-            return Err(object.error("is not supported (perspective)"));
-        }
+        let thin_lens = match object.plugin {
+            "perspective" => false,
+            "thinlens" => true,
+            _ => return Err(object.error("is not supported (perspective, thinlens)")),
+        };
         // The film first: the field of view depends on its aspect.
         let mut width = DEFAULT_FILM_WIDTH;
         let mut height = DEFAULT_FILM_HEIGHT;
@@ -152,11 +167,10 @@ impl<'e> Importer<'e, '_> {
             );
         }
         // A pinhole has no focus; Mitsuba reads the value and ignores it.
-        object.ignore(&[
-            "principal_point_offset_x",
-            "principal_point_offset_y",
-            "focus_distance",
-        ]);
+        object.ignore(&["principal_point_offset_x", "principal_point_offset_y"]);
+        if !thin_lens {
+            object.ignore(&["focus_distance"]);
+        }
         for name in ["principal_point_offset_x", "principal_point_offset_y"] {
             if object.float(name, 0.0)? != 0.0 {
                 return Err(object.error(format!("{name} other than 0 is not supported")));
@@ -170,6 +184,31 @@ impl<'e> Importer<'e, '_> {
         };
         let camera = Camera::from_axes(axes, fov_smaller_deg as f32)
             .map_err(|err| object.error(format!("to_world: {err}")))?;
+        let camera = if thin_lens {
+            let aperture_radius = object
+                .float_opt("aperture_radius")?
+                .ok_or_else(|| object.error("needs `aperture_radius`"))?;
+            let focus_distance =
+                object.float("focus_distance", far_clip.unwrap_or(DEFAULT_FAR_CLIP))?;
+            // Mitsuba's thinlens refuses a scaled to_world (its aperture
+            // would be scaled); so does this importer.
+            let scaled = [Vec3::X, Vec3::Y, Vec3::Z]
+                .into_iter()
+                .any(|axis| (to_world.vector(axis).length() - 1.0).abs() > UNIT_AXIS_TOLERANCE);
+            if scaled {
+                return Err(object
+                    .error("thinlens: scale factors in to_world are not allowed (as in Mitsuba)"));
+            }
+            camera
+                .with_lens(aperture_radius as f32, focus_distance as f32)
+                .map_err(|err| {
+                    object.error(format!(
+                        "aperture_radius {aperture_radius}, focus_distance {focus_distance}: {err}"
+                    ))
+                })?
+        } else {
+            camera
+        };
         self.cx.set_camera(camera);
         self.camera_set = true;
         self.render.width = Some(width as u32);

@@ -125,11 +125,24 @@ impl Loader<'_> {
         })
     }
 
-    /// `[camera]`: a pinhole camera.
+    /// `[camera]`: a pinhole camera, or a thin lens with `aperture_radius`
+    /// (scene units, default 0: a pinhole) focused at `focus_distance`
+    /// (default: the distance to `target`, so that the target is sharp).
     pub(super) fn camera_section(&mut self, item: &Item<'_, '_>) -> Result<(), CliError> {
         let src = &self.src;
         let table = item.table(src)?;
-        table.allow(src, &["position", "target", "up", "fov_deg"], "[camera]")?;
+        table.allow(
+            src,
+            &[
+                "position",
+                "target",
+                "up",
+                "fov_deg",
+                "aperture_radius",
+                "focus_distance",
+            ],
+            "[camera]",
+        )?;
         let position_item =
             table.require(src, "position", "the camera needs `position = [x, y, z]`")?;
         let target_item = table.require(src, "target", "the camera needs `target = [x, y, z]`")?;
@@ -148,8 +161,31 @@ impl Loader<'_> {
                 Some(up) => up.err(src, e),
                 None => target_item.err(src, e),
             },
-            CameraError::Degenerate => target_item.err(src, e),
+            CameraError::Degenerate | CameraError::Lens => target_item.err(src, e),
         })?;
+        let aperture_radius = match table.get("aperture_radius") {
+            Some(a) => {
+                let radius = a.non_negative(src)? as f32;
+                if !radius.is_finite() {
+                    return Err(a.err(src, "too large for single precision"));
+                }
+                radius
+            }
+            None => 0.0,
+        };
+        let focus_distance = match table.get("focus_distance") {
+            Some(f) => {
+                let distance = f.number(src)? as f32;
+                if !(distance > 0.0 && distance.is_finite()) {
+                    return Err(f.err(src, "must be a distance > 0"));
+                }
+                distance
+            }
+            None => position.distance(target),
+        };
+        let camera = camera
+            .with_lens(aperture_radius, focus_distance)
+            .map_err(|e| table.err(src, e))?;
         self.cx.set_camera(camera);
         Ok(())
     }
