@@ -19,27 +19,34 @@
 //! | --- | --- |
 //! | 0, 1 | pixel: the filter (or, splatting, the box) offset, x then y |
 //! | 2 … 5 | wavelengths: the sampled transports' first [`WAVELENGTH_DIMENSIONS`] numbers (the hybrid transport's at its split: it draws none at the camera, and splits at most once per path) |
-//! | `6 + 8 (k − 1)` + 0 | bounce `k`: light selection |
+//! | `6 + 8 (k − 1)` + 0 | bounce `k` ≤ 15: light selection (bounces past the 15th: `128 + 8 (k − 16)` + 0 …, hashed) |
 //! | + 1, + 2 | bounce `k`: the point on the light |
 //! | + 3, + 4 | bounce `k`: the BSDF direction |
 //! | + 5 | bounce `k`: the BSDF lobe |
 //! | + 6 | bounce `k`: Russian roulette |
 //! | + 7 | bounce `k`: fluorescent re-emission |
-//! | [`LENS_FIRST`], + 1 | a thin lens's aperture point (hashed) |
+//! | 126, 127 ([`LENS_FIRST`]) | a thin lens's aperture point |
 //!
 //! The pixel pair is Sobol's dimensions 0 and 1, a (0, 2)-sequence; light
 //! and BSDF pairs are consecutive dimensions, whose 2D projections Joe
 //! and Kuo optimised. A thin lens draws its aperture point only when the
-//! camera has one, from two hashed dimensions past the table: a pinhole
-//! camera's renders keep every number they had (the independent sampler
-//! takes its numbers in call order, so a dimension inserted after the
-//! pixel's would have moved all the others). Wavelength numbers past the first four (only the
+//! camera has one, from the table's last two dimensions, so that the rest
+//! of the allocation stays where it was (the independent sampler takes its
+//! numbers in call order, so a pair drawn only with a lens leaves a pinhole
+//! render's numbers alone; a pair inserted after the pixel's would have
+//! moved every Sobol dimension). Stratified over the passes, the aperture
+//! converges faster than with hashed numbers (`docs/results.md`, "Thin
+//! lens: the aperture's Sobol dimensions"). (Before the lens, the 16th
+//! bounce's light selection and light point had dimensions 126 and 127;
+//! they are hashed now, which changes Sobol renders only where paths are
+//! longer than 15 bounces.) Wavelength numbers past the first four (only the
 //! `uniform`, `stratified` and `visible` strategies with more than four
-//! wavelengths use them) and bounces past the 15th go past the 128
-//! Sobol dimensions and get hashed random numbers (`sobol.rs`).
+//! wavelengths use them) and bounces past the 15th ([`SOBOL_BOUNCES`]) go
+//! past the 128 Sobol dimensions and get hashed random numbers
+//! (`sobol.rs`).
 
 use super::rng::{Purpose, Rng, RngPacket, SampleKey};
-use super::sobol::{SobolKey, SobolPacket, SobolStream};
+use super::sobol::{SOBOL_DIMENSIONS, SobolKey, SobolPacket, SobolStream};
 use crate::simd::LANES;
 use wide::f32x8;
 
@@ -85,11 +92,19 @@ pub const WAVELENGTH_DIMENSIONS: u32 = 4;
 pub const BOUNCE_FIRST: u32 = WAVELENGTH_FIRST + WAVELENGTH_DIMENSIONS;
 /// Dimensions per bounce (module docs' table).
 pub const BOUNCE_DIMENSIONS: u32 = 8;
-/// Dimension of a thin lens's aperture point, first of two (module docs):
-/// hashed, 128 below the top, so below the hashed wavelength dimensions
-/// ([`wavelength_dimension`]: the top ones, one per wavelength number, and
-/// a path draws at most 32) and far above any bounce's.
-pub const LENS_FIRST: u32 = u32::MAX - 128;
+/// Dimensions of a thin lens's aperture point.
+pub const LENS_DIMENSIONS: u32 = 2;
+/// Bounces whose decisions take Sobol dimensions: as many as fit in the
+/// table between the wavelengths' dimensions and the lens's (15); later
+/// bounces take hashed dimensions past the table (module docs).
+pub const SOBOL_BOUNCES: u32 =
+    (SOBOL_DIMENSIONS as u32 - BOUNCE_FIRST - LENS_DIMENSIONS) / BOUNCE_DIMENSIONS;
+/// First dimension of a thin lens's aperture point: the table's last two
+/// (126 and 127), after the [`SOBOL_BOUNCES`] bounces' (module docs).
+pub const LENS_FIRST: u32 = BOUNCE_FIRST + SOBOL_BOUNCES * BOUNCE_DIMENSIONS;
+
+// The lens's pair is inside the Sobol table.
+const _: () = assert!(LENS_FIRST + LENS_DIMENSIONS <= SOBOL_DIMENSIONS as u32);
 
 /// The dimensions of one bounce's decisions (module docs' table).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -111,8 +126,13 @@ pub struct BounceDimensions {
 impl BounceDimensions {
     /// The dimensions of bounce `depth` (1 for the camera ray's hit).
     pub fn of(depth: u32) -> Self {
-        let first =
-            BOUNCE_FIRST.saturating_add(depth.saturating_sub(1).saturating_mul(BOUNCE_DIMENSIONS));
+        let k = depth.saturating_sub(1);
+        let first = if k < SOBOL_BOUNCES {
+            BOUNCE_FIRST + k * BOUNCE_DIMENSIONS
+        } else {
+            (SOBOL_DIMENSIONS as u32)
+                .saturating_add((k - SOBOL_BOUNCES).saturating_mul(BOUNCE_DIMENSIONS))
+        };
         let at = |offset: u32| first.saturating_add(offset);
         Self {
             light_select: at(0),
@@ -280,6 +300,15 @@ mod tests {
         assert_eq!(all.len(), count);
         assert_eq!(BounceDimensions::of(1).light_select, 6);
         assert_eq!(BounceDimensions::of(2).light_select, 14);
+        // The 15th bounce is the last in the table, the lens takes its end
+        // and the 16th bounce starts past it.
+        assert_eq!(SOBOL_BOUNCES, 15);
+        assert_eq!(BounceDimensions::of(15).fluorescence, LENS_FIRST - 1);
+        assert_eq!(LENS_FIRST + LENS_DIMENSIONS, SOBOL_DIMENSIONS as u32);
+        assert_eq!(
+            BounceDimensions::of(16).light_select,
+            SOBOL_DIMENSIONS as u32
+        );
     }
 
     #[test]
