@@ -127,6 +127,9 @@ SCENES = {
     "camera_fov_axis_y": {"suite": "camera", "ref_spp": 4096, "negative": {"fov": "32"}},
     "camera_focal_length": {"suite": "camera", "ref_spp": 4096},
     "camera_thinlens": {"suite": "camera", "ref_spp": 4096, "negative": {"focus": "2.0"}},
+    "camera_orthographic": {
+        "suite": "camera", "ref_spp": 4096, "negative": {"scale": "1.1"}},
+    "camera_clip_shift": {"suite": "camera", "ref_spp": 4096, "negative": {"near": "0.01"}},
     "filter_box": {"suite": "camera", "ref_spp": 4096},
     "filter_tent": {"suite": "camera", "ref_spp": 4096},
     "filter_gaussian": {"suite": "camera", "ref_spp": 4096, "negative": {"stddev": "0.5"}},

@@ -43,6 +43,7 @@ fn scene_toml_seeds_are_scenes() -> TestResult {
         "checkerboard.toml",
         "lights.toml",
         "lens.toml",
+        "orthographic.toml",
     ] {
         let loaded = fspec_cli::scene_file::load_scene_file(&corpus_dir("scene_toml").join(seed))
             .map_err(|e| format!("{seed}: {e}"))?;
@@ -68,6 +69,8 @@ fn scene_xml_seeds_are_scenes() -> TestResult {
         "textures.xml",
         "lights.xml",
         "lens.xml",
+        "orthographic.xml",
+        "camera-shift.xml",
     ] {
         let loaded = fspec_cli::scene_file::load_mitsuba_scene(
             &corpus_dir("scene_xml").join(seed),

@@ -193,6 +193,58 @@ fn malformed_files_name_their_line() -> TestResult {
         3,
         &["scale factors in to_world are not allowed"],
     )?;
+    let ortho = scene(LIT_QUAD).replace(
+        "<sensor type=\"perspective\">\n        <float name=\"fov\" value=\"40\"/>",
+        "<sensor type=\"orthographic\">",
+    );
+    assert!(ortho.contains("orthographic"));
+    refused(
+        "ortho-unequal",
+        &ortho.replace(
+            "up=\"0, 1, 0\"/>",
+            "up=\"0, 1, 0\"/><scale x=\"2\" y=\"1\"/>",
+        ),
+        3,
+        &["orthographic", "unequal scales"],
+    )?;
+    refused(
+        "ortho-fov",
+        &scene(LIT_QUAD).replace("\"perspective\"", "\"orthographic\""),
+        4,
+        &["parameter \"fov\" is not supported"],
+    )?;
+    let sensor = |params: &str| {
+        scene(LIT_QUAD).replace(
+            "<float name=\"fov\" value=\"40\"/>",
+            &format!("<float name=\"fov\" value=\"40\"/>{params}"),
+        )
+    };
+    refused(
+        "near-zero",
+        &sensor("<float name=\"near_clip\" value=\"0\"/>"),
+        3,
+        &["near_clip 0", "need 0 < near_clip < far_clip"],
+    )?;
+    refused(
+        "near-far",
+        &sensor("<float name=\"near_clip\" value=\"5\"/><float name=\"far_clip\" value=\"2\"/>"),
+        3,
+        &["near_clip 5, far_clip 2"],
+    )?;
+    refused(
+        "shift-absurd",
+        &sensor("<float name=\"principal_point_offset_x\" value=\"1e9\"/>"),
+        3,
+        &["principal_point_offset", "within ±16 films"],
+    )?;
+    refused(
+        "shift-thinlens",
+        &lens(
+            "<float name=\"aperture_radius\" value=\"0.1\"/><float name=\"principal_point_offset_x\" value=\"0.1\"/>",
+        ),
+        3,
+        &["principal_point_offset_x", "not supported"],
+    )?;
     let spot = |params: &str| scene(&format!("    <emitter type=\"spot\">{params}</emitter>"));
     refused(
         "spot-beam",

@@ -599,3 +599,160 @@ fn instances_share_a_named_mesh_or_flatten_into_copies() -> TestResult {
     }
     Ok(())
 }
+
+/// An orthographic camera from TOML and from a Mitsuba file: the
+/// conformance scene `camera_orthographic.xml` (to_world scaled by 1.25 on
+/// a 64 × 48 film) and its TOML twin (`view_size = 1.875`, the same film
+/// plane along the smaller axis) load to the same projection, axes and
+/// film plane; the Mitsuba file's rays start at its default near clip
+/// (depth 0.01) and end at its far clip (10⁴), the TOML file's are not
+/// clipped.
+#[test]
+fn orthographic_cameras_agree_between_toml_and_mitsuba_files() -> TestResult {
+    use simd_tracer::scene::camera::Projection;
+    let suite = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/conformance");
+    let xml = load(&suite.join("scenes/camera_orthographic.xml"))?;
+    let toml = load(&suite.join("twins/camera_orthographic.toml"))?;
+    let (a, b) = (xml.camera(), toml.camera());
+    let size = |projection| match projection {
+        Projection::Orthographic { view_size } => Ok(view_size),
+        other => Err(format!("not orthographic: {other:?}")),
+    };
+    assert!((size(a.projection())? - 1.875).abs() < 1e-5);
+    assert!((size(b.projection())? - 1.875).abs() < 1e-6);
+    let (axes_a, axes_b) = (a.axes(), b.axes());
+    for (u, v) in [
+        (axes_a.forward, axes_b.forward),
+        (axes_a.right, axes_b.right),
+        (axes_a.up, axes_b.up),
+    ] {
+        assert!((u - v).length() < 1e-5, "{u} vs {v}");
+    }
+    assert!((axes_a.position - axes_b.position).length() < 1e-5);
+    let clip = a.clip().ok_or("no clip planes")?;
+    assert!((clip.near - 0.01).abs() < 1e-7 && (clip.far / 1e4 - 1.0).abs() < 1e-6);
+    assert_eq!(b.clip(), None);
+    Ok(())
+}
+
+/// The conformance scene `camera_clip_shift.xml` (a principal point
+/// offset, near and far clip planes, a field of view along the width) and
+/// its TOML twin (`shift`, `near_clip`, `far_clip`, the field of view along
+/// the smaller axis) load to the same camera.
+#[test]
+fn shifted_clipped_cameras_agree_between_toml_and_mitsuba_files() -> TestResult {
+    use simd_tracer::scene::camera::{ClipRange, Projection};
+    let suite = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/conformance");
+    let xml = load(&suite.join("scenes/camera_clip_shift.xml"))?;
+    let toml = load(&suite.join("twins/camera_clip_shift.toml"))?;
+    let (a, b) = (xml.camera(), toml.camera());
+    let fov = |projection| match projection {
+        Projection::Perspective { fov_deg } => Ok(fov_deg),
+        other => Err(format!("not perspective: {other:?}")),
+    };
+    assert!((fov(a.projection())? - fov(b.projection())?).abs() < 1e-3);
+    assert_eq!(a.shift(), [0.15, -0.1]);
+    assert_eq!(b.shift(), a.shift());
+    let clip = |camera: &simd_tracer::scene::camera::Camera| {
+        camera
+            .clip()
+            .map(|ClipRange { near, far }| [near, far])
+            .ok_or("no clip planes")
+    };
+    for [near, far] in [clip(a)?, clip(b)?] {
+        assert!((near - 3.4).abs() < 1e-5 && (far - 5.5).abs() < 1e-5);
+    }
+    let (axes_a, axes_b) = (a.axes(), b.axes());
+    for (u, v) in [
+        (axes_a.position, axes_b.position),
+        (axes_a.forward, axes_b.forward),
+        (axes_a.up, axes_b.up),
+    ] {
+        assert!((u - v).length() < 1e-5, "{u} vs {v}");
+    }
+    Ok(())
+}
+
+#[test]
+fn camera_keys_refuse_bad_values_with_one_line() -> TestResult {
+    let cube = "[[shapes]]\ntype = \"cube\"\nmaterial = \"grey\"\n";
+    let ortho = "projection = \"orthographic\"\n";
+    for (name, camera, line_of, needle) in [
+        (
+            "projection-unknown",
+            "fov_deg = 40\nprojection = \"fisheye\"\n",
+            "projection",
+            "use perspective or orthographic",
+        ),
+        (
+            "ortho-fov",
+            "fov_deg = 40\nprojection = \"orthographic\"\nview_size = 2\n",
+            "fov_deg",
+            "does not apply to an orthographic camera",
+        ),
+        (
+            "ortho-lens",
+            &format!("{ortho}view_size = 2\naperture_radius = 0.1\n"),
+            "aperture_radius",
+            "does not apply to an orthographic camera",
+        ),
+        (
+            "ortho-missing",
+            ortho,
+            "[camera]",
+            "the camera needs `view_size`",
+        ),
+        (
+            "ortho-zero",
+            &format!("{ortho}view_size = 0\n"),
+            "view_size",
+            "must be finite and > 0",
+        ),
+        (
+            "ortho-nan",
+            &format!("{ortho}view_size = nan\n"),
+            "view_size",
+            "finite",
+        ),
+        (
+            "perspective-size",
+            "fov_deg = 40\nview_size = 2\n",
+            "view_size",
+            "does not apply to a perspective camera",
+        ),
+        (
+            "shift-short",
+            "fov_deg = 40\nshift = [0.1]\n",
+            "shift",
+            "expected an array of 2 numbers",
+        ),
+        (
+            "shift-absurd",
+            "fov_deg = 40\nshift = [20, 0]\n",
+            "shift",
+            "within ±16 films",
+        ),
+        (
+            "near-negative",
+            "fov_deg = 40\nnear_clip = -1\n",
+            "near_clip",
+            "must be a number >= 0",
+        ),
+        (
+            "far-before-near",
+            "fov_deg = 40\nnear_clip = 1\nfar_clip = 0.5\n",
+            "far_clip",
+            "clip planes need 0 <= near < far",
+        ),
+        (
+            "far-zero",
+            "fov_deg = 40\nfar_clip = 0\n",
+            "far_clip",
+            "clip planes need",
+        ),
+    ] {
+        let head = HEAD.replace("fov_deg = 40\n", camera);
+        error_in(name, &format!("{head}{cube}"), line_of, needle)?;
+    }
+    Ok(())
+}

@@ -227,7 +227,10 @@ fn bare_obj_is_framed_and_lit_by_a_white_environment() -> TestResult {
     // The camera is on +z looking at the centre, the quad fills the view.
     let p = scene.camera().position();
     assert!(p.x.abs() < 1e-6 && p.y.abs() < 1e-6 && p.z > 1.0, "{p}");
-    assert!((scene.camera().fov_deg() - 40.0).abs() < 1e-6);
+    assert_eq!(
+        scene.camera().projection(),
+        simd_tracer::scene::camera::Projection::Perspective { fov_deg: 40.0 }
+    );
     let image = render_small(&scene)?;
     let centre = image[8 * 16 + 8].to_array()[1];
     assert!(centre > 0.0, "centre pixel is black");

@@ -403,11 +403,13 @@ fn fourier_and_sampled_agree_exactly_for_constant_spectra() -> TestResult {
             .map(|lane| {
                 let x = (packet_index * 8 + lane as u64) % 32;
                 let y = (packet_index * 8 + lane as u64) / 32;
-                Ray {
-                    origin: scene.camera().position(),
-                    direction: scene
+                let (origin, direction) =
+                    scene
                         .camera()
-                        .direction(x as f32 + 0.5, y as f32 + 0.5, 32, 16),
+                        .film_ray(x as f32 + 0.5, y as f32 + 0.5, 32, 16);
+                Ray {
+                    origin,
+                    direction,
                     t_max: f32::INFINITY,
                 }
             })
@@ -581,15 +583,18 @@ fn group_matches_single<T: Transport>(
     for group in 0..16u64 {
         let camera: [RayPacket; 4] = core::array::from_fn(|_| {
             let rays: Vec<Ray> = (0..LANES)
-                .map(|_| Ray {
-                    origin: scene.camera().position(),
-                    direction: scene.camera().direction(
+                .map(|_| {
+                    let (origin, direction) = scene.camera().film_ray(
                         rng.next_f32() * width as f32,
                         rng.next_f32() * height as f32,
                         width,
                         height,
-                    ),
-                    t_max: f32::INFINITY,
+                    );
+                    Ray {
+                        origin,
+                        direction,
+                        t_max: f32::INFINITY,
+                    }
                 })
                 .collect();
             let mut packet = RayPacket::from_rays(&rays);

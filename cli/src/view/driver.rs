@@ -40,7 +40,7 @@ use simd_tracer::render::{
 };
 use simd_tracer::scene::Scene;
 use simd_tracer::scene::builtin::SceneOptions;
-use simd_tracer::scene::camera::Camera;
+use simd_tracer::scene::camera::{Camera, Projection};
 use simd_tracer::transport::Transport;
 use spectral_core::SpectralRange;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -347,6 +347,30 @@ fn observer_of(
     choice.observer()
 }
 
+/// The scene's camera moved to where the page put it (`page`, a
+/// perspective pinhole of the field of view the page was sent): the
+/// scene camera's projection, lens (the same aperture and distance to the
+/// plane in focus), film shift and clip planes are kept. The page's field
+/// of view of an orthographic camera is only its unit of panning
+/// ([`page_fov_deg`]).
+fn moved_camera(page: Camera, scene: &Camera) -> Result<Camera, CliError> {
+    scene
+        .with_axes(page.axes())
+        .map_err(|e| CliError::input(format!("camera: {e}")))
+}
+
+/// The field of view the page works with: a perspective camera's, and for
+/// an orthographic one the angle its view size subtends at the orbit's
+/// pivot, so that dragging moves the scene with the pointer there too.
+fn page_fov_deg(camera: &Camera, pivot_distance: f32) -> f32 {
+    match camera.projection() {
+        Projection::Perspective { fov_deg } => fov_deg,
+        Projection::Orthographic { view_size } => {
+            (2.0 * (0.5 * view_size / pivot_distance).atan()).to_degrees()
+        }
+    }
+}
+
 /// Renders one generation; `Ok(true)` when it took all its passes.
 fn render_generation(
     shared: &Shared,
@@ -367,15 +391,7 @@ fn render_generation(
         return Err(CliError::input("the scene could not be built"));
     };
     let camera = match &settings.camera {
-        // A moved camera keeps the scene's lens: the same aperture and the
-        // same distance to the plane in focus.
-        Some(spec) => match built.camera.lens() {
-            Some(lens) => spec
-                .camera()?
-                .with_lens(lens.aperture_radius, lens.focus_distance)
-                .map_err(|e| CliError::input(format!("camera: {e}")))?,
-            None => spec.camera()?,
-        },
+        Some(spec) => moved_camera(spec.camera()?, &built.camera)?,
         None => built.camera,
     };
     built
@@ -393,13 +409,14 @@ fn render_generation(
         render_settings.film = simd_tracer::film::FilmMode::Sample;
     }
     let axes = camera.axes();
+    let pivot_distance = (built.centre - axes.position).length().max(f32::EPSILON);
     let view = CameraView {
         position: axes.position.into(),
         forward: axes.forward.into(),
         up: axes.up.into(),
-        fov_deg: camera.fov_deg(),
+        fov_deg: page_fov_deg(&camera, pivot_distance),
         world_up: built.camera.axes().up.into(),
-        pivot_distance: (built.centre - axes.position).length().max(f32::EPSILON),
+        pivot_distance,
     };
     let observer = Arc::new(observer_of(settings, &built.defaults)?);
     let scene = built.scene.read().unwrap_or_else(PoisonError::into_inner);
@@ -723,6 +740,37 @@ mod tests {
             passes,
             spent: Duration::from_millis(spent_ms),
         }
+    }
+
+    /// The page pans by `2 tan(fov/2) · pivot distance` per film: for an
+    /// orthographic camera that is its view size, so a drag moves the
+    /// scene with the pointer. A moved orthographic camera stays one.
+    #[test]
+    fn orthographic_cameras_pan_by_their_view_size_and_stay_orthographic() {
+        let ortho = Camera::look_at_with(
+            glam::Vec3::new(0.0, 0.0, 5.0),
+            glam::Vec3::ZERO,
+            glam::Vec3::Y,
+            Projection::Orthographic { view_size: 3.0 },
+        )
+        .unwrap();
+        let pivot = 4.0;
+        let fov = page_fov_deg(&ortho, pivot);
+        let panned_size = 2.0 * (0.5 * fov).to_radians().tan() * pivot;
+        assert!((panned_size - 3.0).abs() < 1e-5, "{panned_size}");
+        let page = Camera::look_at(
+            glam::Vec3::new(1.0, 0.0, 5.0),
+            glam::Vec3::ZERO,
+            glam::Vec3::Y,
+            fov,
+        )
+        .unwrap();
+        let moved = moved_camera(page, &ortho).unwrap();
+        assert_eq!(moved.projection(), ortho.projection());
+        assert!((moved.position() - page.position()).length() < 1e-6);
+        let perspective =
+            Camera::look_at(glam::Vec3::Z, glam::Vec3::ZERO, glam::Vec3::Y, 35.0).unwrap();
+        assert_eq!(page_fov_deg(&perspective, pivot), 35.0);
     }
 
     #[test]

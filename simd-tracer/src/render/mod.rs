@@ -427,8 +427,8 @@ impl<P> Tile<P> {
 /// `tile` (inactive where `None`) at an offset drawn from the filter
 /// (splatting: uniform in the pixel, the box's) with the lane's path
 /// stream (two numbers, x then y; a thin lens then draws its aperture
-/// point from two more), all 8 lanes at once; with the offsets from the
-/// pixels' centres, px.
+/// point from two more), all 8 lanes at once, cut to the camera's clip
+/// planes; with the offsets from the pixels' centres, px.
 fn camera_packet<P>(
     scene: &Scene,
     settings: &RenderSettings,
@@ -452,25 +452,29 @@ fn camera_packet<P>(
         FilmMode::Sample => settings.filter.sample_offset_x8(u, v),
         FilmMode::Splat => Filter::Box.sample_offset_x8(u, v),
     };
-    let direction = scene.camera().direction_x8(
+    let camera = scene.camera();
+    let (origin, direction) = camera.film_ray_x8(
         f32x8::new(pixel_x) + dx,
         f32x8::new(pixel_y) + dy,
         settings.width,
         settings.height,
     );
-    let camera = scene.camera();
     let (origin, direction) = match camera.lens() {
-        None => (Vec3x8::splat(camera.position()), direction),
+        None => (origin, direction),
         Some(lens) => {
             let aperture = (path_rngs.draw(LENS_FIRST), path_rngs.draw(LENS_FIRST + 1));
             camera.lens_ray_x8(lens, direction, concentric_disk_x8(aperture.0, aperture.1))
         }
     };
+    let (origin, t_max) = match camera.clip() {
+        None => (origin, f32x8::splat(f32::INFINITY)),
+        Some(clip) => camera.clip_ray_x8(clip, (origin, direction)),
+    };
     let live = active.to_simd();
     let packet = RayPacket {
         origin: Vec3x8::select(live, origin, Vec3x8::splat(camera.position())).to_array(),
         direction: Vec3x8::select(live, direction, Vec3x8::splat(Vec3::Z)).to_array(),
-        t_max: live.select(f32x8::splat(f32::INFINITY), f32x8::ZERO),
+        t_max: live.select(t_max, f32x8::ZERO),
         active,
     };
     (packet, [dx, dy])

@@ -7,6 +7,17 @@
 //!   plane in focus (`src/sensors/thinlens.cpp`; the lens model is
 //!   `simd_tracer::scene::camera`'s). A scaled `to_world` is refused, as
 //!   Mitsuba refuses it.
+//! * `orthographic` (`src/sensors/orthographic.cpp`): a film plane
+//!   spanning local `x` ∈ [−1, 1] across the film's width and
+//!   `y` ∈ [−h/w, h/w], both scaled by `to_world`; rays along local `+z`
+//!   from the near clip. Our camera holds the plane's extent along the
+//!   smaller axis, `view_size = 2 s_x min(w, h)/w` for the scale `s_x` of
+//!   local `x`; a `to_world` that scales `x` and `y` differently
+//!   (non-square pixels) is refused.
+//! * Every sensor clips: rays start at depth `near_clip` (default 0.01)
+//!   and end at depth `far_clip` (default 10⁴), local `z` scaled by
+//!   `to_world` (`src/render/sensor.cpp` refuses `near_clip ≤ 0` and
+//!   `near_clip ≥ far_clip`, so does this importer).
 //! * `perspective`: `to_world` (local `+z` is the viewing direction, `+y`
 //!   up and `+x` the image's left: `src/sensors/perspective.cpp` maps the
 //!   film's `x` to local `−x`), `fov` in degrees along `fov_axis` (`x`, the
@@ -16,9 +27,10 @@
 //!   diagonal whatever `fov_axis` says, as Mitsuba's `parse_fov` does). Our camera holds the field
 //!   of view along the smaller image axis: `tan(fov_smaller/2) =
 //!   tan(fov_axis/2) · min(w, h) / L_axis` with `L_axis` the axis' length
-//!   in pixels (`w`, `h` or `√(w² + h²)`). `near_clip` and `far_clip` are
-//!   accepted; the near clip is not applied (geometry within it is seen),
-//!   a warning says so when it differs from Mitsuba's default.
+//!   in pixels (`w`, `h` or `√(w² + h²)`). `principal_point_offset_x/y`
+//!   (fractions of the film's width and height) shift the film
+//!   (`simd_tracer::scene::camera`'s film shift; only `perspective` has
+//!   them).
 //! * `hdrfilm`: `width` (default 768), `height` (576), `crop_offset_x/y`,
 //!   `crop_width/height` (the rendered window), `rfilter` (default
 //!   `gaussian`); `pixel_format`, `component_format`, `sample_border` and
@@ -44,7 +56,7 @@ use super::properties::Object;
 use crate::error::CliError;
 use crate::scene_file::{CropWindow, FilterChoice, MAX_IMAGE_EDGE};
 use glam::Vec3;
-use simd_tracer::scene::camera::{Camera, CameraAxes};
+use simd_tracer::scene::camera::{Camera, CameraAxes, Projection};
 
 /// Mitsuba's film defaults, px (`src/films/hdrfilm.cpp`).
 const DEFAULT_FILM_WIDTH: i64 = 768;
@@ -76,6 +88,64 @@ const DEFAULT_RR_DEPTH: i64 = 5;
 /// Path length of Mitsuba's `direct` integrator in our depth convention.
 const DIRECT_MAX_DEPTH: u32 = 2;
 
+/// The sensors this importer reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SensorKind {
+    Perspective,
+    ThinLens,
+    Orthographic,
+}
+
+/// A `perspective` or `thinlens` sensor's field of view along the smaller
+/// axis of a `w × h` film, degrees, from `fov` and `fov_axis` or
+/// `focal_length` (module docs).
+fn perspective_fov_smaller_deg(object: &Object<'_>, w: f64, h: f64) -> Result<f64, CliError> {
+    let fov_given = object.float_opt("fov")?;
+    let focal = object.string("focal_length")?;
+    let axis = object.string("fov_axis")?.unwrap_or("x");
+    let axis_px = match axis {
+        "x" => w,
+        "y" => h,
+        "diagonal" => w.hypot(h),
+        "smaller" => w.min(h),
+        "larger" => w.max(h),
+        other => {
+            return Err(object.error(format!(
+                "fov_axis \"{other}\" is not one of x, y, diagonal, smaller, larger"
+            )));
+        }
+    };
+    let tan_half_axis = match (fov_given, focal) {
+        (Some(_), Some(_)) => {
+            return Err(object.error("give `fov` or `focal_length`, not both"));
+        }
+        (Some(fov), None) => {
+            if !(fov > 0.0 && fov < 180.0) {
+                return Err(object.error(format!("fov {fov}: must be between 0 and 180 degrees")));
+            }
+            (0.5 * fov.to_radians()).tan()
+        }
+        (None, focal) => {
+            let mm = match focal {
+                Some(text) => parse_millimetres(text).ok_or_else(|| {
+                    object.error(format!("focal_length \"{text}\": expected e.g. \"50mm\""))
+                })?,
+                None => DEFAULT_FOCAL_LENGTH_MM,
+            };
+            // The 35 mm film's diagonal, on the image's diagonal.
+            FILM_35MM_WIDTH_MM.hypot(FILM_35MM_HEIGHT_MM) / (2.0 * mm)
+        }
+    };
+    let axis_px = if fov_given.is_some() {
+        axis_px
+    } else {
+        w.hypot(h)
+    };
+    let tan_half_smaller = tan_half_axis * w.min(h) / axis_px;
+    let fov_smaller_deg = (2.0 * tan_half_smaller.atan()).to_degrees();
+    Ok(fov_smaller_deg)
+}
+
 /// Mitsuba's `path` defaults, for a scene without an integrator.
 pub(super) fn path_defaults(render: &mut crate::scene_file::RenderDefaults) {
     render.max_depth = Some(u32::MAX);
@@ -86,10 +156,13 @@ impl<'e> Importer<'e, '_> {
     /// The `<sensor>`: camera and render defaults.
     pub(super) fn sensor(&mut self, e: &'e Element) -> Result<(), CliError> {
         let object = Object::new(e)?;
-        let thin_lens = match object.plugin {
-            "perspective" => false,
-            "thinlens" => true,
-            _ => return Err(object.error("is not supported (perspective, thinlens)")),
+        let kind = match object.plugin {
+            "perspective" => SensorKind::Perspective,
+            "thinlens" => SensorKind::ThinLens,
+            "orthographic" => SensorKind::Orthographic,
+            _ => {
+                return Err(object.error("is not supported (perspective, thinlens, orthographic)"));
+            }
         };
         // The film first: the field of view depends on its aspect.
         let mut width = DEFAULT_FILM_WIDTH;
@@ -112,84 +185,77 @@ impl<'e> Importer<'e, '_> {
         }
         let to_world = object.transform("to_world")?;
         let (w, h) = (width as f64, height as f64);
-        let fov_given = object.float_opt("fov")?;
-        let focal = object.string("focal_length")?;
-        let axis = object.string("fov_axis")?.unwrap_or("x");
-        let axis_px = match axis {
-            "x" => w,
-            "y" => h,
-            "diagonal" => w.hypot(h),
-            "smaller" => w.min(h),
-            "larger" => w.max(h),
-            other => {
-                return Err(object.error(format!(
-                    "fov_axis \"{other}\" is not one of x, y, diagonal, smaller, larger"
-                )));
-            }
-        };
-        let tan_half_axis = match (fov_given, focal) {
-            (Some(_), Some(_)) => {
-                return Err(object.error("give `fov` or `focal_length`, not both"));
-            }
-            (Some(fov), None) => {
-                if !(fov > 0.0 && fov < 180.0) {
-                    return Err(
-                        object.error(format!("fov {fov}: must be between 0 and 180 degrees"))
-                    );
-                }
-                (0.5 * fov.to_radians()).tan()
-            }
-            (None, focal) => {
-                let mm = match focal {
-                    Some(text) => parse_millimetres(text).ok_or_else(|| {
-                        object.error(format!("focal_length \"{text}\": expected e.g. \"50mm\""))
-                    })?,
-                    None => DEFAULT_FOCAL_LENGTH_MM,
-                };
-                // The 35 mm film's diagonal, on the image's diagonal.
-                FILM_35MM_WIDTH_MM.hypot(FILM_35MM_HEIGHT_MM) / (2.0 * mm)
-            }
-        };
-        let axis_px = if fov_given.is_some() {
-            axis_px
-        } else {
-            w.hypot(h)
-        };
-        let tan_half_smaller = tan_half_axis * w.min(h) / axis_px;
-        let fov_smaller_deg = (2.0 * tan_half_smaller.atan()).to_degrees();
         let near_clip = object.float("near_clip", DEFAULT_NEAR_CLIP)?;
-        let far_clip = object.float_opt("far_clip")?;
-        if near_clip != DEFAULT_NEAR_CLIP || far_clip.is_some() {
-            let spot = Self::spot(e, String::new());
-            self.cx.warn(
-                &spot,
-                "near_clip/far_clip are not applied (all geometry in front of the camera is seen)",
-            );
+        let far_clip = object.float("far_clip", DEFAULT_FAR_CLIP)?;
+        // Mitsuba's checks (`src/render/sensor.cpp`, `ProjectiveCamera`).
+        if !(near_clip > 0.0 && near_clip < far_clip) {
+            return Err(object.error(format!(
+                "near_clip {near_clip}, far_clip {far_clip}: need 0 < near_clip < far_clip"
+            )));
         }
         // A pinhole has no focus; Mitsuba reads the value and ignores it.
-        object.ignore(&["principal_point_offset_x", "principal_point_offset_y"]);
-        if !thin_lens {
+        if kind == SensorKind::Perspective {
             object.ignore(&["focus_distance"]);
         }
-        for name in ["principal_point_offset_x", "principal_point_offset_y"] {
-            if object.float(name, 0.0)? != 0.0 {
-                return Err(object.error(format!("{name} other than 0 is not supported")));
+        let projection = match kind {
+            SensorKind::Orthographic => {
+                let scale_x = to_world.vector(Vec3::X).length();
+                let scale_y = to_world.vector(Vec3::Y).length();
+                if (scale_x - scale_y).abs() > UNIT_AXIS_TOLERANCE * scale_x.max(scale_y) {
+                    return Err(object.error(format!(
+                        "orthographic: to_world scales x by {scale_x} and y by {scale_y}; \
+                         unequal scales (non-square pixels) are not supported"
+                    )));
+                }
+                // Mitsuba's film plane spans local x in [−1, 1] across the
+                // width: 2 scale_x scene units, over min(w, h)/w of which
+                // lies the smaller axis.
+                let view_size = 2.0 * f64::from(scale_x) * w.min(h) / w;
+                Projection::Orthographic {
+                    view_size: view_size as f32,
+                }
             }
-        }
+            SensorKind::Perspective | SensorKind::ThinLens => Projection::Perspective {
+                fov_deg: perspective_fov_smaller_deg(&object, w, h)? as f32,
+            },
+        };
         let axes = CameraAxes {
             position: to_world.point(Vec3::ZERO),
             forward: to_world.vector(Vec3::Z),
             right: -to_world.vector(Vec3::X),
             up: to_world.vector(Vec3::Y),
         };
-        let camera = Camera::from_axes(axes, fov_smaller_deg as f32)
+        // Clip depths are local z, scaled by to_world.
+        let depth_scale = f64::from(to_world.vector(Vec3::Z).length());
+        let camera = Camera::from_axes(axes, projection)
+            .and_then(|camera| {
+                camera.with_clip(
+                    (near_clip * depth_scale) as f32,
+                    (far_clip * depth_scale) as f32,
+                )
+            })
             .map_err(|err| object.error(format!("to_world: {err}")))?;
-        let camera = if thin_lens {
+        // Only `perspective` has a principal point; the other sensors
+        // leave the parameters unread, so they are refused as unused.
+        let camera = if kind == SensorKind::Perspective {
+            let shift = [
+                object.float("principal_point_offset_x", 0.0)? as f32,
+                object.float("principal_point_offset_y", 0.0)? as f32,
+            ];
+            camera.with_shift(shift).map_err(|err| {
+                object.error(format!(
+                    "principal_point_offset {} {}: {err}",
+                    shift[0], shift[1]
+                ))
+            })?
+        } else {
+            camera
+        };
+        let camera = if kind == SensorKind::ThinLens {
             let aperture_radius = object
                 .float_opt("aperture_radius")?
                 .ok_or_else(|| object.error("needs `aperture_radius`"))?;
-            let focus_distance =
-                object.float("focus_distance", far_clip.unwrap_or(DEFAULT_FAR_CLIP))?;
+            let focus_distance = object.float("focus_distance", far_clip)?;
             // Mitsuba's thinlens refuses a scaled to_world (its aperture
             // would be scaled); so does this importer.
             let scaled = [Vec3::X, Vec3::Y, Vec3::Z]

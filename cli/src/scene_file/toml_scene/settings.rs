@@ -12,7 +12,7 @@ use crate::sensor_file::{ObserverChoice, load_sensor_csv};
 use glam::{Mat3, Vec3};
 use simd_tracer::film::FilmMode;
 use simd_tracer::sampling::sampler::SamplerKind;
-use simd_tracer::scene::camera::{Camera, CameraError};
+use simd_tracer::scene::camera::{Camera, CameraError, Projection};
 use simd_tracer::spectra::environment::EnvironmentMap;
 
 impl Loader<'_> {
@@ -125,9 +125,14 @@ impl Loader<'_> {
         })
     }
 
-    /// `[camera]`: a pinhole camera, or a thin lens with `aperture_radius`
-    /// (scene units, default 0: a pinhole) focused at `focus_distance`
-    /// (default: the distance to `target`, so that the target is sharp).
+    /// `[camera]`: a perspective camera, a pinhole or a thin lens with
+    /// `aperture_radius` (scene units, default 0: a pinhole) focused at
+    /// `focus_distance` (default: the distance to `target`, so that the
+    /// target is sharp); or, with `projection = "orthographic"`, parallel
+    /// rays from a film plane `view_size` scene units across along the
+    /// smaller image axis, centred at `position`. Either takes a film
+    /// `shift` (fractions of the film's width and height) and clip planes
+    /// `near_clip` and `far_clip` (depths along the view; default none).
     pub(super) fn camera_section(&mut self, item: &Item<'_, '_>) -> Result<(), CliError> {
         let src = &self.src;
         let table = item.table(src)?;
@@ -137,16 +142,56 @@ impl Loader<'_> {
                 "position",
                 "target",
                 "up",
+                "projection",
                 "fov_deg",
+                "view_size",
                 "aperture_radius",
                 "focus_distance",
+                "shift",
+                "near_clip",
+                "far_clip",
             ],
             "[camera]",
         )?;
         let position_item =
             table.require(src, "position", "the camera needs `position = [x, y, z]`")?;
         let target_item = table.require(src, "target", "the camera needs `target = [x, y, z]`")?;
-        let fov_item = table.require(src, "fov_deg", "the camera needs `fov_deg`")?;
+        let orthographic = match table.get("projection") {
+            Some(p) => match p.string(src)? {
+                "perspective" => false,
+                "orthographic" => true,
+                other => {
+                    return Err(p.err(
+                        src,
+                        format!("projection `{other}`: use perspective or orthographic"),
+                    ));
+                }
+            },
+            None => false,
+        };
+        // Each projection's keys, and the other's refused.
+        let (size_key, other_keys): (&str, &[&str]) = if orthographic {
+            (
+                "view_size",
+                &["fov_deg", "aperture_radius", "focus_distance"],
+            )
+        } else {
+            ("fov_deg", &["view_size"])
+        };
+        for key in other_keys {
+            if let Some(extra) = table.get(key) {
+                let projection = if orthographic {
+                    "an orthographic"
+                } else {
+                    "a perspective"
+                };
+                return Err(extra.err(
+                    src,
+                    format!("`{key}` does not apply to {projection} camera"),
+                ));
+            }
+        }
+        let size_item = table.require(src, size_key, &format!("the camera needs `{size_key}`"))?;
         let position = position_item.vec3(src)?;
         let target = target_item.vec3(src)?;
         let up_item = table.get("up");
@@ -154,15 +199,61 @@ impl Loader<'_> {
             Some(up) => up.vec3(src)?,
             None => Vec3::Y,
         };
-        let fov = fov_item.number(src)? as f32;
-        let camera = Camera::look_at(position, target, up, fov).map_err(|e| match e {
-            CameraError::FieldOfView => fov_item.err(src, "must be between 0 and 180 degrees"),
-            CameraError::UpParallel => match &up_item {
-                Some(up) => up.err(src, e),
-                None => target_item.err(src, e),
-            },
-            CameraError::Degenerate | CameraError::Lens => target_item.err(src, e),
-        })?;
+        let size = size_item.number(src)? as f32;
+        let projection = if orthographic {
+            Projection::Orthographic { view_size: size }
+        } else {
+            Projection::Perspective { fov_deg: size }
+        };
+        let camera =
+            Camera::look_at_with(position, target, up, projection).map_err(|e| match e {
+                CameraError::FieldOfView => size_item.err(src, "must be between 0 and 180 degrees"),
+                CameraError::ViewSize => size_item.err(src, "must be finite and > 0 (scene units)"),
+                CameraError::UpParallel => match &up_item {
+                    Some(up) => up.err(src, e),
+                    None => target_item.err(src, e),
+                },
+                CameraError::Degenerate
+                | CameraError::Lens
+                | CameraError::OrthographicLens
+                | CameraError::Clip
+                | CameraError::Shift => target_item.err(src, e),
+            })?;
+        let camera = match table.get("shift") {
+            Some(item) => {
+                let shift = item.numbers(src, 2)?;
+                camera
+                    .with_shift([shift[0] as f32, shift[1] as f32])
+                    .map_err(|e| item.err(src, e))?
+            }
+            None => camera,
+        };
+        let near = match table.get("near_clip") {
+            Some(item) => Some((item.non_negative(src)? as f32, item)),
+            None => None,
+        };
+        let far = match table.get("far_clip") {
+            Some(item) => Some((item.number(src)? as f32, item)),
+            None => None,
+        };
+        let camera = match (near, far) {
+            (None, None) => camera,
+            (near, far) => {
+                let near_value = near.as_ref().map_or(0.0, |n| n.0);
+                let far_value = far.as_ref().map_or(f32::INFINITY, |f| f.0);
+                let blamed = far.or(near).map(|(_, item)| item);
+                camera
+                    .with_clip(near_value, far_value)
+                    .map_err(|e| match blamed {
+                        Some(item) => item.err(src, e),
+                        None => table.err(src, e),
+                    })?
+            }
+        };
+        if orthographic {
+            self.cx.set_camera(camera);
+            return Ok(());
+        }
         let aperture_radius = match table.get("aperture_radius") {
             Some(a) => {
                 let radius = a.non_negative(src)? as f32;
