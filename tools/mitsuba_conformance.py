@@ -122,6 +122,7 @@ SCENES = {
     "obj_normals": {"suite": "shapes", "ref_spp": 4096},
     "ply_teapot": {"suite": "shapes", "ref_spp": 4096},
     "serialized_teapot": {"suite": "shapes", "ref_spp": 4096},
+    "shape_cylinder": {"suite": "shapes", "ref_spp": 4096, "negative": {"r": "0.3"}},
     "instances": {"suite": "shapes", "ref_spp": 4096, "negative": {"angle": "40"}},
     # camera and film
     "camera_fov_axis_y": {"suite": "camera", "ref_spp": 4096, "negative": {"fov": "32"}},

@@ -245,6 +245,18 @@ fn malformed_files_name_their_line() -> TestResult {
         3,
         &["principal_point_offset_x", "not supported"],
     )?;
+    refused(
+        "cylinder-ends",
+        &scene("    <shape type=\"cylinder\"><point name=\"p1\" x=\"0\" y=\"0\" z=\"0\"/></shape>"),
+        8,
+        &["p0 and p1 must differ"],
+    )?;
+    refused(
+        "cylinder-radius",
+        &scene("    <shape type=\"cylinder\"><float name=\"radius\" value=\"-1\"/></shape>"),
+        8,
+        &["radius -1", "finite and > 0"],
+    )?;
     let spot = |params: &str| scene(&format!("    <emitter type=\"spot\">{params}</emitter>"));
     refused(
         "spot-beam",

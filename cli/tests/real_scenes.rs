@@ -756,3 +756,67 @@ fn camera_keys_refuse_bad_values_with_one_line() -> TestResult {
     }
     Ok(())
 }
+
+/// Cylinders: the conformance scene `shape_cylinder.xml` (Mitsuba's
+/// `cylinder` by `p0`, `p1`, `radius`) and its TOML twin (`type =
+/// "cylinder"` with the same keys) tessellate into the same triangles.
+#[test]
+fn cylinders_agree_between_toml_and_mitsuba_files() -> TestResult {
+    let suite = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/conformance");
+    let xml = load(&suite.join("scenes/shape_cylinder.xml"))?;
+    let toml = load(&suite.join("twins/shape_cylinder.toml"))?;
+    let (a, b) = (xml.triangles(), toml.triangles());
+    assert_eq!(a.len(), b.len());
+    // The floor's two triangles and the two tubes.
+    assert!(a.len() > 2 + 2 * 2 * 8, "{} triangles", a.len());
+    for (ta, tb) in a.iter().zip(b.iter()) {
+        for (p, q) in ta.iter().zip(tb.iter()) {
+            assert!((*p - *q).length() < 1e-5, "{p} vs {q}");
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn cylinder_keys_refuse_bad_values_with_one_line() -> TestResult {
+    for (name, shape, line_of, needle) in [
+        (
+            "cylinder-same-ends",
+            "type = \"cylinder\"\np0 = [0, 1, 0]\np1 = [0, 1, 0]\n",
+            "p1",
+            "p0 and p1 must differ",
+        ),
+        (
+            "cylinder-radius",
+            "type = \"cylinder\"\nradius = 0\n",
+            "radius",
+            "must be > 0",
+        ),
+        (
+            "sphere-p0",
+            "type = \"sphere\"\np0 = [0, 0, 0]\n",
+            "p0",
+            "a cylinder `p0` and `p1`",
+        ),
+        (
+            "cube-radius",
+            "type = \"cube\"\nradius = 2\n",
+            "radius",
+            "those two `radius`",
+        ),
+        (
+            "cylinder-sag",
+            "type = \"cylinder\"\nsag = 2\n",
+            "sag",
+            "must be between 0 and 1",
+        ),
+    ] {
+        error_at(
+            name,
+            &format!("[[shapes]]\n{shape}material = \"grey\"\n"),
+            line_of,
+            needle,
+        )?;
+    }
+    Ok(())
+}

@@ -8,9 +8,10 @@
 //!   convention (`v = 0` at an image's top row): an OBJ's `v` is flipped
 //!   on load (`flip_tex_coords`, default true for OBJ and false for PLY, as
 //!   Mitsuba).
-//! * `sphere` (`center`, `radius`), `rectangle`, `cube`, `disk`: Mitsuba's
-//!   local shapes (`simd_tracer::scene::analytic`), tessellated finely
-//!   enough that the surface is within 10⁻³ radii of the exact one.
+//! * `sphere` (`center`, `radius`), `rectangle`, `cube`, `disk`,
+//!   `cylinder` (`p0`, `p1`, `radius`; an open tube): Mitsuba's local
+//!   shapes (`simd_tracer::scene::analytic`), tessellated finely enough
+//!   that the surface is within 10⁻³ radii of the exact one.
 //! * `shapegroup` (with an `id`; its shapes are kept, not placed) and
 //!   `instance` (a `<ref>` to a shapegroup and `to_world`): a shapegroup
 //!   placed by several instances is kept once and instanced, one placed
@@ -30,7 +31,8 @@ use crate::scene_file::construction::{MeshFormat, MeshParts, Placement};
 use glam::{Vec2, Vec3};
 use simd_tracer::ids::MaterialId;
 use simd_tracer::scene::analytic::{
-    DEFAULT_SAG, cube_mesh, disk_mesh, rectangle_mesh, segments_for_sag, sphere_mesh,
+    DEFAULT_SAG, cube_mesh, cylinder_mesh, cylinder_placement, disk_mesh, rectangle_mesh,
+    segments_for_sag, sphere_mesh,
 };
 use simd_tracer::scene::mesh::MeshData;
 use simd_tracer::scene::transform::Transform;
@@ -38,7 +40,7 @@ use simd_tracer::scene::transform::Transform;
 /// Mesh formats read from files.
 const FILE_SHAPES: &[&str] = &["obj", "ply", "serialized"];
 /// Shapes built in.
-const ANALYTIC_SHAPES: &[&str] = &["sphere", "rectangle", "cube", "disk"];
+const ANALYTIC_SHAPES: &[&str] = &["sphere", "rectangle", "cube", "disk", "cylinder"];
 
 /// What a shape is attached to: its BSDF and area emitter elements.
 struct Attached<'e> {
@@ -153,6 +155,15 @@ impl<'e> Importer<'e, '_> {
                 disk_mesh(segments_for_sag(DEFAULT_SAG)),
                 Transform::IDENTITY,
             ),
+            "cylinder" => {
+                let p0 = object.vector("p0")?.unwrap_or(Vec3::ZERO);
+                let p1 = object.vector("p1")?.unwrap_or(Vec3::Z);
+                let radius = object.float("radius", 1.0)?;
+                let local = cylinder_placement(p0, p1, radius as f32).map_err(|err| {
+                    object.error(format!("p0 {p0}, p1 {p1}, radius {radius}: {err}"))
+                })?;
+                (cylinder_mesh(segments_for_sag(DEFAULT_SAG)), local)
+            }
             "rectangle" => (rectangle_mesh(), Transform::IDENTITY),
             "cube" => (cube_mesh(), Transform::IDENTITY),
             _ => (self.mesh_file(object, face_normals)?, Transform::IDENTITY),

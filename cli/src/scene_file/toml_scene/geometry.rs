@@ -10,7 +10,8 @@ use crate::scene_file::toml_reader::{Item, Table};
 use glam::Vec3;
 use simd_tracer::ids::MaterialId;
 use simd_tracer::scene::analytic::{
-    DEFAULT_SAG, cube_mesh, disk_mesh, rectangle_mesh, segments_for_sag, sphere_mesh,
+    DEFAULT_SAG, cube_mesh, cylinder_mesh, cylinder_placement, disk_mesh, rectangle_mesh,
+    segments_for_sag, sphere_mesh,
 };
 use simd_tracer::scene::transform::Transform;
 use std::collections::HashMap;
@@ -199,9 +200,11 @@ impl Loader<'_> {
 
     /// `[[shapes]]`: Mitsuba's analytic shapes, tessellated
     /// (`simd_tracer::scene::analytic`): `type = "sphere"` (`center`,
-    /// `radius`), `"rectangle"`, `"cube"`, `"disk"`, each with `material`,
-    /// `transform`, `flip_normals`, and `sag` (sphere and disk: the largest
-    /// distance of the tessellation from the surface, in radii).
+    /// `radius`), `"rectangle"`, `"cube"`, `"disk"`, `"cylinder"` (`p0`,
+    /// `p1`, `radius`: an open tube along `p0 → p1`), each with `material`,
+    /// `transform`, `flip_normals`, and `sag` (sphere, disk and cylinder:
+    /// the largest distance of the tessellation from the surface, in
+    /// radii).
     pub(super) fn shapes_section(&mut self, item: &Item<'_, '_>) -> Result<(), CliError> {
         for shape in item.array(&self.src)? {
             let src = &self.src;
@@ -212,6 +215,8 @@ impl Loader<'_> {
                     "type",
                     "center",
                     "radius",
+                    "p0",
+                    "p1",
                     "sag",
                     "material",
                     "transform",
@@ -221,9 +226,10 @@ impl Loader<'_> {
                 ],
                 "a shape",
             )?;
-            let kind_item = table.require(src, "type", "sphere, rectangle, cube or disk")?;
+            let kind_item =
+                table.require(src, "type", "sphere, rectangle, cube, disk or cylinder")?;
             let kind = kind_item.string(src)?;
-            let curved = matches!(kind, "sphere" | "disk");
+            let curved = matches!(kind, "sphere" | "disk" | "cylinder");
             let sag = match table.get("sag") {
                 Some(i) if curved => {
                     let sag = i.number(src)?;
@@ -234,44 +240,69 @@ impl Loader<'_> {
                     }
                     sag as f32
                 }
-                Some(i) => return Err(i.err(src, "only a sphere or a disk is tessellated")),
+                Some(i) => {
+                    return Err(i.err(src, "only a sphere, a disk or a cylinder is tessellated"));
+                }
                 None => DEFAULT_SAG,
             };
-            for key in ["center", "radius"] {
-                if let (Some(i), false) = (table.get(key), kind == "sphere") {
-                    return Err(i.err(src, "only a sphere has `center` and `radius`"));
+            for (key, owner) in [
+                ("center", "sphere"),
+                ("radius", "sphere"),
+                ("radius", "cylinder"),
+                ("p0", "cylinder"),
+                ("p1", "cylinder"),
+            ] {
+                let owned = match key {
+                    "radius" => matches!(kind, "sphere" | "cylinder"),
+                    _ => kind == owner,
+                };
+                if let (Some(i), false) = (table.get(key), owned) {
+                    return Err(i.err(
+                        src,
+                        "only a sphere has `center`, a cylinder `p0` and `p1`, and those two `radius`",
+                    ));
                 }
             }
+            let radius = match table.get("radius") {
+                Some(r) => {
+                    let value = r.number(src)?;
+                    if value <= 0.0 {
+                        return Err(r.err(src, "must be > 0"));
+                    }
+                    value as f32
+                }
+                None => 1.0,
+            };
             let (mesh, local) = match kind {
                 "sphere" => {
                     let center = table
                         .get("center")
                         .map_or(Ok(Vec3::ZERO), |c| c.vec3(src))?;
-                    let radius = match table.get("radius") {
-                        Some(r) => {
-                            let r = r.number(src)?;
-                            if r <= 0.0 {
-                                return Err(table.get("radius").map_or_else(
-                                    || table.err(src, "radius"),
-                                    |i| i.err(src, "must be > 0"),
-                                ));
-                            }
-                            r as f32
-                        }
-                        None => 1.0,
-                    };
                     let local = Transform::scale(Vec3::splat(radius))
                         .and_then(|s| s.then(&Transform::translate(center)?))
                         .map_err(|e| table.err(src, e))?;
                     (sphere_mesh(segments_for_sag(sag)), local)
                 }
                 "disk" => (disk_mesh(segments_for_sag(sag)), Transform::IDENTITY),
+                "cylinder" => {
+                    let p0_item = table.get("p0");
+                    let p0 = p0_item.as_ref().map_or(Ok(Vec3::ZERO), |p| p.vec3(src))?;
+                    let p1_item = table.get("p1");
+                    let p1 = p1_item.as_ref().map_or(Ok(Vec3::Z), |p| p.vec3(src))?;
+                    let local = cylinder_placement(p0, p1, radius).map_err(|e| match &p1_item {
+                        Some(p) => p.err(src, e),
+                        None => table.err(src, e),
+                    })?;
+                    (cylinder_mesh(segments_for_sag(sag)), local)
+                }
                 "rectangle" => (rectangle_mesh(), Transform::IDENTITY),
                 "cube" => (cube_mesh(), Transform::IDENTITY),
                 other => {
                     return Err(kind_item.err(
                         src,
-                        format!("unknown shape \"{other}\" (sphere, rectangle, cube, disk)"),
+                        format!(
+                            "unknown shape \"{other}\" (sphere, rectangle, cube, disk, cylinder)"
+                        ),
                     ));
                 }
             };
