@@ -483,3 +483,73 @@ fn the_command_line_takes_defines_and_reports_one_line() -> TestResult {
     assert_eq!(bad_define.status.code(), Some(2));
     Ok(())
 }
+
+/// Mitsuba's samplers: each rounds `sample_count` as Mitsuba does (a
+/// warning when it changes), accepts its own parameters only, and a
+/// sampler Mitsuba does not have is an error (a warning with `--lenient`).
+#[test]
+fn samplers_round_their_counts_as_mitsuba() -> TestResult {
+    let with_sampler = |sampler: &str| {
+        scene(LIT_QUAD).replace(
+            "<film type=\"hdrfilm\">",
+            &format!("{sampler}<film type=\"hdrfilm\">"),
+        )
+    };
+    let dir = test_dir("samplers")?;
+    for (name, sampler, spp, rounded) in [
+        (
+            "ld",
+            "<sampler type=\"ldsampler\"><integer name=\"sample_count\" value=\"5\"/></sampler>",
+            16,
+            true,
+        ),
+        (
+            "strat",
+            "<sampler type=\"stratified\"><integer name=\"sample_count\" value=\"16\"/><boolean name=\"jitter\" value=\"false\"/></sampler>",
+            16,
+            false,
+        ),
+        (
+            "ortho",
+            "<sampler type=\"orthogonal\"><integer name=\"sample_count\" value=\"10\"/><integer name=\"strength\" value=\"2\"/></sampler>",
+            25,
+            true,
+        ),
+        (
+            "indep",
+            "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"7\"/></sampler>",
+            7,
+            false,
+        ),
+    ] {
+        let path = write(&dir, &format!("{name}.xml"), &with_sampler(sampler))?;
+        let loaded = load(&path, &[], false)?;
+        assert_eq!(loaded.render.spp, Some(spp), "{name}");
+        let warned = loaded.warnings.iter().any(|w| w.contains("rounded to"));
+        assert_eq!(warned, rounded, "{name}: {:?}", loaded.warnings);
+    }
+    let sobol = with_sampler(
+        "<sampler type=\"sobol\"><integer name=\"sample_count\" value=\"8\"/></sampler>",
+    );
+    let path = write(&dir, "sobol.xml", &sobol)?;
+    let error = load(&path, &[], false).err().ok_or("sobol: accepted")?;
+    assert!(
+        error.contains("sampler type \"sobol\" is not supported"),
+        "{error}"
+    );
+    let lenient = load(&path, &[], true)?;
+    assert_eq!(lenient.render.spp, Some(8));
+    assert!(lenient.warnings.iter().any(|w| w.contains("sobol")));
+    let jitter = with_sampler(
+        "<sampler type=\"ldsampler\"><boolean name=\"jitter\" value=\"true\"/></sampler>",
+    );
+    let path = write(&dir, "jitter.xml", &jitter)?;
+    let error = load(&path, &[], false)
+        .err()
+        .ok_or("jitter on ldsampler: accepted")?;
+    assert!(
+        error.contains("parameter \"jitter\" is not supported"),
+        "{error}"
+    );
+    Ok(())
+}

@@ -37,9 +37,14 @@
 //!   `banner` do not change the rendered radiance and are accepted.
 //! * `rfilter`: `box`, `tent` (`radius`, default 1 px), `gaussian`
 //!   (`stddev`, default 0.5 px, truncated at 4 σ).
-//! * `sampler`: `independent` (`sample_count`, default 4; `seed`, default
-//!   0). Other samplers render with independent samples and the same count
-//!   (a warning): the image converges to the same result.
+//! * `sampler`: `independent`, `stratified`, `multijitter`, `orthogonal`
+//!   and `ldsampler` (`sample_count`, default 4; `seed`, default 0). The
+//!   count is rounded as each of Mitsuba's samplers rounds it
+//!   (`src/samplers/*.cpp`, [`mitsuba_sample_count`]; a warning when it
+//!   changes, as Mitsuba logs one); the numbers come from fspec's own
+//!   sampler (`--sampler`, default Owen-scrambled Sobol points), whose
+//!   image converges to the same result. Other samplers are unsupported
+//!   (an error; `--lenient`: fspec's sampler with the count as given).
 //! * integrators: `path` (`max_depth`, default −1 = unlimited, as Mitsuba:
 //!   1 shows only emitters, 2 adds direct light; `rr_depth`, default 5;
 //!   `hide_emitters`), `direct` (direct lighting only: a path of at most 2
@@ -144,6 +149,45 @@ fn perspective_fov_smaller_deg(object: &Object<'_>, w: f64, h: f64) -> Result<f6
     let tan_half_smaller = tan_half_axis * w.min(h) / axis_px;
     let fov_smaller_deg = (2.0 * tan_half_smaller.atan()).to_degrees();
     Ok(fov_smaller_deg)
+}
+
+/// The largest `sample_count` accepted: 2²⁰ samples per pixel, far above
+/// any render, whose rounded counts (at most `(⌈√n⌉ + 1)²` for the
+/// square counts, a power of two's square for `ldsampler`) stay in `u32`.
+const MAX_SAMPLE_COUNT: u32 = 1 << 20;
+
+/// The sample count that Mitsuba 3.9.1's sampler `plugin` renders for a
+/// requested `spp` (`src/samplers/*.cpp`, `set_sample_count`), `None` for
+/// a sampler it does not have:
+///
+/// * `independent`: `spp`;
+/// * `stratified`: the smallest square `r² ≥ spp`;
+/// * `multijitter`: `r₀ r₁` with `r₁ = ⌊√spp⌋`, `r₀ = ⌈spp / r₁⌉`;
+/// * `orthogonal`: `p²` for the smallest prime `p ≥ 2` with `p² ≥ spp`;
+/// * `ldsampler`: `r²` for the smallest power of two `r ≥ 2` with
+///   `r² ≥ spp`.
+fn mitsuba_sample_count(plugin: &str, spp: u32) -> Option<u32> {
+    let smallest_root = |accept: &dyn Fn(u32) -> bool, start: u32| {
+        (start..)
+            .find(|&r| r.saturating_mul(r) >= spp && accept(r))
+            .map(|r| r * r)
+    };
+    match plugin {
+        "independent" => Some(spp),
+        "stratified" => smallest_root(&|_| true, 1),
+        "multijitter" => {
+            let rows = (1u32..)
+                .take_while(|r| r.saturating_mul(*r) <= spp)
+                .last()?;
+            Some(spp.div_ceil(rows) * rows)
+        }
+        "orthogonal" => smallest_root(
+            &|r| (2..r).take_while(|d| d * d <= r).all(|d| r % d != 0),
+            2,
+        ),
+        "ldsampler" => smallest_root(&u32::is_power_of_two, 2),
+        _ => None,
+    }
 }
 
 /// Mitsuba's `path` defaults, for a scene without an integrator.
@@ -381,31 +425,39 @@ impl<'e> Importer<'e, '_> {
     fn sampler(&mut self, e: &'e Element) -> Result<(), CliError> {
         let object = Object::new(e)?;
         let count = object.integer("sample_count", DEFAULT_SAMPLE_COUNT)?;
-        if !(1..=i64::from(u32::MAX)).contains(&count) {
-            return Err(object.error(format!("sample_count {count}: must be >= 1")));
+        if !(1..=i64::from(MAX_SAMPLE_COUNT)).contains(&count) {
+            return Err(object.error(format!(
+                "sample_count {count}: must be 1 … {MAX_SAMPLE_COUNT}"
+            )));
         }
         let seed = object.integer("seed", 0)?;
         if seed < 0 {
             return Err(object.error(format!("seed {seed}: must be >= 0")));
         }
-        if object.plugin != "independent" {
+        let Some(rounded) = mitsuba_sample_count(object.plugin, count as u32) else {
+            self.unsupported(e, "rendered with fspec's sampler, the same count")?;
+            self.render.spp = Some(count as u32);
+            self.render.seed = Some(seed as u64);
+            return self.check_unused(&object);
+        };
+        if rounded != count as u32 {
             let spot = Self::spot(e, String::new());
             self.cx.warn(
                 &spot,
                 format!(
-                    "sampler \"{}\": rendered with independent samples, the same count",
+                    "sampler \"{}\": sample_count {count} rounded to {rounded}, as Mitsuba rounds it",
                     object.plugin
                 ),
             );
-            object.ignore(&[
-                "jitter",
-                "dimension",
-                "scramble_seed",
-                "strength",
-                "scramble",
-            ]);
         }
-        self.render.spp = Some(count as u32);
+        // Parameters of Mitsuba's samplers that shape their patterns, not
+        // the image they converge to.
+        match object.plugin {
+            "stratified" | "multijitter" => object.ignore(&["jitter"]),
+            "orthogonal" => object.ignore(&["jitter", "strength"]),
+            _ => {}
+        }
+        self.render.spp = Some(rounded);
         self.render.seed = Some(seed as u64);
         self.check_unused(&object)
     }
@@ -458,4 +510,44 @@ fn parse_millimetres(text: &str) -> Option<f64> {
     let t = text.trim();
     let t = t.strip_suffix("mm").unwrap_or(t).trim();
     t.parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mitsuba_sample_count;
+
+    /// Mitsuba's roundings, case by case (`src/samplers/*.cpp`).
+    #[test]
+    fn sample_counts_round_as_mitsubas_samplers_do() {
+        for (plugin, spp, expected) in [
+            ("independent", 5, 5),
+            ("stratified", 16, 16),
+            ("stratified", 17, 25),
+            ("stratified", 1, 1),
+            ("multijitter", 10, 12), // rows 3, columns ⌈10/3⌉ = 4
+            ("multijitter", 16, 16),
+            ("multijitter", 2, 2),
+            ("orthogonal", 4, 4),
+            ("orthogonal", 5, 9),
+            ("orthogonal", 10, 25), // 4 is not prime
+            ("orthogonal", 26, 49),
+            ("orthogonal", 1, 4),
+            ("ldsampler", 4, 4),
+            ("ldsampler", 5, 16),
+            ("ldsampler", 64, 64),
+            ("ldsampler", 65, 256),
+            ("ldsampler", 1, 4),
+        ] {
+            assert_eq!(
+                mitsuba_sample_count(plugin, spp),
+                Some(expected),
+                "{plugin} {spp}"
+            );
+        }
+        assert_eq!(mitsuba_sample_count("sobol", 4), None);
+        // The largest count accepted rounds without overflow.
+        for plugin in ["stratified", "multijitter", "orthogonal", "ldsampler"] {
+            assert!(mitsuba_sample_count(plugin, super::MAX_SAMPLE_COUNT).is_some());
+        }
+    }
 }
