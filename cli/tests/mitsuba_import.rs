@@ -553,3 +553,41 @@ fn samplers_round_their_counts_as_mitsuba() -> TestResult {
     );
     Ok(())
 }
+
+/// Mitsuba's clip planes: an orthographic sensor's rays start at local
+/// `z = near_clip` scaled by `to_world` and run `far_clip − near_clip`
+/// along their unit direction (`orthographic.cpp`); it takes a
+/// `focus_distance` (read by every projective sensor, unused here). A
+/// scaled `perspective` is refused, as Mitsuba refuses it.
+#[test]
+fn clip_planes_and_scales_follow_mitsuba() -> TestResult {
+    let ortho = scene(LIT_QUAD)
+        .replace(
+            "<sensor type=\"perspective\">\n        <float name=\"fov\" value=\"40\"/>",
+            "<sensor type=\"orthographic\"><float name=\"near_clip\" value=\"0.5\"/>\
+             <float name=\"far_clip\" value=\"5\"/><float name=\"focus_distance\" value=\"3\"/>",
+        )
+        .replace("up=\"0, 1, 0\"/>", "up=\"0, 1, 0\"/><scale value=\"2\"/>");
+    assert!(ortho.contains("orthographic") && ortho.contains("<scale value=\"2\"/>"));
+    let dir = test_dir("clip-scales")?;
+    let path = write(&dir, "ortho.xml", &ortho)?;
+    let loaded = load(&path, &[], false)?;
+    let built = loaded.builder.build()?;
+    let clip = built.camera().clip().ok_or("no clip planes")?;
+    // Near: 0.5 × 2; far: that plus 5 − 0.5 (not 5 × 2).
+    assert!(
+        (clip.near - 1.0).abs() < 1e-5 && (clip.far - 5.5).abs() < 1e-5,
+        "{clip:?}"
+    );
+    refused(
+        "perspective-scaled",
+        &scene(LIT_QUAD).replace("up=\"0, 1, 0\"/>", "up=\"0, 1, 0\"/><scale value=\"2\"/>"),
+        3,
+        &["perspective: scale factors in to_world are not allowed"],
+    )?;
+    // A mirror is no scale.
+    let mirrored = scene(LIT_QUAD).replace("up=\"0, 1, 0\"/>", "up=\"0, 1, 0\"/><scale x=\"-1\"/>");
+    let path = write(&dir, "mirror.xml", &mirrored)?;
+    load(&path, &[], false)?;
+    Ok(())
+}

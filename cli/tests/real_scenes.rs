@@ -745,6 +745,12 @@ fn camera_keys_refuse_bad_values_with_one_line() -> TestResult {
             "clip planes need 0 <= near < far",
         ),
         (
+            "near-huge",
+            "fov_deg = 40\nnear_clip = 1e39\n",
+            "near_clip",
+            "too large for single precision",
+        ),
+        (
             "far-zero",
             "fov_deg = 40\nfar_clip = 0\n",
             "far_clip",
@@ -803,6 +809,12 @@ fn cylinder_keys_refuse_bad_values_with_one_line() -> TestResult {
             "type = \"cube\"\nradius = 2\n",
             "radius",
             "those two `radius`",
+        ),
+        (
+            "cylinder-tiny",
+            "type = \"cylinder\"\nradius = 1e-50\n",
+            "radius",
+            "must be > 0",
         ),
         (
             "cylinder-sag",

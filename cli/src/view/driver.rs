@@ -359,6 +359,18 @@ fn moved_camera(page: Camera, scene: &Camera) -> Result<Camera, CliError> {
         .map_err(|e| CliError::input(format!("camera: {e}")))
 }
 
+/// The distance of the page's orbit pivot: the scene's centre's, at least
+/// a little above 0 and, for an orthographic camera, at least its view
+/// size, so that [`page_fov_deg`] stays below 2 atan(1/2) ≈ 53° (a camera
+/// at the centre would give 180°, which the page's camera refuses).
+fn page_pivot_distance(camera: &Camera, distance_to_centre: f32) -> f32 {
+    let floor = match camera.projection() {
+        Projection::Perspective { .. } => f32::EPSILON,
+        Projection::Orthographic { view_size } => view_size,
+    };
+    distance_to_centre.max(floor)
+}
+
 /// The field of view the page works with: a perspective camera's, and for
 /// an orthographic one the angle its view size subtends at the orbit's
 /// pivot, so that dragging moves the scene with the pointer there too.
@@ -409,7 +421,7 @@ fn render_generation(
         render_settings.film = simd_tracer::film::FilmMode::Sample;
     }
     let axes = camera.axes();
-    let pivot_distance = (built.centre - axes.position).length().max(f32::EPSILON);
+    let pivot_distance = page_pivot_distance(&camera, (built.centre - axes.position).length());
     let view = CameraView {
         position: axes.position.into(),
         forward: axes.forward.into(),
@@ -754,7 +766,8 @@ mod tests {
             Projection::Orthographic { view_size: 3.0 },
         )
         .unwrap();
-        let pivot = 4.0;
+        let pivot = page_pivot_distance(&ortho, 4.0);
+        assert_eq!(pivot, 4.0);
         let fov = page_fov_deg(&ortho, pivot);
         let panned_size = 2.0 * (0.5 * fov).to_radians().tan() * pivot;
         assert!((panned_size - 3.0).abs() < 1e-5, "{panned_size}");
@@ -768,6 +781,10 @@ mod tests {
         let moved = moved_camera(page, &ortho).unwrap();
         assert_eq!(moved.projection(), ortho.projection());
         assert!((moved.position() - page.position()).length() < 1e-6);
+        // At the scene's centre the pivot moves out to the view size.
+        let centred = page_pivot_distance(&ortho, 0.0);
+        assert_eq!(centred, 3.0);
+        assert!(page_fov_deg(&ortho, centred) < 54.0);
         let perspective =
             Camera::look_at(glam::Vec3::Z, glam::Vec3::ZERO, glam::Vec3::Y, 35.0).unwrap();
         assert_eq!(page_fov_deg(&perspective, pivot), 35.0);

@@ -1,5 +1,5 @@
 //! Mitsuba's analytic shapes as meshes: the unit sphere, rectangle, disk,
-//! cube and cylinder in their local frames, placed by a [`Transform`](crate::scene::transform::Transform)
+//! cube and cylinder in their local frames, placed by a [`Transform`]
 //! through [`SceneBuilder::add_mesh_data`](crate::scene::SceneBuilder::add_mesh_data).
 //!
 //! **Tessellation, not exact intersection.** The tracer's traversals

@@ -5,8 +5,7 @@
 //!   `aperture_radius` (required, as in Mitsuba; 0 is a pinhole) and
 //!   `focus_distance` (default: the far clip, 10⁴), the distance of the
 //!   plane in focus (`src/sensors/thinlens.cpp`; the lens model is
-//!   `simd_tracer::scene::camera`'s). A scaled `to_world` is refused, as
-//!   Mitsuba refuses it.
+//!   `simd_tracer::scene::camera`'s).
 //! * `orthographic` (`src/sensors/orthographic.cpp`): a film plane
 //!   spanning local `x` ∈ [−1, 1] across the film's width and
 //!   `y` ∈ [−h/w, h/w], both scaled by `to_world`; rays along local `+z`
@@ -15,9 +14,12 @@
 //!   local `x`; a `to_world` that scales `x` and `y` differently
 //!   (non-square pixels) is refused.
 //! * Every sensor clips: rays start at depth `near_clip` (default 0.01)
-//!   and end at depth `far_clip` (default 10⁴), local `z` scaled by
-//!   `to_world` (`src/render/sensor.cpp` refuses `near_clip ≤ 0` and
-//!   `near_clip ≥ far_clip`, so does this importer).
+//!   and end at depth `far_clip` (default 10⁴); an orthographic sensor's
+//!   near depth is scaled by its `to_world`'s `z` scale and its rays run
+//!   `far_clip − near_clip` beyond it (`orthographic.cpp`). `perspective`
+//!   and `thinlens` refuse a scaled `to_world`, as Mitsuba does.
+//!   `src/render/sensor.cpp` refuses `near_clip ≤ 0` and
+//!   `near_clip ≥ far_clip`, so does this importer.
 //! * `perspective`: `to_world` (local `+z` is the viewing direction, `+y`
 //!   up and `+x` the image's left: `src/sensors/perspective.cpp` maps the
 //!   film's `x` to local `−x`), `fov` in degrees along `fov_axis` (`x`, the
@@ -237,9 +239,24 @@ impl<'e> Importer<'e, '_> {
                 "near_clip {near_clip}, far_clip {far_clip}: need 0 < near_clip < far_clip"
             )));
         }
-        // A pinhole has no focus; Mitsuba reads the value and ignores it.
-        if kind == SensorKind::Perspective {
+        // A pinhole or an orthographic sensor has no focus; Mitsuba reads
+        // the value for every projective sensor and ignores it there.
+        if kind != SensorKind::ThinLens {
             object.ignore(&["focus_distance"]);
+        }
+        // Mitsuba's perspective and thinlens sensors refuse a scaled
+        // to_world (`src/sensors/perspective.cpp`, `thinlens.cpp`); so
+        // does this importer. A mirror (an axis of length 1) is no scale.
+        if kind != SensorKind::Orthographic {
+            let scaled = [Vec3::X, Vec3::Y, Vec3::Z]
+                .into_iter()
+                .any(|axis| (to_world.vector(axis).length() - 1.0).abs() > UNIT_AXIS_TOLERANCE);
+            if scaled {
+                return Err(object.error(format!(
+                    "{}: scale factors in to_world are not allowed (as in Mitsuba)",
+                    object.plugin
+                )));
+            }
         }
         let projection = match kind {
             SensorKind::Orthographic => {
@@ -269,15 +286,14 @@ impl<'e> Importer<'e, '_> {
             right: -to_world.vector(Vec3::X),
             up: to_world.vector(Vec3::Y),
         };
-        // Clip depths are local z, scaled by to_world.
-        let depth_scale = f64::from(to_world.vector(Vec3::Z).length());
+        // The clip depths. An orthographic sensor's rays start at local
+        // z = near_clip, scaled by to_world, and run far_clip − near_clip
+        // along their unit direction (`orthographic.cpp`: `maxt = far −
+        // near`); the other sensors have no scale.
+        let near_depth = near_clip * f64::from(to_world.vector(Vec3::Z).length());
+        let far_depth = near_depth + (far_clip - near_clip);
         let camera = Camera::from_axes(axes, projection)
-            .and_then(|camera| {
-                camera.with_clip(
-                    (near_clip * depth_scale) as f32,
-                    (far_clip * depth_scale) as f32,
-                )
-            })
+            .and_then(|camera| camera.with_clip(near_depth as f32, far_depth as f32))
             .map_err(|err| object.error(format!("to_world: {err}")))?;
         // Only `perspective` has a principal point; the other sensors
         // leave the parameters unread, so they are refused as unused.
@@ -300,15 +316,6 @@ impl<'e> Importer<'e, '_> {
                 .float_opt("aperture_radius")?
                 .ok_or_else(|| object.error("needs `aperture_radius`"))?;
             let focus_distance = object.float("focus_distance", far_clip)?;
-            // Mitsuba's thinlens refuses a scaled to_world (its aperture
-            // would be scaled); so does this importer.
-            let scaled = [Vec3::X, Vec3::Y, Vec3::Z]
-                .into_iter()
-                .any(|axis| (to_world.vector(axis).length() - 1.0).abs() > UNIT_AXIS_TOLERANCE);
-            if scaled {
-                return Err(object
-                    .error("thinlens: scale factors in to_world are not allowed (as in Mitsuba)"));
-            }
             camera
                 .with_lens(aperture_radius as f32, focus_distance as f32)
                 .map_err(|err| {

@@ -266,8 +266,11 @@ impl Loader<'_> {
             let radius = match table.get("radius") {
                 Some(r) => {
                     let value = r.number(src)?;
-                    if value <= 0.0 {
+                    if value <= 0.0 || (value as f32) <= 0.0 {
                         return Err(r.err(src, "must be > 0"));
+                    }
+                    if !(value as f32).is_finite() {
+                        return Err(r.err(src, "too large for single precision"));
                     }
                     value as f32
                 }

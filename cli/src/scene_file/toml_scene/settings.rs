@@ -229,7 +229,13 @@ impl Loader<'_> {
             None => camera,
         };
         let near = match table.get("near_clip") {
-            Some(item) => Some((item.non_negative(src)? as f32, item)),
+            Some(item) => {
+                let depth = item.non_negative(src)? as f32;
+                if !depth.is_finite() {
+                    return Err(item.err(src, "too large for single precision"));
+                }
+                Some((depth, item))
+            }
             None => None,
         };
         let far = match table.get("far_clip") {
