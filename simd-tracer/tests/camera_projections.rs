@@ -11,23 +11,13 @@
 //! * clip planes: a square in front of the near clip or behind the far
 //!   clip vanishes; one between them is whole.
 
+mod glowing_squares;
+
 use glam::Vec3;
-use simd_tracer::film::Buffer;
-use simd_tracer::film::filter::Filter;
-use simd_tracer::integrator::IntegratorSettings;
-use simd_tracer::render::{RenderSettings, render};
+use glowing_squares::{SIZE, TestResult, luminance, scene as scene_with_edge};
+use simd_tracer::scene::Scene;
 use simd_tracer::scene::camera::{Camera, Projection};
-use simd_tracer::scene::{Scene, SceneBuilder};
-use simd_tracer::shading::material::Material;
-use simd_tracer::spectra::SpectrumSource;
-use simd_tracer::transport::FourierTransport;
-use spectral_core::SpectralRange;
-use spectral_core::xyz::XyzRoute;
 
-type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
-
-/// Film edge, px.
-const SIZE: u32 = 48;
 /// The orthographic view size, scene units.
 const VIEW_SIZE: f32 = 2.0;
 /// Edge of the glowing square: 12 px on the film.
@@ -48,51 +38,12 @@ fn scene(projection: Projection, depth: f32) -> TestResult<Scene> {
 /// `camera` looking at glowing squares of edge [`EDGE`] at `(depth,
 /// offset to the right)`, on black.
 fn scene_with(camera: Camera, squares: &[(f32, f32)]) -> TestResult<Scene> {
-    let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
-    let black = b.add_spectrum("black", SpectrumSource::Constant(0.0))?;
-    let glow = b.add_spectrum("glow", SpectrumSource::Constant(1.0))?;
-    let mut lamp = Material::lambert("lamp", black);
-    lamp.emission = Some(glow);
-    let lamp = b.add_material(lamp);
-    let h = 0.5 * EDGE;
-    for &(depth, offset_x) in squares {
-        b.add_quad(
-            [
-                Vec3::new(offset_x - h, -h, -depth),
-                Vec3::new(offset_x + h, -h, -depth),
-                Vec3::new(offset_x + h, h, -depth),
-                Vec3::new(offset_x - h, h, -depth),
-            ],
-            lamp,
-        );
-    }
-    b.set_camera(camera);
-    Ok(b.build()?)
+    scene_with_edge(camera, EDGE, squares)
 }
 
-/// Luminance `Y` of every pixel, row by row.
+/// Luminance `Y` of every pixel, row by row (64 spp, seed 3).
 fn image(scene: &Scene) -> TestResult<Vec<f64>> {
-    let settings = RenderSettings {
-        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
-        width: SIZE,
-        height: SIZE,
-        spp: 64,
-        // The camera ray and the emission it meets.
-        integrator: IntegratorSettings {
-            max_depth: 1,
-            rr_depth: 64,
-            hide_emitters: false,
-        },
-        seed: 3,
-        filter: Filter::Box,
-        threads: Some(2),
-        time_limit: None,
-        window: None,
-        film: simd_tracer::film::FilmMode::Sample,
-    };
-    let transport = FourierTransport::<8>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-    let result = render(&transport, scene, &settings, &mut |_| true)?;
-    Ok(result.xyz.iter().map(|p| p.y).collect())
+    luminance(scene, 64, 3)
 }
 
 /// Area the square covers (pixels: the total over a lit pixel's value)

@@ -8,79 +8,34 @@
 //! Negative controls: a smaller aperture and another focus distance miss
 //! the predicted moment.
 
+mod glowing_squares;
+
 use glam::Vec3;
-use simd_tracer::film::Buffer;
-use simd_tracer::film::filter::Filter;
-use simd_tracer::integrator::IntegratorSettings;
-use simd_tracer::render::{RenderSettings, render};
+use glowing_squares::{SIZE, TestResult, luminance};
+use simd_tracer::scene::Scene;
 use simd_tracer::scene::camera::Camera;
-use simd_tracer::scene::{Scene, SceneBuilder};
-use simd_tracer::shading::material::Material;
-use simd_tracer::spectra::SpectrumSource;
-use simd_tracer::transport::FourierTransport;
-use spectral_core::SpectralRange;
-use spectral_core::xyz::XyzRoute;
 
-type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
-
-/// Film edge, px.
-const SIZE: u32 = 48;
 /// Field of view along the smaller axis, degrees.
 const FOV_DEG: f32 = 40.0;
 /// Depth of the glowing square in front of the camera.
 const DEPTH: f32 = 4.0;
 /// Edge of the glowing square (6.6 px on the film at `DEPTH`).
 const EDGE: f32 = 0.4;
+/// Samples per pixel.
+const SPP: u32 = 256;
 
 /// The camera at the origin looking down `−z` at a glowing square of edge
 /// [`EDGE`] at depth [`DEPTH`], on black; with a lens of `aperture_radius`
 /// focused at `focus_distance` (aperture 0: the pinhole).
 fn scene(aperture_radius: f32, focus_distance: f32) -> TestResult<Scene> {
-    let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
-    let black = b.add_spectrum("black", SpectrumSource::Constant(0.0))?;
-    let glow = b.add_spectrum("glow", SpectrumSource::Constant(1.0))?;
-    let mut lamp = Material::lambert("lamp", black);
-    lamp.emission = Some(glow);
-    let lamp = b.add_material(lamp);
-    let h = 0.5 * EDGE;
-    b.add_quad(
-        [
-            Vec3::new(-h, -h, -DEPTH),
-            Vec3::new(h, -h, -DEPTH),
-            Vec3::new(h, h, -DEPTH),
-            Vec3::new(-h, h, -DEPTH),
-        ],
-        lamp,
-    );
     let camera = Camera::look_at(Vec3::ZERO, -Vec3::Z, Vec3::Y, FOV_DEG)?
         .with_lens(aperture_radius, focus_distance)?;
-    b.set_camera(camera);
-    Ok(b.build()?)
+    glowing_squares::scene(camera, EDGE, &[(DEPTH, 0.0)])
 }
 
 /// Luminance `Y` of every pixel, row by row.
 fn image(scene: &Scene, seed: u64) -> TestResult<Vec<f64>> {
-    let settings = RenderSettings {
-        sampler: simd_tracer::sampling::sampler::SamplerKind::Independent,
-        width: SIZE,
-        height: SIZE,
-        spp: 256,
-        // The camera ray and the emission it meets.
-        integrator: IntegratorSettings {
-            max_depth: 1,
-            rr_depth: 64,
-            hide_emitters: false,
-        },
-        seed,
-        filter: Filter::Box,
-        threads: Some(2),
-        time_limit: None,
-        window: None,
-        film: simd_tracer::film::FilmMode::Sample,
-    };
-    let transport = FourierTransport::<8>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-    let result = render(&transport, scene, &settings, &mut |_| true)?;
-    Ok(result.xyz.iter().map(|p| p.y).collect())
+    luminance(scene, SPP, seed)
 }
 
 /// Total, centroid (px) and second moment about the centroid (px², both

@@ -245,18 +245,15 @@ impl Loader<'_> {
                 }
                 None => DEFAULT_SAG,
             };
-            for (key, owner) in [
-                ("center", "sphere"),
-                ("radius", "sphere"),
-                ("radius", "cylinder"),
-                ("p0", "cylinder"),
-                ("p1", "cylinder"),
-            ] {
-                let owned = match key {
-                    "radius" => matches!(kind, "sphere" | "cylinder"),
-                    _ => kind == owner,
-                };
-                if let (Some(i), false) = (table.get(key), owned) {
+            // Each shape's own keys, refused on the others.
+            let owners: [(&str, &[&str]); 4] = [
+                ("center", &["sphere"]),
+                ("radius", &["sphere", "cylinder"]),
+                ("p0", &["cylinder"]),
+                ("p1", &["cylinder"]),
+            ];
+            for (key, kinds) in owners {
+                if let (Some(i), false) = (table.get(key), kinds.contains(&kind)) {
                     return Err(i.err(
                         src,
                         "only a sphere has `center`, a cylinder `p0` and `p1`, and those two `radius`",
