@@ -195,7 +195,7 @@ impl Palette {
         let index = |id: SpectrumId| (!id.is_none()).then_some(id.0 as usize);
         let mut reflectances = BTreeSet::new();
         for material in scene.materials() {
-            match &material.bsdf {
+            match material.bsdf.unmasked() {
                 Bsdf::Lambert {
                     albedo: Albedo::Spectrum(id),
                 }

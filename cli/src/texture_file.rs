@@ -63,8 +63,9 @@ pub(crate) const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 pub enum TextureUse {
     /// A spectral reflectance (RGB, grey or Fourier coefficients).
     Albedo,
-    /// A scalar in [0, 1] (a film thickness within its range).
-    Thickness,
+    /// A scalar in [0, 1], values as stored (a film thickness within its
+    /// range, an opacity).
+    Scalar,
 }
 
 enum Format {
@@ -315,11 +316,11 @@ fn load_png(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Text
                 .collect();
             Texture::rgb(pixels.width, pixels.height, &rgb, range).map_err(describe)
         }
-        TextureUse::Thickness => {
+        TextureUse::Scalar => {
             if pixels.channels >= 3 {
                 return Err(error(
                     path,
-                    "a thickness texture must be a grey image (this PNG is in colour)",
+                    "a thickness or opacity texture must be a grey image (this PNG is in colour)",
                 ));
             }
             let values = (0..count).map(|i| texel(i)[0]).collect();
@@ -425,10 +426,10 @@ fn load_exr(
     let has_f0 = header.channels.list.iter().any(|c| c.name.eq("F0"));
     let describe = |e| error(path, format!("invalid texture: {e}"));
     if has_f0 {
-        if usage == TextureUse::Thickness {
+        if usage == TextureUse::Scalar {
             return Err(error(
                 path,
-                "a thickness texture must be a grey image (this EXR holds Fourier coefficients)",
+                "a thickness or opacity texture must be a grey image (this EXR holds Fourier coefficients)",
             ));
         }
         let image = read_coefficients_exr_from(reader, path)?;
@@ -437,10 +438,10 @@ fn load_exr(
             .map_err(describe);
     }
     if spectral_kind_of(&header, SpectralKind::Reflective).is_some() {
-        if usage == TextureUse::Thickness {
+        if usage == TextureUse::Scalar {
             return Err(error(
                 path,
-                "a thickness texture must be a grey image (this EXR holds spectra)",
+                "a thickness or opacity texture must be a grey image (this EXR holds spectra)",
             ));
         }
         let image = read_spectral_exr_from(reader, path, SpectralKind::Reflective)?;
@@ -488,14 +489,14 @@ fn load_exr(
             };
             Texture::rgb(w32, h32, &rgb, range).map_err(describe)
         }
-        TextureUse::Thickness => {
+        TextureUse::Scalar => {
             let values = match channel("Y").or_else(|| image.only_channel()) {
                 Some(values) => values,
                 None => {
                     return Err(error(
                         path,
                         format!(
-                            "a thickness EXR needs a Y channel or a single channel (found {})",
+                            "a thickness or opacity EXR needs a Y channel or a single channel (found {})",
                             image.names()
                         ),
                     ));
@@ -539,7 +540,7 @@ pub fn fuzz_coefficient_exr(bytes: &[u8]) {
         assert!(lo.is_finite() && hi.is_finite() && lo < hi, "{lo}..{hi}");
     }
     let range = SpectralRange::VISIBLE;
-    for usage in [TextureUse::Albedo, TextureUse::Thickness] {
+    for usage in [TextureUse::Albedo, TextureUse::Scalar] {
         let Ok(texture) = load_exr(std::io::Cursor::new(bytes), name, usage, range) else {
             continue;
         };

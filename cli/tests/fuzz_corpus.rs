@@ -44,6 +44,7 @@ fn scene_toml_seeds_are_scenes() -> TestResult {
         "lights.toml",
         "lens.toml",
         "orthographic.toml",
+        "mask.toml",
     ] {
         let loaded = fspec_cli::scene_file::load_scene_file(&corpus_dir("scene_toml").join(seed))
             .map_err(|e| format!("{seed}: {e}"))?;
@@ -71,6 +72,7 @@ fn scene_xml_seeds_are_scenes() -> TestResult {
         "lens.xml",
         "orthographic.xml",
         "camera-shift.xml",
+        "mask.xml",
     ] {
         let loaded = fspec_cli::scene_file::load_mitsuba_scene(
             &corpus_dir("scene_xml").join(seed),

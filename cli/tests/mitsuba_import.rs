@@ -591,3 +591,157 @@ fn clip_planes_and_scales_follow_mitsuba() -> TestResult {
     load(&path, &[], false)?;
     Ok(())
 }
+
+/// The conformance suite's textures (`conformance/scenes/textures/`).
+fn suite_texture(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/conformance/scenes/textures")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// `mask` as Mitsuba 3.9.1 reads it: the nested BSDF keeps its sides (a
+/// one-sided diffuse stays black from behind, `twosided` inside the mask
+/// makes it two-sided), a constant opacity outside [0, 1] is clamped with
+/// a warning, a grey bitmap's opacities are sRGB-decoded unless `raw`.
+/// Refused as Mitsuba refuses them: a mask without one nested BSDF, a mask
+/// inside `twosided`, a colour opacity bitmap without `raw`; and opacity
+/// textures other than `bitmap`.
+#[test]
+fn masks_follow_mitsuba() -> TestResult {
+    use simd_tracer::shading::material::{Bsdf, Opacity};
+    let dir = test_dir("masks")?;
+    let masked = |opacity: &str, nested: &str| {
+        scene(&format!(
+            "    <shape type=\"rectangle\"><bsdf type=\"mask\">{opacity}{nested}</bsdf></shape>\n    <emitter type=\"constant\"/>"
+        ))
+    };
+    let diffuse = "<bsdf type=\"diffuse\"/>";
+    let two_sided = "<bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf>";
+    let mask_of = |text: &str,
+                   name: &str|
+     -> TestResult<(
+        simd_tracer::shading::material::Mask,
+        Vec<String>,
+        simd_tracer::scene::Scene,
+    )> {
+        let path = write(&dir, name, text)?;
+        let loaded = load(&path, &[], false)?;
+        let warnings = loaded.warnings.clone();
+        let built = loaded.builder.build()?;
+        let mask = built
+            .materials()
+            .iter()
+            .find_map(|m| match &m.bsdf {
+                Bsdf::Mask(mask) => Some((**mask).clone()),
+                _ => None,
+            })
+            .ok_or("no mask")?;
+        Ok((mask, warnings, built))
+    };
+    let (one, warnings, _) = mask_of(
+        &masked("<float name=\"opacity\" value=\"0.25\"/>", diffuse),
+        "one.xml",
+    )?;
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_eq!(one.opacity, Opacity::Constant(0.25));
+    assert!(one.nested_front_only);
+    let (two, ..) = mask_of(&masked("", two_sided), "two.xml")?;
+    assert_eq!(two.opacity, Opacity::Constant(0.5), "Mitsuba's default");
+    assert!(!two.nested_front_only);
+    let (clamped, warnings, _) = mask_of(
+        &masked("<float name=\"opacity\" value=\"1.5\"/>", diffuse),
+        "clamped.xml",
+    )?;
+    assert_eq!(clamped.opacity, Opacity::Constant(1.0));
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("opacity 1.5 is clamped to 1")),
+        "{warnings:?}"
+    );
+    // grey.png's top-left texel is 230: sRGB-decoded, or as stored.
+    let grey = suite_texture("grey.png");
+    for (raw, expected) in [
+        ("false", srgb_decode(230.0 / 255.0)),
+        ("true", 230.0 / 255.0),
+    ] {
+        let bitmap = format!(
+            "<texture type=\"bitmap\" name=\"opacity\"><string name=\"filename\" value=\"{grey}\"/>\
+             <boolean name=\"raw\" value=\"{raw}\"/><string name=\"filter_type\" value=\"nearest\"/></texture>"
+        );
+        let (textured, _, built) = mask_of(&masked(&bitmap, diffuse), &format!("raw-{raw}.xml"))?;
+        let Opacity::Texture(id) = textured.opacity else {
+            return Err("not a texture".into());
+        };
+        let texture = &built.material_tables().textures[id.index()];
+        // Mitsuba's v = 0 is the image's top row.
+        let value = f64::from(texture.scalar_at(0.125, 0.125));
+        assert!(
+            (value - expected).abs() < 1e-5,
+            "raw {raw}: {value} vs {expected}"
+        );
+    }
+    let colours = suite_texture("colours.png");
+    let colour_bitmap = |raw: &str| {
+        format!(
+            "<texture type=\"bitmap\" name=\"opacity\"><string name=\"filename\" value=\"{colours}\"/>{raw}</texture>"
+        )
+    };
+    refused(
+        "mask-colour",
+        &masked(&colour_bitmap(""), diffuse),
+        8,
+        &["a colour image as an opacity needs raw=true"],
+    )?;
+    mask_of(
+        &masked(
+            &colour_bitmap("<boolean name=\"raw\" value=\"true\"/>"),
+            diffuse,
+        ),
+        "colour-raw.xml",
+    )?;
+    refused(
+        "mask-empty",
+        &masked("", ""),
+        8,
+        &["mask", "needs one nested BSDF"],
+    )?;
+    refused(
+        "mask-two",
+        &masked("", &format!("{diffuse}{diffuse}")),
+        8,
+        &["needs one nested BSDF"],
+    )?;
+    refused(
+        "mask-checkerboard",
+        &masked("<texture type=\"checkerboard\" name=\"opacity\"/>", diffuse),
+        8,
+        &["is not supported as an opacity (bitmap)"],
+    )?;
+    refused(
+        "mask-nan",
+        &masked("<float name=\"opacity\" value=\"nan\"/>", diffuse),
+        8,
+        &["not a finite number"],
+    )?;
+    refused(
+        "twosided-mask",
+        &scene(&format!(
+            "    <shape type=\"rectangle\"><bsdf type=\"twosided\"><bsdf type=\"mask\">{diffuse}</bsdf></bsdf></shape>"
+        )),
+        8,
+        &["twosided", "only BSDFs without transmission can be nested"],
+    )?;
+    Ok(())
+}
+
+/// The sRGB transfer function's inverse (IEC 61966-2-1).
+fn srgb_decode(v: f64) -> f64 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}

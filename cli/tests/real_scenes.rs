@@ -832,3 +832,136 @@ fn cylinder_keys_refuse_bad_values_with_one_line() -> TestResult {
     }
     Ok(())
 }
+
+/// Cut-outs from TOML: `opacity` wraps a material's BSDF in a mask that
+/// keeps the BSDF's sides (the material itself scatters from both faces),
+/// and a black card of opacity 0.3 in front of a glowing wall passes 0.7
+/// of the wall's light (binomial noise of the pass-or-absorb choice; 0.3,
+/// the opacity taken as the transparency, fails). `opacity_texture` reads
+/// a grey PNG's values as stored.
+#[test]
+fn toml_opacity_cuts_a_card_out() -> TestResult {
+    use simd_tracer::shading::material::{Bsdf, Opacity, Sides};
+    let text = |card: &str| {
+        format!(
+            r#"
+[camera]
+position = [0, 0, 5]
+target = [0, 0, 0]
+fov_deg = 8
+
+[materials.wall]
+type = "lambert"
+albedo = {{ constant = 0 }}
+emission = {{ constant = 2 }}
+
+[materials.card]
+type = "lambert"
+albedo = {{ constant = 0 }}
+sides = "front"
+{card}
+
+[[shapes]]
+type = "rectangle"
+material = "wall"
+transform = [{{ scale = 3 }}]
+
+[[shapes]]
+type = "rectangle"
+material = "card"
+transform = [{{ translate = [0, 0, 1] }}]
+"#
+        )
+    };
+    let (_dir, masked_path) = scene("card-masked", &text("opacity = 0.3"))?;
+    let masked = load(&masked_path)?;
+    let card = masked
+        .materials()
+        .iter()
+        .find(|m| m.name == "card")
+        .ok_or("no card")?;
+    assert_eq!(card.sides, Sides::Both);
+    let Bsdf::Mask(mask) = &card.bsdf else {
+        return Err("the card is not masked".into());
+    };
+    assert_eq!(mask.opacity, Opacity::Constant(0.3));
+    assert!(mask.nested_front_only, "the nested lambert keeps `front`");
+    let (_dir, open_path) = scene("card-open", &text("opacity = 0"))?;
+    let open = load(&open_path)?;
+    let fourier = FourierTransport::<8>::new(masked.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
+    let spp = 64;
+    let mean_y = |image: Vec<Xyz>| image.iter().map(|x| x.y).sum::<f64>() / image.len() as f64;
+    let fraction = mean_y(render_xyz(&fourier, &masked, spp, 1)?)
+        / mean_y(render_xyz(&fourier, &open, spp, 1)?);
+    let samples = f64::from(SIZE.0 * SIZE.1 * spp);
+    let sigma = (0.7 * 0.3 / samples).sqrt();
+    println!("card of opacity 0.3: passes {fraction:.5} ± {sigma:.5}");
+    assert!((fraction - 0.7).abs() < 4.0 * sigma, "{fraction}");
+    assert!((fraction - 0.3).abs() > 20.0 * sigma, "{fraction}");
+    // A grey PNG as the opacity, values as stored: grey.png's top-left
+    // texel is 230 (OBJ's convention: v = 1 is the top row).
+    let grey =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/conformance/scenes/textures/grey.png");
+    let (_dir, path) = scene(
+        "card-texture",
+        &text(&format!(
+            "opacity_texture = {{ file = \"{}\", filter = \"nearest\" }}",
+            grey.display()
+        )),
+    )?;
+    let textured = load(&path)?;
+    let card = textured
+        .materials()
+        .iter()
+        .find(|m| m.name == "card")
+        .ok_or("no card")?;
+    let Bsdf::Mask(mask) = &card.bsdf else {
+        return Err("the card is not masked".into());
+    };
+    let Opacity::Texture(id) = mask.opacity else {
+        return Err("not a texture".into());
+    };
+    let value = textured.material_tables().textures[id.index()].scalar_at(0.125, 0.875);
+    assert!((f64::from(value) - 230.0 / 255.0).abs() < 1e-6, "{value}");
+    Ok(())
+}
+
+#[test]
+fn opacity_keys_refuse_bad_values_with_one_line() -> TestResult {
+    let colours = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/conformance/scenes/textures/colours.png")
+        .display()
+        .to_string();
+    for (name, keys, line_of, needle) in [
+        (
+            "opacity-range",
+            "opacity = 1.5\n".to_string(),
+            "opacity",
+            "must be in [0, 1]",
+        ),
+        (
+            "opacity-type",
+            "opacity = \"half\"\n".to_string(),
+            "opacity",
+            "number",
+        ),
+        (
+            "opacity-both",
+            format!("opacity = 0.5\nopacity_texture = \"{colours}\"\n"),
+            "opacity_texture",
+            "not both",
+        ),
+        (
+            "opacity-colour",
+            format!("opacity_texture = \"{colours}\"\n"),
+            "opacity_texture",
+            "must be a grey image",
+        ),
+    ] {
+        let body = format!(
+            "[materials.card]\ntype = \"lambert\"\nalbedo = {{ constant = 0.5 }}\n{keys}\n[[shapes]]\ntype = \"cube\"\nmaterial = \"card\"\n"
+        );
+        error_at(name, &body, line_of, needle)?;
+    }
+    Ok(())
+}

@@ -1446,7 +1446,7 @@ impl SceneBuilder {
             }
         }
         for material in &self.materials {
-            if let Bsdf::Fluorescent { fluorophore, .. } = material.bsdf
+            if let Bsdf::Fluorescent { fluorophore, .. } = *material.bsdf.unmasked()
                 && fluorophore.index() >= self.fluorophores.len()
             {
                 return Err(SceneError::Reference(

@@ -7,7 +7,8 @@
 //! | `dielectric`, `roughdielectric` | `int_ior` (`bk7`), `ext_ior` (`air`): numbers or names (`named_ior`); `alpha`, `distribution` as above | dielectric interface of index `int/ext`, two-sided |
 //! | `thindielectric` | `int_ior`, `ext_ior` | thin slab, two-sided |
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` (0.5), `int_ior` (`polypropylene`), `ext_ior` (`air`), `nonlinear` (false); `alpha` (0.1), `distribution` (`beckmann`) | dielectric coat over a diffuse base, one-sided |
-//! | `twosided` | one nested BSDF | that BSDF on both faces |
+//! | `twosided` | one nested BSDF without transmission (Mitsuba refuses dielectrics and masks) | that BSDF on both faces |
+//! | `mask` | `opacity` (0.5; a number or a `bitmap`), one nested BSDF | the nested BSDF where opaque, a hole elsewhere (`simd_tracer`'s `Mask`); the nested BSDF keeps its sides (`mask(twosided(…))` for a two-sided card) |
 //!
 //! * One-sided (Mitsuba's reflective BSDFs): a ray that reaches the back
 //!   face (against the shading normal) scatters nothing; `twosided` lifts
@@ -29,7 +30,9 @@ use super::spectra::{SpectrumUse, zero_outside};
 use crate::error::CliError;
 use crate::scene_file::source::Spot;
 use simd_tracer::ids::SpectrumId;
-use simd_tracer::shading::material::{Albedo, Bsdf, Material, MitsubaPlastic, Sides};
+use simd_tracer::shading::material::{
+    Albedo, Bsdf, Mask, Material, MitsubaPlastic, Opacity, Sides,
+};
 use simd_tracer::shading::microfacet::{Distribution, Microfacet};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::Ior;
@@ -40,6 +43,8 @@ const DEFAULT_BSDF_KEY: usize = 0;
 const BLACK_BSDF_KEY: usize = 1;
 /// Mitsuba's default reflectance of `diffuse` and `plastic`.
 const DEFAULT_REFLECTANCE: f64 = 0.5;
+/// Mitsuba's default opacity of `mask`.
+const DEFAULT_OPACITY: f64 = 0.5;
 /// Mitsuba's default roughness of the rough BSDFs.
 const DEFAULT_ALPHA: f64 = 0.1;
 /// Mitsuba's default interior of dielectrics.
@@ -178,9 +183,34 @@ impl<'e> Importer<'e, '_> {
                 };
                 self.check_unused(&object)?;
                 let mut built = self.bsdf(Some(inner))?;
+                if built.bsdf.transmits() {
+                    return Err(object.error(
+                        "only BSDFs without transmission can be nested (as in Mitsuba; put a mask around the twosided)",
+                    ));
+                }
                 built.one_sided = false;
                 built.name = name;
                 return Ok(built);
+            }
+            "mask" => {
+                let opacity = self.opacity(&object)?;
+                let nested: Vec<_> = object
+                    .objects()
+                    .into_iter()
+                    .filter(|p| p.name != "opacity")
+                    .collect();
+                let nested = match nested.as_slice() {
+                    [one] => self.object_of(one, &["bsdf"])?,
+                    _ => return Err(object.error("needs one nested BSDF")),
+                };
+                let nested = self.bsdf(Some(nested))?;
+                let nested_front_only = nested.one_sided && !nested.bsdf.transmits();
+                let mask = Mask {
+                    opacity,
+                    nested: nested.bsdf,
+                    nested_front_only,
+                };
+                (Bsdf::Mask(Box::new(mask)), false)
             }
             _ => {
                 self.unsupported(e, "rendered as a grey diffuse BSDF")?;
@@ -314,6 +344,27 @@ impl<'e> Importer<'e, '_> {
         }
     }
 
+    /// A mask's `opacity`: a number (clamped to [0, 1] as Mitsuba clamps
+    /// it, with a warning) or a `bitmap` texture; 0.5 by default.
+    fn opacity(&mut self, object: &Object<'e>) -> Result<Opacity, CliError> {
+        if let Some(texture) = self.texture_property(object, "opacity")? {
+            return Ok(Opacity::Texture(self.texture_opacity(texture)?));
+        }
+        let value = self.scalar(object, "opacity", DEFAULT_OPACITY)?;
+        if !value.is_finite() {
+            return Err(object.error(format!("opacity {value}: must be a finite number")));
+        }
+        let clamped = value.clamp(0.0, 1.0);
+        if clamped != value {
+            let spot = Self::spot(object.element, object.describe());
+            self.cx.warn(
+                &spot,
+                format!("opacity {value} is clamped to {clamped}, as Mitsuba clamps it"),
+            );
+        }
+        Ok(Opacity::Constant(clamped as f32))
+    }
+
     /// Refuses a `specular_reflectance`/`…transmittance` other than 1.
     fn unit_factor(&mut self, object: &Object<'e>, name: &str) -> Result<(), CliError> {
         let Some(p) = object.get(name) else {
@@ -420,21 +471,31 @@ impl<'e> Importer<'e, '_> {
         }
     }
 
+    /// The texture that property `name` holds (nested or referenced);
+    /// `None` if it is absent or not a texture.
+    fn texture_property(
+        &mut self,
+        object: &Object<'e>,
+        name: &str,
+    ) -> Result<Option<&'e Element>, CliError> {
+        let Some(p) = object.get(name) else {
+            return Ok(None);
+        };
+        Ok(match p.value {
+            Value::Object(e) if e.tag == "texture" => Some(e),
+            Value::Ref(id) => {
+                let target = self.resolve_ref(p.element, id)?;
+                (target.tag == "texture").then_some(target)
+            }
+            _ => None,
+        })
+    }
+
     /// A reflectance: a spectrum or a texture (nested or referenced), with
     /// Mitsuba's default 0.5.
     pub(crate) fn albedo(&mut self, object: &Object<'e>, name: &str) -> Result<Albedo, CliError> {
-        if let Some(p) = object.get(name) {
-            let texture = match p.value {
-                Value::Object(e) if e.tag == "texture" => Some(e),
-                Value::Ref(id) => {
-                    let target = self.resolve_ref(p.element, id)?;
-                    (target.tag == "texture").then_some(target)
-                }
-                _ => None,
-            };
-            if let Some(texture) = texture {
-                return self.texture_albedo(texture);
-            }
+        if let Some(texture) = self.texture_property(object, name)? {
+            return self.texture_albedo(texture);
         }
         let id = self.spectrum_id(
             object,

@@ -70,14 +70,7 @@ impl<'e> Importer<'e, '_> {
             }
             "envmap" => {
                 self.one_environment(&object)?;
-                let name = object
-                    .string("filename")?
-                    .ok_or_else(|| object.error("needs `filename`"))?;
-                let path = e.place.resolve(name).ok_or_else(|| {
-                    object.error(format!(
-                        "\"{name}\": file references are not available here"
-                    ))
-                })?;
+                let path = object.filename()?;
                 let scale = object.float("scale", 1.0)?;
                 if scale < 0.0 {
                     return Err(object.error(format!("scale {scale}: must be >= 0")));

@@ -244,6 +244,19 @@ impl<'e> Object<'e> {
         }
     }
 
+    /// The required `filename` parameter, resolved against the file's
+    /// folder (the `<path>` folders included).
+    pub(crate) fn filename(&self) -> Result<std::path::PathBuf, CliError> {
+        let name = self
+            .string("filename")?
+            .ok_or_else(|| self.error("needs `filename`"))?;
+        self.element.place.resolve(name).ok_or_else(|| {
+            self.error(format!(
+                "\"{name}\": file references are not available here"
+            ))
+        })
+    }
+
     /// A point or vector property, if given.
     pub(crate) fn vector(&self, name: &str) -> Result<Option<Vec3>, CliError> {
         match self.get(name) {

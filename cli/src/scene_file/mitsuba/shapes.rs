@@ -183,14 +183,7 @@ impl<'e> Importer<'e, '_> {
 
     /// The mesh of an `obj`, `ply` or `serialized` shape.
     fn mesh_file(&mut self, object: &Object<'e>, face_normals: bool) -> Result<MeshData, CliError> {
-        let name = object
-            .string("filename")?
-            .ok_or_else(|| object.error("needs `filename`"))?;
-        let path = object.element.place.resolve(name).ok_or_else(|| {
-            object.error(format!(
-                "\"{name}\": file references are not available here"
-            ))
-        })?;
+        let path = object.filename()?;
         let format = match object.plugin {
             "obj" => MeshFormat::Obj,
             "ply" => MeshFormat::Ply,

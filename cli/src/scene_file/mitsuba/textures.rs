@@ -26,11 +26,28 @@ use super::properties::Object;
 use super::spectra::SpectrumUse;
 use crate::error::CliError;
 use crate::hdr_image::{Encoding, load_rgb_image_as};
+use simd_tracer::ids::TextureId;
 use simd_tracer::scene::transform::Transform;
 use simd_tracer::shading::material::Albedo;
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::texture::{FilterMode, Texture, TextureSampling, UvTransform, WrapMode};
 use spectral_core::SpectralRange;
+
+/// Rec. 709 luminance weights of linear RGB (ITU-R BT.709-6, item 3.3),
+/// Mitsuba's `luminance()` for its sRGB variants.
+const LUMINANCE_R: f32 = 0.212_671;
+/// The green weight.
+const LUMINANCE_G: f32 = 0.715_160;
+/// The blue weight.
+const LUMINANCE_B: f32 = 0.072_169;
+
+/// A decoded bitmap and its file's name for messages.
+struct Bitmap {
+    width: u32,
+    height: u32,
+    texels: Vec<[f32; 3]>,
+    describe: String,
+}
 
 /// Mitsuba's checkerboard defaults.
 const DEFAULT_COLOR0: f64 = 0.4;
@@ -61,48 +78,14 @@ impl<'e> Importer<'e, '_> {
         let spot = Self::spot(e, object.describe());
         let id = match object.plugin {
             "bitmap" => {
-                let name = object
-                    .string("filename")?
-                    .ok_or_else(|| object.error("needs `filename`"))?;
-                let path = e.place.resolve(name).ok_or_else(|| {
-                    object.error(format!(
-                        "\"{name}\": file references are not available here"
-                    ))
-                })?;
-                let encoding = if object.boolean("raw", false)? {
-                    Encoding::Raw
-                } else {
-                    Encoding::Srgb
-                };
-                let filter = match object.string("filter_type")?.unwrap_or("bilinear") {
-                    "bilinear" => FilterMode::Bilinear,
-                    "nearest" => FilterMode::Nearest,
-                    other => {
-                        return Err(object.error(format!(
-                            "filter_type \"{other}\" is not one of bilinear, nearest"
-                        )));
-                    }
-                };
-                let wrap = match object.string("wrap_mode")?.unwrap_or("repeat") {
-                    "repeat" => WrapMode::Repeat,
-                    "mirror" => WrapMode::Mirror,
-                    "clamp" => WrapMode::Clamp,
-                    other => {
-                        return Err(object.error(format!(
-                            "wrap_mode \"{other}\" is not one of repeat, mirror, clamp"
-                        )));
-                    }
-                };
-                let uv = UvTransform::from_matrix(uv_matrix(&to_uv, true))
-                    .map_err(|err| object.error(format!("to_uv: {err}")))?;
-                let image = load_rgb_image_as(&path, encoding).map_err(|err| object.error(err))?;
+                let (image, sampling) = self.bitmap(&object, &to_uv)?;
                 let clamped = image.texels.iter().flatten().filter(|v| **v > 1.0).count();
                 if clamped > 0 {
                     self.cx.warn(
                         &spot,
                         format!(
                             "{}: {clamped} texel value(s) above 1 are clamped to 1 (a reflectance; Mitsuba clamps them too)",
-                            path.display()
+                            image.describe
                         ),
                     );
                 }
@@ -113,10 +96,8 @@ impl<'e> Importer<'e, '_> {
                     .collect();
                 let texture =
                     Texture::rgb(image.width, image.height, &texels, SpectralRange::VISIBLE)
-                        .map_err(|err| object.error(format!("{}: {err}", path.display())))?;
-                object.ignore(&["format", "accel"]);
-                self.cx
-                    .add_texture(texture.with_sampling(TextureSampling { wrap, filter, uv }))
+                        .map_err(|err| object.error(format!("{}: {err}", image.describe)))?;
+                self.cx.add_texture(texture.with_sampling(sampling))
             }
             "checkerboard" => {
                 let uv = UvTransform::from_matrix(uv_matrix(&to_uv, false))
@@ -152,5 +133,88 @@ impl<'e> Importer<'e, '_> {
         self.check_unused(&object)?;
         self.textures.insert(key, id);
         Ok(Albedo::Texture(id))
+    }
+
+    /// A scalar texture of opacities (`mask`'s `opacity`, built once per
+    /// element): a `bitmap`, read as Mitsuba's `eval_1` reads it in its
+    /// spectral variants: a grey image's values (sRGB-decoded unless
+    /// `raw`), or the luminance of a colour image with `raw` (without
+    /// `raw` Mitsuba refuses a colour image here, and so do we).
+    pub(crate) fn texture_opacity(&mut self, e: &'e Element) -> Result<TextureId, CliError> {
+        let key = super::address(e);
+        if let Some(&id) = self.opacity_textures.get(&key) {
+            return Ok(id);
+        }
+        let object = Object::new(e)?;
+        let to_uv = object.transform("to_uv")?;
+        if object.plugin != "bitmap" {
+            return Err(object.error("is not supported as an opacity (bitmap)"));
+        }
+        let (image, sampling) = self.bitmap(&object, &to_uv)?;
+        let grey = image.texels.iter().all(|&[r, g, b]| r == g && g == b);
+        if !grey && !object.boolean("raw", false)? {
+            return Err(object.error(format!(
+                "{}: a colour image as an opacity needs raw=true (Mitsuba refuses it without)",
+                image.describe
+            )));
+        }
+        let values = image
+            .texels
+            .iter()
+            .map(|&[r, g, b]| (LUMINANCE_R * r + LUMINANCE_G * g + LUMINANCE_B * b).clamp(0.0, 1.0))
+            .collect();
+        let texture = Texture::scalar(image.width, image.height, values, SpectralRange::VISIBLE)
+            .map_err(|err| object.error(format!("{}: {err}", image.describe)))?;
+        let id = self.cx.add_texture(texture.with_sampling(sampling));
+        self.check_unused(&object)?;
+        self.opacity_textures.insert(key, id);
+        Ok(id)
+    }
+
+    /// The image and sampling of a `bitmap` texture: `filename`, `raw`,
+    /// `filter_type`, `wrap_mode` and `to_uv` (module docs).
+    fn bitmap(
+        &mut self,
+        object: &Object<'e>,
+        to_uv: &Transform,
+    ) -> Result<(Bitmap, TextureSampling), CliError> {
+        let path = object.filename()?;
+        let encoding = if object.boolean("raw", false)? {
+            Encoding::Raw
+        } else {
+            Encoding::Srgb
+        };
+        let filter = match object.string("filter_type")?.unwrap_or("bilinear") {
+            "bilinear" => FilterMode::Bilinear,
+            "nearest" => FilterMode::Nearest,
+            other => {
+                return Err(object.error(format!(
+                    "filter_type \"{other}\" is not one of bilinear, nearest"
+                )));
+            }
+        };
+        let wrap = match object.string("wrap_mode")?.unwrap_or("repeat") {
+            "repeat" => WrapMode::Repeat,
+            "mirror" => WrapMode::Mirror,
+            "clamp" => WrapMode::Clamp,
+            other => {
+                return Err(object.error(format!(
+                    "wrap_mode \"{other}\" is not one of repeat, mirror, clamp"
+                )));
+            }
+        };
+        let uv = UvTransform::from_matrix(uv_matrix(to_uv, true))
+            .map_err(|err| object.error(format!("to_uv: {err}")))?;
+        let image = load_rgb_image_as(&path, encoding).map_err(|err| object.error(err))?;
+        object.ignore(&["format", "accel"]);
+        Ok((
+            Bitmap {
+                width: image.width,
+                height: image.height,
+                texels: image.texels,
+                describe: path.display().to_string(),
+            },
+            TextureSampling { wrap, filter, uv },
+        ))
     }
 }

@@ -10,7 +10,7 @@ use crate::scene_file::toml_reader::{Item, Table};
 use crate::texture_file::TextureUse;
 use simd_tracer::ids::MaterialId;
 use simd_tracer::scene::builtin::fluorescence::PEAK_ABSORPTANCE;
-use simd_tracer::shading::material::{Albedo, Bsdf, Material, Sides};
+use simd_tracer::shading::material::{Albedo, Bsdf, Material, Opacity, Sides};
 use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
@@ -18,64 +18,23 @@ use spectral_core::fluorescence::{BRIGHTENER, Band, FLUORESCEIN, Fluorophore};
 use spectral_core::table::MAX_LAYERS;
 use toml::de::DeValue;
 
-/// The keys each material type allows (`type`, `emission`,
-/// `emission_scale`, `two_sided` and `sides` for all).
-const LAMBERT_KEYS: &[&str] = &[
+/// The keys every material type allows.
+const COMMON_KEYS: &[&str] = &[
     "type",
     "emission",
     "emission_scale",
     "two_sided",
     "sides",
-    "albedo",
-    "albedo_texture",
+    "opacity",
+    "opacity_texture",
 ];
-const CONDUCTOR_KEYS: &[&str] = &[
-    "type",
-    "emission",
-    "emission_scale",
-    "two_sided",
-    "sides",
-    "metal",
-    "n",
-    "k",
-    "n_const",
-    "k_const",
-    "roughness",
-];
-const DIELECTRIC_KEYS: &[&str] = &[
-    "type",
-    "emission",
-    "emission_scale",
-    "two_sided",
-    "sides",
-    "ior",
-    "roughness",
-];
-const THIN_DIELECTRIC_KEYS: &[&str] = &[
-    "type",
-    "emission",
-    "emission_scale",
-    "two_sided",
-    "sides",
-    "ior",
-];
-const COATED_KEYS: &[&str] = &[
-    "type",
-    "emission",
-    "emission_scale",
-    "two_sided",
-    "sides",
-    "albedo",
-    "albedo_texture",
-    "ior",
-    "roughness",
-];
+/// The keys of each material type, besides [`COMMON_KEYS`].
+const LAMBERT_KEYS: &[&str] = &["albedo", "albedo_texture"];
+const CONDUCTOR_KEYS: &[&str] = &["metal", "n", "k", "n_const", "k_const", "roughness"];
+const DIELECTRIC_KEYS: &[&str] = &["ior", "roughness"];
+const THIN_DIELECTRIC_KEYS: &[&str] = &["ior"];
+const COATED_KEYS: &[&str] = &["albedo", "albedo_texture", "ior", "roughness"];
 const THIN_FILM_KEYS: &[&str] = &[
-    "type",
-    "emission",
-    "emission_scale",
-    "two_sided",
-    "sides",
     "layers",
     "substrate",
     "base",
@@ -83,17 +42,7 @@ const THIN_FILM_KEYS: &[&str] = &[
     "thickness_range_nm",
 ];
 
-const FLUORESCENT_KEYS: &[&str] = &[
-    "type",
-    "emission",
-    "emission_scale",
-    "two_sided",
-    "sides",
-    "albedo",
-    "fluorophore",
-    "absorptance",
-    "quantum_yield",
-];
+const FLUORESCENT_KEYS: &[&str] = &["albedo", "fluorophore", "absorptance", "quantum_yield"];
 /// The keys of an inline fluorophore table.
 const FLUOROPHORE_KEYS: &[&str] = &["absorption", "emission", "quantum_yield"];
 /// The built-in fluorophores (`spectral_core::fluorescence`).
@@ -101,11 +50,6 @@ const FLUOROPHORES: [(&str, Fluorophore); 2] =
     [("brightener", BRIGHTENER), ("fluorescein", FLUORESCEIN)];
 
 const NEURAL_KEYS: &[&str] = &[
-    "type",
-    "emission",
-    "emission_scale",
-    "two_sided",
-    "sides",
     "network",
     "roughness",
     "thickness_nm",
@@ -170,7 +114,8 @@ impl Loader<'_> {
                 ));
             }
         };
-        table.allow(&self.src, keys, &format!("a {kind} material"))?;
+        let allowed: Vec<&str> = COMMON_KEYS.iter().chain(keys).copied().collect();
+        table.allow(&self.src, &allowed, &format!("a {kind} material"))?;
         let bsdf = match kind {
             "lambert" => Bsdf::Lambert {
                 albedo: self.albedo(&table, "lambert")?,
@@ -211,7 +156,33 @@ impl Loader<'_> {
                 }
             };
         }
+        if let Some(opacity) = self.opacity(&table)? {
+            material = material.masked(opacity);
+        }
         Ok(self.cx.add_material(material))
+    }
+
+    /// `opacity` (a number in [0, 1]) or `opacity_texture` (a grey image,
+    /// its values used as stored: coverage is linear, as PNG's alpha is),
+    /// not both; `None` without either.
+    fn opacity(&mut self, table: &Table<'_, '_>) -> Result<Option<Opacity>, CliError> {
+        match (table.get("opacity"), table.get("opacity_texture")) {
+            (None, None) => Ok(None),
+            (Some(value), None) => {
+                let alpha = value.number(&self.src)?;
+                if !(0.0..=1.0).contains(&alpha) {
+                    return Err(value.err(&self.src, format!("opacity {alpha}: must be in [0, 1]")));
+                }
+                Ok(Some(Opacity::Constant(alpha as f32)))
+            }
+            (None, Some(texture)) => Ok(Some(Opacity::Texture(
+                self.texture(&texture, TextureUse::Scalar)?,
+            ))),
+            (Some(_), Some(texture)) => Err(texture.err(
+                &self.src,
+                "give either `opacity` or `opacity_texture`, not both",
+            )),
+        }
     }
 
     /// A thin dielectric: `ior`, the slab's index relative to the outside,
@@ -569,7 +540,7 @@ impl Loader<'_> {
         }
         let thickness_range_nm = textured.as_ref().map(|(_, r)| *r);
         let thickness = match &textured {
-            Some((texture, _)) => Some(self.texture(texture, TextureUse::Thickness)?),
+            Some((texture, _)) => Some(self.texture(texture, TextureUse::Scalar)?),
             None => None,
         };
         let film = ThinFilm {
@@ -669,7 +640,7 @@ impl Loader<'_> {
                         "a textured-thickness neural film is smooth: leave out `roughness`",
                     ));
                 }
-                let thickness = Some(self.texture(&texture, TextureUse::Thickness)?);
+                let thickness = Some(self.texture(&texture, TextureUse::Scalar)?);
                 let front_reflectance = self.cx.add_angular(
                     &at,
                     &at.key,

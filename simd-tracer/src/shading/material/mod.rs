@@ -14,6 +14,7 @@
 //! | Dielectric | smooth (delta) or microfacet (Walter et al. 2007) reflection and transmission; the lobe is chosen with the mean Fresnel `c_0` of the table (Fourier mode, and sampled mode without dispersion) and the throughput carries the spectral `F` or `1 − F`; transmitted radiance is scaled by `1/η²`; with a dispersive IOR and a hero wavelength, refraction follows the hero's IOR and terminates the secondary wavelengths; where the chosen refraction does not exist (total internal reflection at that IOR) the refracted share `1 − F` is reflected instead, so each wavelength keeps `F + (1 − F) = 1` |
 //! | Coated | a smooth or rough dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic and roughplastic): specular `s F(θo)` plus diffuse `ρ T_i T_o/(π η² (1 − F_dr,int))` with the coat's transmittances `T` (flat `1 − F`, or tabulated for a rough coat) and optionally Mitsuba's nonlinear internal scattering; for the smooth coat and `ρ = 1` energy is conserved exactly (the coat's Fresnel is achromatic, so it rides in the scalar part); formulas in `coated.rs` |
 //! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
+//! | Mask | a nested BSDF where the opacity `α` says, a hole elsewhere (Mitsuba 3.9.1's `mask`, src/bsdfs/mask.cpp): `f = α f_nested + (1 − α) δ(wi + wo)/|cos θi|`; the hole is sampled with probability `1 − α` (straight on, weight 1, delta), the nested BSDF with `α` (its weight, pdf `α p`); formulas, sides and shadow rays in `mask.rs` |
 //! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1; achromatic, delta, the same from both faces |
 //!
 //! **Sides.** [`Material::sides`] says which faces scatter. With
@@ -52,6 +53,8 @@ pub use plastic::{
 };
 mod interface;
 pub use interface::thin_dielectric_reflectance;
+mod mask;
+pub use mask::{Mask, Opacity};
 mod fluorescent;
 pub use fluorescent::{FLUORESCENT_LOBE_PROBABILITY, SceneFluorophore, tabulated_sides};
 mod packet;
@@ -160,6 +163,9 @@ pub enum Bsdf {
         /// Film thickness in [0, 1] of its range, from a scalar texture.
         thickness: Option<TextureId>,
     },
+    /// A cut-out: a nested BSDF where an opacity says, a hole elsewhere
+    /// (`mask.rs`).
+    Mask(Box<Mask>),
 }
 
 /// A material.
@@ -220,6 +226,22 @@ impl Material {
         }
     }
 
+    /// This material cut out by `opacity` (`mask.rs`): its BSDF nested in
+    /// a [`Mask`] that keeps the BSDF's sides, while the material scatters
+    /// from both faces (its holes pass light either way).
+    pub fn masked(self, opacity: Opacity) -> Self {
+        let nested_front_only = self.front_only();
+        Self {
+            bsdf: Bsdf::Mask(Box::new(Mask {
+                opacity,
+                nested: self.bsdf,
+                nested_front_only,
+            })),
+            sides: Sides::Both,
+            ..self
+        }
+    }
+
     /// Whether only the front face scatters: [`Sides::Front`] with a BSDF
     /// that does not transmit (module docs).
     pub fn front_only(&self) -> bool {
@@ -228,12 +250,21 @@ impl Material {
 
     /// Every id the material refers to.
     pub fn references(&self) -> References {
+        let mut r = self.bsdf.references();
+        r.spectra.extend(self.emission);
+        r
+    }
+}
+
+impl Bsdf {
+    /// Every id the BSDF refers to.
+    fn references(&self) -> References {
         let mut r = References::default();
         let albedo = |a: &Albedo, r: &mut References| match a {
             Albedo::Spectrum(id) => r.spectra.push(*id),
             Albedo::Texture(id) => r.textures.push(*id),
         };
-        match &self.bsdf {
+        match self {
             Bsdf::Lambert { albedo: a } | Bsdf::Coated { albedo: a, .. } => albedo(a, &mut r),
             Bsdf::Conductor { fresnel, .. } => r.angular.push(*fresnel),
             Bsdf::ThinDielectric { .. } => {}
@@ -255,27 +286,40 @@ impl Material {
                 }
                 r.textures.extend(*thickness);
             }
+            Bsdf::Mask(mask) => {
+                r = mask.nested.references();
+                if let Opacity::Texture(id) = mask.opacity {
+                    r.textures.push(id);
+                }
+            }
         }
-        r.spectra.extend(self.emission);
         r
     }
-}
 
-impl Bsdf {
+    /// The BSDF under any masks: what scatters where the surface is opaque.
+    pub fn unmasked(&self) -> &Bsdf {
+        match self {
+            Self::Mask(mask) => mask.nested.unmasked(),
+            other => other,
+        }
+    }
+
     /// Whether the directions it samples depend on wavelength: a dielectric
     /// with a dispersive index (its refraction follows the hero
     /// wavelength). Where this holds the hybrid transport leaves Fourier
     /// coefficients for sampled wavelengths if the sample does take such a
     /// direction ([`Bsdf::direction_depends_on_wavelength`]).
     pub fn disperses(&self) -> bool {
-        matches!(self, Self::Dielectric { ior, .. } if ior.is_dispersive())
+        matches!(self.unmasked(), Self::Dielectric { ior, .. } if ior.is_dispersive())
     }
 
     /// Whether the BSDF transmits light through the surface (then it
-    /// scatters from both faces whatever [`Material::sides`] says).
+    /// scatters from both faces whatever [`Material::sides`] says; a mask
+    /// passes light through its holes and its nested BSDF keeps its own
+    /// sides, `mask.rs`).
     pub fn transmits(&self) -> bool {
         match self {
-            Self::Dielectric { .. } | Self::ThinDielectric { .. } => true,
+            Self::Dielectric { .. } | Self::ThinDielectric { .. } | Self::Mask(_) => true,
             Self::ThinFilm {
                 front_transmittance,
                 ..

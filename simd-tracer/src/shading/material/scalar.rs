@@ -34,6 +34,7 @@ impl Bsdf {
             return None;
         }
         match self {
+            Self::Mask(mask) => mask.sample(tables, p, wo, u_lobe, [u, v]),
             Self::Lambert { albedo } => {
                 let wi = sample_cosine(p.n, u, v);
                 let cos = wi.dot(p.n);
@@ -251,6 +252,9 @@ impl Bsdf {
         wo: Vec3,
         u_lobe: f32,
     ) -> bool {
+        if let Self::Mask(mask) = self {
+            return mask.direction_depends_on_wavelength(tables, p, wo, u_lobe);
+        }
         let Self::Dielectric {
             outside,
             inside,
@@ -348,6 +352,7 @@ impl Bsdf {
                 .coat(tables, p)
                 .map_or(BsdfEval::ZERO, |coat| coat.eval(wo_local, wi_local)),
             Self::ThinFilm { .. } | Self::ThinDielectric { .. } => BsdfEval::ZERO,
+            Self::Mask(mask) => mask.eval(tables, p, wo, wi),
         }
     }
 }
