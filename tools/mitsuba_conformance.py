@@ -85,6 +85,7 @@ SCENES = {
     "conductor_au": {"suite": "materials", "ref_spp": 4096},
     "conductor_cu": {"suite": "materials", "ref_spp": 4096},
     "conductor_default": {"suite": "materials", "ref_spp": 4096},
+    "conductor_tinted": {"suite": "materials", "ref_spp": 4096, "negative": {"blue": "0.7"}},
     "conductor_eta_k_spectra": {"suite": "materials", "ref_spp": 4096},
     "roughconductor_ggx_a010": {
         "suite": "materials", "ref_spp": 4096, "negative": {"alpha": "0.3"}},

@@ -745,3 +745,59 @@ fn srgb_decode(v: f64) -> f64 {
         ((v + 0.055) / 1.055).powf(2.4)
     }
 }
+
+/// A conductor's `specular_reflectance` multiplies its Fresnel term (the
+/// tint alone on the default material `none`, where `F = 1`); a textured
+/// one is refused.
+#[test]
+fn conductor_tints_multiply_the_fresnel_term() -> TestResult {
+    use simd_tracer::shading::material::Bsdf;
+    let dir = test_dir("tints")?;
+    let conductor = |params: &str| {
+        scene(&format!(
+            "    <shape type=\"rectangle\"><bsdf type=\"conductor\">{params}</bsdf></shape>\n    <emitter type=\"constant\"/>"
+        ))
+    };
+    let fresnel_at = |text: &str, name: &str, cos: f32, lambda_nm: f32| -> TestResult<f32> {
+        let path = write(&dir, name, text)?;
+        let built = load(&path, &[], false)?.builder.build()?;
+        let fresnel = built
+            .materials()
+            .iter()
+            .find_map(|m| match m.bsdf {
+                Bsdf::Conductor { fresnel, .. } => Some(fresnel),
+                _ => None,
+            })
+            .ok_or("no conductor")?;
+        Ok(built.material_tables().angular[fresnel.index()].eval(cos, lambda_nm, 0.0))
+    };
+    let tinted = conductor("<float name=\"specular_reflectance\" value=\"0.5\"/>");
+    let copper = "<string name=\"material\" value=\"Cu\"/>";
+    let tinted_copper = conductor(&format!(
+        "{copper}<float name=\"specular_reflectance\" value=\"0.5\"/>"
+    ));
+    for cos in [1.0f32, 0.5, 0.1] {
+        for lambda_nm in [450.0f32, 600.0] {
+            let mirror = fresnel_at(&tinted, "mirror.xml", cos, lambda_nm)?;
+            assert!((mirror - 0.5).abs() < 1e-6, "{mirror}");
+            let plain = fresnel_at(&conductor(copper), "cu.xml", cos, lambda_nm)?;
+            let half = fresnel_at(&tinted_copper, "cu-half.xml", cos, lambda_nm)?;
+            assert!((half - 0.5 * plain).abs() < 1e-6, "{half} vs {plain}");
+        }
+    }
+    refused(
+        "tint-texture",
+        &conductor("<texture type=\"checkerboard\" name=\"specular_reflectance\"/>"),
+        8,
+        &["a textured specular_reflectance is not supported"],
+    )?;
+    refused(
+        "dielectric-reflectance",
+        &scene(
+            "    <shape type=\"rectangle\"><bsdf type=\"dielectric\"><float name=\"specular_reflectance\" value=\"0.5\"/></bsdf></shape>",
+        ),
+        8,
+        &["values other than 1 are not supported"],
+    )?;
+    Ok(())
+}

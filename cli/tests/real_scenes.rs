@@ -965,3 +965,39 @@ fn opacity_keys_refuse_bad_values_with_one_line() -> TestResult {
     }
     Ok(())
 }
+
+/// A TOML conductor's `tint` multiplies its Fresnel term; a tint that is
+/// not a spectrum is refused with one line.
+#[test]
+fn toml_conductor_tints_multiply_the_fresnel_term() -> TestResult {
+    use simd_tracer::shading::material::Bsdf;
+    let text = |tint: &str| {
+        format!(
+            "{HEAD}[materials.metal]\ntype = \"conductor\"\nmetal = \"gold\"\n{tint}\n[[shapes]]\ntype = \"cube\"\nmaterial = \"metal\"\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"grey\"\n"
+        )
+    };
+    let fresnel = |name: &str, tint: &str| -> TestResult<Vec<f32>> {
+        let (_dir, path) = scene(name, &text(tint))?;
+        let built = load(&path)?;
+        let id = built
+            .materials()
+            .iter()
+            .find_map(|m| match m.bsdf {
+                Bsdf::Conductor { fresnel, .. } => Some(fresnel),
+                _ => None,
+            })
+            .ok_or("no conductor")?;
+        let table = &built.material_tables().angular[id.index()];
+        Ok([(1.0f32, 450.0f32), (0.5, 550.0), (0.2, 650.0)]
+            .iter()
+            .map(|&(cos, lambda)| table.eval(cos, lambda, 0.0))
+            .collect())
+    };
+    let plain = fresnel("gold-plain", "")?;
+    let tinted = fresnel("gold-tinted", "tint = { constant = 0.4 }")?;
+    for (p, t) in plain.iter().zip(&tinted) {
+        assert!((t - 0.4 * p).abs() < 1e-6, "{t} vs 0.4 × {p}");
+    }
+    error_in("tint-bad", &text("tint = 3"), "tint", "a spectrum")?;
+    Ok(())
+}

@@ -439,6 +439,7 @@ fn gold_at_normal_incidence_has_the_colour_of_the_core_fresnel() -> TestResult {
                 n: Box::new(n),
                 k: Box::new(k),
                 outside: 1.0,
+                tint: None,
             },
         )?;
         Ok(b.add_material(Material::new(

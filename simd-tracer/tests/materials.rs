@@ -54,6 +54,7 @@ fn fixture() -> TestResult<Fixture> {
             n: Box::new(n),
             k: Box::new(k),
             outside: 1.0,
+            tint: None,
         },
     )?;
     let glass = Ior::Constant(1.5);

@@ -212,7 +212,12 @@ fn fixture() -> TestResult<Fixture> {
                         let k = spectrum(&mut b, "k", number(&row, "k")?)?;
                         let id = b.add_angular(
                             "conductor",
-                            AngularFunction::Conductor { n, k, outside: 1.0 },
+                            AngularFunction::Conductor {
+                                n,
+                                k,
+                                outside: 1.0,
+                                tint: None,
+                            },
                         )?;
                         conductor = Some(id);
                         id

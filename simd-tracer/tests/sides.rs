@@ -100,6 +100,7 @@ fn conductor(b: &mut SceneBuilder, sides: Sides) -> TestResult<MaterialId> {
             n: Box::new(n),
             k: Box::new(k),
             outside: 1.0,
+            tint: None,
         },
     )?;
     let mut m = Material::new(

@@ -501,6 +501,7 @@ fn materials(range: SpectralRange) -> Result<SceneBuilder, BuiltinError> {
                     n: Box::new(n),
                     k: Box::new(k),
                     outside: 1.0,
+                    tint: None,
                 },
             )?;
             Ok(b.add_material(Material::new(

@@ -619,7 +619,11 @@ impl Scene {
             .iter()
             .map(|a| {
                 let spectra = match a.function() {
-                    AngularFunction::Conductor { n, k, .. } => n.memory_bytes() + k.memory_bytes(),
+                    AngularFunction::Conductor { n, k, tint, .. } => {
+                        n.memory_bytes()
+                            + k.memory_bytes()
+                            + tint.as_ref().map_or(0, |t| t.memory_bytes())
+                    }
                     AngularFunction::Film { layers, .. } => {
                         layers.capacity() * size_of::<crate::spectra::angular::FilmLayer>()
                     }

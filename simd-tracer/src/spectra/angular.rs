@@ -209,7 +209,10 @@ networks! {
 #[derive(Debug, Clone, PartialEq)]
 pub enum AngularFunction {
     /// Conductor Fresnel reflectance from `n(λ)`, `k(λ)` scene spectra seen
-    /// from a medium of index `outside`.
+    /// from a medium of index `outside`, times an optional tint `s(λ)`:
+    /// `s(λ) F(cos θ, λ)` (Mitsuba's `specular_reflectance` of its
+    /// conductors, src/bsdfs/conductor.cpp: a factor on the Fresnel term;
+    /// with `n = 0`, `k = 1`, where `F = 1`, the tint alone).
     Conductor {
         /// Real part.
         n: Box<SceneSpectrum>,
@@ -217,6 +220,8 @@ pub enum AngularFunction {
         k: Box<SceneSpectrum>,
         /// Outside index.
         outside: f64,
+        /// The factor `s(λ)` (`None`: 1).
+        tint: Option<Box<SceneSpectrum>>,
     },
     /// Dielectric Fresnel reflectance, lit from outside or from inside.
     Dielectric {
@@ -258,12 +263,20 @@ impl AngularFunction {
     /// `F(cos θ, λ)`; `thickness_nm` overrides layer 0 of a film (textures).
     pub fn eval(&self, cos_theta: f64, lambda_nm: f64, thickness_nm: Option<f64>) -> f64 {
         match self {
-            Self::Conductor { n, k, outside } => {
+            Self::Conductor {
+                n,
+                k,
+                outside,
+                tint,
+            } => {
                 let index = Complex::new(
                     f64::from(n.value(lambda_nm as f32)),
                     f64::from(k.value(lambda_nm as f32)),
                 );
-                fresnel_conductor(cos_theta, index.scale(1.0 / outside))
+                let scale = tint
+                    .as_ref()
+                    .map_or(1.0, |t| f64::from(t.value(lambda_nm as f32)));
+                scale * fresnel_conductor(cos_theta, index.scale(1.0 / outside))
             }
             Self::Dielectric { ior, from_inside } => {
                 let sign = if *from_inside { -1.0 } else { 1.0 };
@@ -491,6 +504,61 @@ mod tests {
         assert!((cauchy.at(500.0) - 1.516).abs() < 1e-12);
     }
 
+    /// A tint multiplies the conductor's Fresnel term at every angle and
+    /// wavelength, exactly and in the Fourier table; without the tint the
+    /// values differ (the negative control).
+    #[test]
+    fn a_tint_multiplies_the_fresnel_term() -> Result<(), SpectralError> {
+        let range = SpectralRange::VISIBLE;
+        let spectrum = |name: &str| -> Result<Box<SceneSpectrum>, SpectralError> {
+            let builtin =
+                Builtin::lookup(name).map_err(|_| SpectralError::InvalidParameter("builtin"))?;
+            Ok(Box::new(SceneSpectrum::new(
+                SpectrumSource::Builtin(builtin),
+                range,
+            )?))
+        };
+        let ramp = SceneSpectrum::new(
+            SpectrumSource::Tabulated {
+                lambda_nm: vec![360.0, 830.0],
+                values: vec![0.2, 0.9],
+            },
+            range,
+        )?;
+        let conductor =
+            |tint: Option<Box<SceneSpectrum>>| -> Result<AngularSpectrum, SpectralError> {
+                AngularSpectrum::new(
+                    AngularFunction::Conductor {
+                        n: spectrum("copper-n")?,
+                        k: spectrum("copper-k")?,
+                        outside: 1.0,
+                        tint,
+                    },
+                    &range,
+                )
+            };
+        let (plain, tinted) = (conductor(None)?, conductor(Some(Box::new(ramp.clone())))?);
+        for cos in [1.0f32, 0.6, 0.2] {
+            for lambda in [420.0f32, 550.0, 680.0] {
+                let expected = ramp.value(lambda) * plain.eval(cos, lambda, 0.0);
+                let got = tinted.eval(cos, lambda, 0.0);
+                assert!((got - expected).abs() < 1e-6, "{got} vs {expected}");
+                assert!((plain.eval(cos, lambda, 0.0) - got).abs() > 1e-3);
+            }
+            // The table is the projection of the product.
+            let series = |table: &AngularSpectrum| {
+                let c = table.fourier(cos, 0.0);
+                spectral_core::FourierSpectrum::<f32, 16>::from_coeffs(core::array::from_fn(|j| {
+                    c[j]
+                }))
+            };
+            let at = series(&tinted).eval(&FourierBasis::new(range), 550.0);
+            let exact = tinted.eval(cos, 550.0, 0.0);
+            assert!((at - exact).abs() < 0.02, "{at} vs {exact}");
+        }
+        Ok(())
+    }
+
     #[test]
     fn gold_table_matches_exact_fresnel_at_normal_incidence() {
         let range = SpectralRange::VISIBLE;
@@ -510,6 +578,7 @@ mod tests {
                 n: Box::new(n),
                 k: Box::new(k),
                 outside: 1.0,
+                tint: None,
             },
             &range,
         )

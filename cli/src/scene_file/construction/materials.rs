@@ -64,6 +64,19 @@ pub(crate) fn coated(albedo: Albedo, ior: Ior, microfacet: Microfacet) -> Bsdf {
     }
 }
 
+/// A conductor's optical constants (scene spectra): `n + i k`, and an
+/// optional tint `s(λ)` multiplying its Fresnel reflectance
+/// (`AngularFunction::Conductor`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ConductorIndex {
+    /// Real part of the index.
+    pub(crate) n: SpectrumId,
+    /// Imaginary part.
+    pub(crate) k: SpectrumId,
+    /// The tint (`None`: 1).
+    pub(crate) tint: Option<SpectrumId>,
+}
+
 impl Construction<'_> {
     /// Adds `material`, remembering whether it emits.
     pub(crate) fn add_material(&mut self, material: Material) -> MaterialId {
@@ -143,19 +156,23 @@ impl Construction<'_> {
     }
 
     /// The Fresnel term of a conductor of complex index `n + i k` (outside
-    /// medium n = 1), for the material at `at`; `origin` is where the
-    /// spectra were given.
+    /// medium n = 1), times its tint, for the material at `at`; `origin` is
+    /// where the spectra were given.
     pub(crate) fn conductor_fresnel(
         &mut self,
         at: &Spot,
         origin: &Spot,
-        n: SpectrumId,
-        k: SpectrumId,
+        index: ConductorIndex,
     ) -> Result<AngularId, CliError> {
+        let tint = match index.tint {
+            Some(id) => Some(self.prepared(origin, id)?),
+            None => None,
+        };
         let function = AngularFunction::Conductor {
-            n: self.prepared(origin, n)?,
-            k: self.prepared(origin, k)?,
+            n: self.prepared(origin, index.n)?,
+            k: self.prepared(origin, index.k)?,
             outside: 1.0,
+            tint,
         };
         self.add_angular(at, &at.key, function)
     }

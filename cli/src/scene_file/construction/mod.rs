@@ -34,7 +34,7 @@ mod spectra;
 mod textures;
 
 pub(crate) use lights::MapSettings;
-pub(crate) use materials::{ThinFilm, coated};
+pub(crate) use materials::{ConductorIndex, ThinFilm, coated};
 pub(crate) use meshes::{
     FaceMaterials, MeshFormat, MeshParts, Mesher, Placement, load_obj_geometry,
 };

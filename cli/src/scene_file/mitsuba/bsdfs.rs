@@ -3,7 +3,7 @@
 //! | plugin | parameters (defaults) | built as |
 //! | --- | --- | --- |
 //! | `diffuse` | `reflectance` (0.5; spectrum or texture) | Lambert, one-sided |
-//! | `conductor`, `roughconductor` | `material` (`none`: a perfect mirror) or `eta` and `k`; `alpha` (0.1) or `alpha_u`/`alpha_v`; `distribution` (`beckmann`) | conductor, one-sided |
+//! | `conductor`, `roughconductor` | `material` (`none`: a perfect mirror) or `eta` and `k`; `specular_reflectance` (1; a spectrum, not a texture); `alpha` (0.1) or `alpha_u`/`alpha_v`; `distribution` (`beckmann`) | conductor whose Fresnel term is multiplied by `specular_reflectance`, one-sided |
 //! | `dielectric`, `roughdielectric` | `int_ior` (`bk7`), `ext_ior` (`air`): numbers or names (`named_ior`); `alpha`, `distribution` as above | dielectric interface of index `int/ext`, two-sided |
 //! | `thindielectric` | `int_ior`, `ext_ior` | thin slab, two-sided |
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` (0.5), `int_ior` (`polypropylene`), `ext_ior` (`air`), `nonlinear` (false); `alpha` (0.1), `distribution` (`beckmann`) | dielectric coat over a diffuse base, one-sided |
@@ -13,8 +13,9 @@
 //! * One-sided (Mitsuba's reflective BSDFs): a ray that reaches the back
 //!   face (against the shading normal) scatters nothing; `twosided` lifts
 //!   that. Dielectrics are two-sided by nature.
-//! * `specular_reflectance` and `specular_transmittance` must be 1 (their
-//!   default): other values are refused rather than rendered wrongly.
+//! * `specular_reflectance` and `specular_transmittance` of dielectrics
+//!   must be 1 (their default): other values are refused rather than
+//!   rendered wrongly.
 //! * Anisotropic roughness (`alpha_u ≠ alpha_v`) is approximated by the
 //!   isotropic `α = √(α_u α_v)`, with a warning.
 //! * `sample_visible` changes only the sampling, not the image: accepted.
@@ -28,6 +29,7 @@ use super::named_ior::{named_ior, names};
 use super::properties::{Object, Value};
 use super::spectra::{SpectrumUse, zero_outside};
 use crate::error::CliError;
+use crate::scene_file::construction::ConductorIndex;
 use crate::scene_file::source::Spot;
 use simd_tracer::ids::SpectrumId;
 use simd_tracer::shading::material::{
@@ -144,9 +146,10 @@ impl<'e> Importer<'e, '_> {
             }
             "conductor" | "roughconductor" => {
                 let rough = self.roughness(&object)?;
-                self.unit_factor(&object, "specular_reflectance")?;
                 let (n, k) = self.conductor_index(&object)?;
-                let fresnel = self.cx.conductor_fresnel(&spot, &spot, n, k)?;
+                let tint = self.specular_tint(&object)?;
+                let index = ConductorIndex { n, k, tint };
+                let fresnel = self.cx.conductor_fresnel(&spot, &spot, index)?;
                 (conductor(fresnel, rough), true)
             }
             "dielectric" | "roughdielectric" => {
@@ -363,6 +366,27 @@ impl<'e> Importer<'e, '_> {
             );
         }
         Ok(Opacity::Constant(clamped as f32))
+    }
+
+    /// A conductor's `specular_reflectance`: a spectrum (a reflectance, as
+    /// Mitsuba reads it) multiplying its Fresnel term; `None` when absent.
+    fn specular_tint(&mut self, object: &Object<'e>) -> Result<Option<SpectrumId>, CliError> {
+        const NAME: &str = "specular_reflectance";
+        if object.get(NAME).is_none() {
+            return Ok(None);
+        }
+        if self.texture_property(object, NAME)?.is_some() {
+            return Err(
+                object.error("a textured specular_reflectance is not supported (give a spectrum)")
+            );
+        }
+        let id = self.spectrum_id(
+            object,
+            NAME,
+            SpectrumUse::Reflectance,
+            SpectrumSource::Constant(1.0),
+        )?;
+        Ok(Some(id))
     }
 
     /// Refuses a `specular_reflectance`/`…transmittance` other than 1.

@@ -5,7 +5,7 @@
 
 use super::Loader;
 use crate::error::CliError;
-use crate::scene_file::construction::{ThinFilm, coated};
+use crate::scene_file::construction::{ConductorIndex, ThinFilm, coated};
 use crate::scene_file::toml_reader::{Item, Table};
 use crate::texture_file::TextureUse;
 use simd_tracer::ids::MaterialId;
@@ -30,7 +30,7 @@ const COMMON_KEYS: &[&str] = &[
 ];
 /// The keys of each material type, besides [`COMMON_KEYS`].
 const LAMBERT_KEYS: &[&str] = &["albedo", "albedo_texture"];
-const CONDUCTOR_KEYS: &[&str] = &["metal", "n", "k", "n_const", "k_const", "roughness"];
+const CONDUCTOR_KEYS: &[&str] = &["metal", "n", "k", "n_const", "k_const", "roughness", "tint"];
 const DIELECTRIC_KEYS: &[&str] = &["ior", "roughness"];
 const THIN_DIELECTRIC_KEYS: &[&str] = &["ior"];
 const COATED_KEYS: &[&str] = &["albedo", "albedo_texture", "ior", "roughness"];
@@ -396,10 +396,13 @@ impl Loader<'_> {
             )
         } else if let (Some(n), Some(k)) = (&nc_item, &kc_item) {
             let nv = n.number(&self.src)?;
-            if nv <= 0.0 {
-                return Err(n.err(&self.src, "must be a number > 0"));
-            }
             let kv = k.non_negative(&self.src)?;
+            // n = 0 with k > 0 is an ideal mirror (|r| = 1 at every angle:
+            // Mitsuba's conductor `none` is n = 0, k = 1); n = k = 0 has no
+            // Fresnel term.
+            if nv < 0.0 || (nv == 0.0 && kv == 0.0) {
+                return Err(n.err(&self.src, "must be a number >= 0 (0 only with k_const > 0)"));
+            }
             (
                 self.cx
                     .add_spectrum(&n.spot(), SpectrumSource::Constant(nv))?,
@@ -425,7 +428,16 @@ impl Loader<'_> {
                 &format!("`{have}` needs `{missing}` too"),
             ));
         };
-        let fresnel = self.cx.conductor_fresnel(&table.spot(), &origin, n, k)?;
+        let tint = match table.get("tint") {
+            Some(item) => {
+                let id = self.spectrum_ref(&item, 1.0)?;
+                self.cx.warn_reflectance_above_one(&item.spot(), id);
+                Some(id)
+            }
+            None => None,
+        };
+        let index = ConductorIndex { n, k, tint };
+        let fresnel = self.cx.conductor_fresnel(&table.spot(), &origin, index)?;
         Ok(Bsdf::Conductor {
             fresnel,
             microfacet: Microfacet::ggx(self.roughness(table)?),

@@ -482,6 +482,7 @@ mod tests {
                 n: grey_spectrum.clone(),
                 k: grey_spectrum,
                 outside: 1.0,
+                tint: None,
             },
         )?;
         let lambert = b.add_material(Material::lambert("grey", grey));
