@@ -102,6 +102,7 @@ SCENES = {
     "roughplastic_beckmann_a030": {"suite": "materials", "ref_spp": 4096},
     "sidedness": {"suite": "materials", "ref_spp": 4096},
     "bsdf_mask": {"suite": "materials", "ref_spp": 4096, "negative": {"alpha": "0.65"}},
+    "twosided_faces": {"suite": "materials", "ref_spp": 4096, "negative": {"blue": "0.35"}},
     # lights
     "point_light": {"suite": "lights", "ref_spp": 4096, "negative": {"light_x": "1.4"}},
     "spot_light": {"suite": "lights", "ref_spp": 4096, "negative": {"beam": "12"}},

@@ -194,8 +194,8 @@ impl Palette {
     pub fn of(scene: &Scene) -> Self {
         let index = |id: SpectrumId| (!id.is_none()).then_some(id.0 as usize);
         let mut reflectances = BTreeSet::new();
-        for material in scene.materials() {
-            match material.bsdf.unmasked() {
+        for leaf in scene.materials().iter().flat_map(|m| m.bsdf.leaves()) {
+            match leaf {
                 Bsdf::Lambert {
                     albedo: Albedo::Spectrum(id),
                 }

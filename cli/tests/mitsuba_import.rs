@@ -801,3 +801,57 @@ fn conductor_tints_multiply_the_fresnel_term() -> TestResult {
     )?;
     Ok(())
 }
+
+/// `twosided` with two nested BSDFs puts the first on the front face and
+/// the second on the back (one BSDF, or the same one twice, is that BSDF
+/// on both faces); three nested BSDFs, or a transmitting one, are refused.
+/// `null` is a mask of opacity 0.
+#[test]
+fn twosided_faces_and_null_follow_mitsuba() -> TestResult {
+    use simd_tracer::shading::material::{Bsdf, Opacity};
+    let dir = test_dir("faces")?;
+    let red = "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.8, 0.1, 0.1\"/></bsdf>";
+    let metal = "<bsdf type=\"conductor\"/>";
+    let two_sided = |nested: &str| {
+        scene(&format!(
+            "    <shape type=\"rectangle\"><bsdf type=\"twosided\">{nested}</bsdf></shape>\n    <emitter type=\"constant\"/>"
+        ))
+    };
+    let bsdf_of = |text: &str, name: &str| -> TestResult<Bsdf> {
+        let path = write(&dir, name, text)?;
+        let built = load(&path, &[], false)?.builder.build()?;
+        let material = built.materials().first().ok_or("no material")?;
+        Ok(material.bsdf.clone())
+    };
+    let Bsdf::Faces(faces) = bsdf_of(&two_sided(&format!("{red}{metal}")), "two.xml")? else {
+        return Err("two BSDFs are not two faces".into());
+    };
+    assert!(matches!(faces[0], Bsdf::Lambert { .. }), "{:?}", faces[0]);
+    assert!(matches!(faces[1], Bsdf::Conductor { .. }), "{:?}", faces[1]);
+    let one = bsdf_of(&two_sided(red), "one.xml")?;
+    assert!(matches!(one, Bsdf::Lambert { .. }), "{one:?}");
+    let same = scene(
+        "    <bsdf type=\"diffuse\" id=\"d\"/>\n    <shape type=\"rectangle\"><bsdf type=\"twosided\"><ref id=\"d\"/><ref id=\"d\"/></bsdf></shape>\n    <emitter type=\"constant\"/>",
+    );
+    assert!(matches!(bsdf_of(&same, "same.xml")?, Bsdf::Lambert { .. }));
+    refused(
+        "twosided-three",
+        &two_sided(&format!("{red}{red}{metal}")),
+        8,
+        &["needs one or two nested BSDFs"],
+    )?;
+    refused(
+        "twosided-glass",
+        &two_sided(&format!("{red}<bsdf type=\"dielectric\"/>")),
+        8,
+        &["only BSDFs without transmission can be nested"],
+    )?;
+    let null = scene(
+        "    <shape type=\"rectangle\"><bsdf type=\"null\"/></shape>\n    <shape type=\"sphere\"/>\n    <emitter type=\"constant\"/>",
+    );
+    let Bsdf::Mask(mask) = bsdf_of(&null, "null.xml")? else {
+        return Err("null is not a mask".into());
+    };
+    assert_eq!(mask.opacity, Opacity::Constant(0.0));
+    Ok(())
+}

@@ -1450,14 +1450,16 @@ impl SceneBuilder {
             }
         }
         for material in &self.materials {
-            if let Bsdf::Fluorescent { fluorophore, .. } = *material.bsdf.unmasked()
-                && fluorophore.index() >= self.fluorophores.len()
-            {
-                return Err(SceneError::Reference(
-                    material.name.clone(),
-                    "fluorophore",
-                    fluorophore.0,
-                ));
+            for leaf in material.bsdf.leaves() {
+                if let Bsdf::Fluorescent { fluorophore, .. } = *leaf
+                    && fluorophore.index() >= self.fluorophores.len()
+                {
+                    return Err(SceneError::Reference(
+                        material.name.clone(),
+                        "fluorophore",
+                        fluorophore.0,
+                    ));
+                }
             }
         }
         if let Some(env) = self

@@ -7,7 +7,8 @@
 //! | `dielectric`, `roughdielectric` | `int_ior` (`bk7`), `ext_ior` (`air`): numbers or names (`named_ior`); `alpha`, `distribution` as above | dielectric interface of index `int/ext`, two-sided |
 //! | `thindielectric` | `int_ior`, `ext_ior` | thin slab, two-sided |
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` (0.5), `int_ior` (`polypropylene`), `ext_ior` (`air`), `nonlinear` (false); `alpha` (0.1), `distribution` (`beckmann`) | dielectric coat over a diffuse base, one-sided |
-//! | `twosided` | one nested BSDF without transmission (Mitsuba refuses dielectrics and masks) | that BSDF on both faces |
+//! | `twosided` | one or two nested BSDFs without transmission (Mitsuba refuses dielectrics and masks) | one: that BSDF on both faces; two: the first on the front face, the second on the back (`Bsdf::Faces`) |
+//! | `null` | none | every ray passes (a mask of opacity 0); shadow rays stop at it, as at every surface |
 //! | `mask` | `opacity` (0.5; a number or a `bitmap`), one nested BSDF | the nested BSDF where opaque, a hole elsewhere (`simd_tracer`'s `Mask`); the nested BSDF keeps its sides (`mask(twosided(…))` for a two-sided card) |
 //!
 //! * One-sided (Mitsuba's reflective BSDFs): a ray that reaches the back
@@ -168,32 +169,54 @@ impl<'e> Importer<'e, '_> {
             "plastic" | "roughplastic" => (self.plastic(&object, &spot)?, true),
             "twosided" => {
                 let nested = object.objects();
-                let inner = match nested.as_slice() {
-                    [one] => self.object_of(one, &["bsdf"])?,
+                let elements = match nested.as_slice() {
+                    [one] => vec![self.object_of(one, &["bsdf"])?],
                     [front, back] => {
                         let (f, b) = (
                             self.object_of(front, &["bsdf"])?,
                             self.object_of(back, &["bsdf"])?,
                         );
-                        if !std::ptr::eq(f, b) {
-                            return Err(object.error(
-                                "different BSDFs on the two faces are not supported (one nested BSDF)",
-                            ));
+                        if std::ptr::eq(f, b) {
+                            vec![f]
+                        } else {
+                            vec![f, b]
                         }
-                        f
                     }
-                    _ => return Err(object.error("needs one nested BSDF")),
+                    _ => return Err(object.error("needs one or two nested BSDFs")),
                 };
                 self.check_unused(&object)?;
-                let mut built = self.bsdf(Some(inner))?;
-                if built.bsdf.transmits() {
-                    return Err(object.error(
-                        "only BSDFs without transmission can be nested (as in Mitsuba; put a mask around the twosided)",
-                    ));
+                let mut faces = Vec::with_capacity(elements.len());
+                for element in elements {
+                    let built = self.bsdf(Some(element))?;
+                    if built.bsdf.transmits() {
+                        return Err(object.error(
+                            "only BSDFs without transmission can be nested (as in Mitsuba; put a mask around the twosided)",
+                        ));
+                    }
+                    faces.push(built.bsdf);
                 }
-                built.one_sided = false;
-                built.name = name;
-                return Ok(built);
+                let bsdf = match <[Bsdf; 2]>::try_from(faces) {
+                    Ok(two) => Bsdf::Faces(Box::new(two)),
+                    Err(mut one) => one
+                        .pop()
+                        .ok_or_else(|| object.error("needs a nested BSDF"))?,
+                };
+                return Ok(BuiltBsdf {
+                    name,
+                    bsdf,
+                    one_sided: false,
+                });
+            }
+            "null" => {
+                // Mitsuba's null BSDF: every ray passes; a mask that is all
+                // hole (its nested BSDF is never used).
+                let nested = self.black_bsdf()?.bsdf;
+                let mask = Mask {
+                    opacity: Opacity::Constant(0.0),
+                    nested,
+                    nested_front_only: false,
+                };
+                (Bsdf::Mask(Box::new(mask)), false)
             }
             "mask" => {
                 let opacity = self.opacity(&object)?;

@@ -15,6 +15,7 @@
 //! | Coated | a smooth or rough dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic and roughplastic): specular `s F(θo)` plus diffuse `ρ T_i T_o/(π η² (1 − F_dr,int))` with the coat's transmittances `T` (flat `1 − F`, or tabulated for a rough coat) and optionally Mitsuba's nonlinear internal scattering; for the smooth coat and `ρ = 1` energy is conserved exactly (the coat's Fresnel is achromatic, so it rides in the scalar part); formulas in `coated.rs` |
 //! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
 //! | Mask | a nested BSDF where the opacity `α` says, a hole elsewhere (Mitsuba 3.9.1's `mask`, src/bsdfs/mask.cpp): `f = α f_nested + (1 − α) δ(wi + wo)/|cos θi|`; the hole is sampled with probability `1 − α` (straight on, weight 1, delta), the nested BSDF with `α` (its weight, pdf `α p`); formulas, sides and shadow rays in `mask.rs` |
+//! | Faces | a BSDF per face, `[front, back]`: the face the viewer sees scatters, as itself seen from the front (Mitsuba's `twosided` with two BSDFs) |
 //! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1; achromatic, delta, the same from both faces |
 //!
 //! **Sides.** [`Material::sides`] says which faces scatter. With
@@ -166,6 +167,12 @@ pub enum Bsdf {
     /// A cut-out: a nested BSDF where an opacity says, a hole elsewhere
     /// (`mask.rs`).
     Mask(Box<Mask>),
+    /// Different BSDFs on the two faces, `[front, back]` (Mitsuba's
+    /// `twosided` with two nested BSDFs, src/bsdfs/twosided.cpp): each
+    /// scatters the light that arrives on its own side, seen in the frame
+    /// of the normal turned towards the viewer ([`ShadingPoint::front`]
+    /// picks the face).
+    Faces(Box<[Bsdf; 2]>),
 }
 
 /// A material.
@@ -292,15 +299,25 @@ impl Bsdf {
                     r.textures.push(id);
                 }
             }
+            Bsdf::Faces(faces) => {
+                for face in faces.iter() {
+                    let inner = face.references();
+                    r.spectra.extend(inner.spectra);
+                    r.angular.extend(inner.angular);
+                    r.textures.extend(inner.textures);
+                }
+            }
         }
         r
     }
 
-    /// The BSDF under any masks: what scatters where the surface is opaque.
-    pub fn unmasked(&self) -> &Bsdf {
+    /// The BSDFs that scatter, under any masks and faces: the BSDF itself
+    /// unless it is a [`Bsdf::Mask`] or [`Bsdf::Faces`].
+    pub fn leaves(&self) -> Vec<&Bsdf> {
         match self {
-            Self::Mask(mask) => mask.nested.unmasked(),
-            other => other,
+            Self::Mask(mask) => mask.nested.leaves(),
+            Self::Faces(faces) => faces.iter().flat_map(Bsdf::leaves).collect(),
+            other => vec![other],
         }
     }
 
@@ -310,7 +327,9 @@ impl Bsdf {
     /// coefficients for sampled wavelengths if the sample does take such a
     /// direction ([`Bsdf::direction_depends_on_wavelength`]).
     pub fn disperses(&self) -> bool {
-        matches!(self.unmasked(), Self::Dielectric { ior, .. } if ior.is_dispersive())
+        self.leaves()
+            .into_iter()
+            .any(|b| matches!(b, Self::Dielectric { ior, .. } if ior.is_dispersive()))
     }
 
     /// Whether the BSDF transmits light through the surface (then it
@@ -320,6 +339,7 @@ impl Bsdf {
     pub fn transmits(&self) -> bool {
         match self {
             Self::Dielectric { .. } | Self::ThinDielectric { .. } | Self::Mask(_) => true,
+            Self::Faces(faces) => faces.iter().any(Bsdf::transmits),
             Self::ThinFilm {
                 front_transmittance,
                 ..
@@ -420,6 +440,51 @@ mod tests {
     use crate::simd::Vec3x8;
     use crate::simd::{LANES, LaneMask};
     use wide::f32x8;
+
+    /// A BSDF per face: the front face's BSDF scatters what arrives in
+    /// front, the back face's what arrives behind (each in the frame of the
+    /// normal turned towards the viewer), in sampling and evaluation alike;
+    /// the faces swapped give the other albedo (the negative control).
+    #[test]
+    fn each_face_scatters_with_its_own_bsdf() {
+        let lambert = |id: u32| Bsdf::Lambert {
+            albedo: Albedo::Spectrum(SpectrumId(id)),
+        };
+        let faces = Bsdf::Faces(Box::new([lambert(3), lambert(5)]));
+        let swapped = Bsdf::Faces(Box::new([lambert(5), lambert(3)]));
+        let tables = MaterialTables {
+            spectra: &[],
+            angular: &[],
+            textures: &[],
+        };
+        let (wo, wi) = (
+            Vec3::new(0.2, 0.1, 0.9).normalize(),
+            Vec3::new(-0.3, 0.2, 0.8).normalize(),
+        );
+        let albedo_of = |b: &Bsdf, front: bool| {
+            let p = ShadingPoint {
+                n: Vec3::Z,
+                front,
+                uv: Vec2::ZERO,
+                hero_nm: None,
+            };
+            let sampled = b
+                .sample(&tables, &p, wo, 0.5, 0.3, 0.6)
+                .map(|s| s.spectrum.of);
+            let evaluated = b.eval(&tables, &p, wo, wi);
+            assert!(evaluated.value > 0.0);
+            assert_eq!(sampled, Some(evaluated.spectrum.of));
+            evaluated.spectrum.of
+        };
+        let id = |n: u32| Some(SpectralRef::Scene(SpectrumId(n)));
+        assert_eq!(albedo_of(&faces, true), id(3));
+        assert_eq!(albedo_of(&faces, false), id(5));
+        assert_eq!(albedo_of(&swapped, true), id(5));
+        assert_eq!(faces.leaves().len(), 2);
+        assert!(!faces.transmits());
+        let refs = Material::new("faces", faces).references();
+        assert_eq!(refs.spectra, [SpectrumId(3), SpectrumId(5)]);
+    }
 
     /// Each lane of the 8-wide cosine sampler is the scalar sampler's
     /// direction (to rounding: the two use different `sin`/`cos`), a unit

@@ -35,6 +35,7 @@ impl Bsdf {
         }
         match self {
             Self::Mask(mask) => mask.sample(tables, p, wo, u_lobe, [u, v]),
+            Self::Faces(faces) => faces[usize::from(!p.front)].sample(tables, p, wo, u_lobe, u, v),
             Self::Lambert { albedo } => {
                 let wi = sample_cosine(p.n, u, v);
                 let cos = wi.dot(p.n);
@@ -252,8 +253,13 @@ impl Bsdf {
         wo: Vec3,
         u_lobe: f32,
     ) -> bool {
-        if let Self::Mask(mask) = self {
-            return mask.direction_depends_on_wavelength(tables, p, wo, u_lobe);
+        match self {
+            Self::Mask(mask) => return mask.direction_depends_on_wavelength(tables, p, wo, u_lobe),
+            Self::Faces(faces) => {
+                return faces[usize::from(!p.front)]
+                    .direction_depends_on_wavelength(tables, p, wo, u_lobe);
+            }
+            _ => {}
         }
         let Self::Dielectric {
             outside,
@@ -353,6 +359,7 @@ impl Bsdf {
                 .map_or(BsdfEval::ZERO, |coat| coat.eval(wo_local, wi_local)),
             Self::ThinFilm { .. } | Self::ThinDielectric { .. } => BsdfEval::ZERO,
             Self::Mask(mask) => mask.eval(tables, p, wo, wi),
+            Self::Faces(faces) => faces[usize::from(!p.front)].eval(tables, p, wo, wi),
         }
     }
 }
