@@ -103,6 +103,7 @@ SCENES = {
     "sidedness": {"suite": "materials", "ref_spp": 4096},
     "bsdf_mask": {"suite": "materials", "ref_spp": 4096, "negative": {"alpha": "0.65"}},
     "twosided_faces": {"suite": "materials", "ref_spp": 4096, "negative": {"blue": "0.35"}},
+    "bsdf_blend": {"suite": "materials", "ref_spp": 4096, "negative": {"weight": "0.7"}},
     # lights
     "point_light": {"suite": "lights", "ref_spp": 4096, "negative": {"light_x": "1.4"}},
     "spot_light": {"suite": "lights", "ref_spp": 4096, "negative": {"beam": "12"}},

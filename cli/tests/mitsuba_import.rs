@@ -610,7 +610,7 @@ fn suite_texture(name: &str) -> String {
 /// textures other than `bitmap`.
 #[test]
 fn masks_follow_mitsuba() -> TestResult {
-    use simd_tracer::shading::material::{Bsdf, Opacity};
+    use simd_tracer::shading::material::{Bsdf, Fraction};
     let dir = test_dir("masks")?;
     let masked = |opacity: &str, nested: &str| {
         scene(&format!(
@@ -645,16 +645,16 @@ fn masks_follow_mitsuba() -> TestResult {
         "one.xml",
     )?;
     assert!(warnings.is_empty(), "{warnings:?}");
-    assert_eq!(one.opacity, Opacity::Constant(0.25));
+    assert_eq!(one.opacity, Fraction::Constant(0.25));
     assert!(one.nested_front_only);
     let (two, ..) = mask_of(&masked("", two_sided), "two.xml")?;
-    assert_eq!(two.opacity, Opacity::Constant(0.5), "Mitsuba's default");
+    assert_eq!(two.opacity, Fraction::Constant(0.5), "Mitsuba's default");
     assert!(!two.nested_front_only);
     let (clamped, warnings, _) = mask_of(
         &masked("<float name=\"opacity\" value=\"1.5\"/>", diffuse),
         "clamped.xml",
     )?;
-    assert_eq!(clamped.opacity, Opacity::Constant(1.0));
+    assert_eq!(clamped.opacity, Fraction::Constant(1.0));
     assert!(
         warnings
             .iter()
@@ -672,7 +672,7 @@ fn masks_follow_mitsuba() -> TestResult {
              <boolean name=\"raw\" value=\"{raw}\"/><string name=\"filter_type\" value=\"nearest\"/></texture>"
         );
         let (textured, _, built) = mask_of(&masked(&bitmap, diffuse), &format!("raw-{raw}.xml"))?;
-        let Opacity::Texture(id) = textured.opacity else {
+        let Fraction::Texture(id) = textured.opacity else {
             return Err("not a texture".into());
         };
         let texture = &built.material_tables().textures[id.index()];
@@ -693,7 +693,7 @@ fn masks_follow_mitsuba() -> TestResult {
         "mask-colour",
         &masked(&colour_bitmap(""), diffuse),
         8,
-        &["a colour image as an opacity needs raw=true"],
+        &["a colour image as an opacity or weight needs raw=true"],
     )?;
     mask_of(
         &masked(
@@ -718,7 +718,7 @@ fn masks_follow_mitsuba() -> TestResult {
         "mask-checkerboard",
         &masked("<texture type=\"checkerboard\" name=\"opacity\"/>", diffuse),
         8,
-        &["is not supported as an opacity (bitmap)"],
+        &["is not supported as an opacity or weight (bitmap)"],
     )?;
     refused(
         "mask-nan",
@@ -808,7 +808,7 @@ fn conductor_tints_multiply_the_fresnel_term() -> TestResult {
 /// `null` is a mask of opacity 0.
 #[test]
 fn twosided_faces_and_null_follow_mitsuba() -> TestResult {
-    use simd_tracer::shading::material::{Bsdf, Opacity};
+    use simd_tracer::shading::material::{Bsdf, Fraction};
     let dir = test_dir("faces")?;
     let red = "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.8, 0.1, 0.1\"/></bsdf>";
     let metal = "<bsdf type=\"conductor\"/>";
@@ -852,6 +852,59 @@ fn twosided_faces_and_null_follow_mitsuba() -> TestResult {
     let Bsdf::Mask(mask) = bsdf_of(&null, "null.xml")? else {
         return Err("null is not a mask".into());
     };
-    assert_eq!(mask.opacity, Opacity::Constant(0.0));
+    assert_eq!(mask.opacity, Fraction::Constant(0.0));
+    Ok(())
+}
+
+/// `blendbsdf`: a required `weight` (a number, clamped as Mitsuba clamps
+/// it, or a bitmap) of the second of two nested BSDFs; refused without a
+/// weight, with other than two BSDFs, or with a one-sided and a two-sided
+/// BSDF (fspec's materials have one sidedness).
+#[test]
+fn blends_follow_mitsuba() -> TestResult {
+    use simd_tracer::shading::material::{Bsdf, Fraction};
+    let dir = test_dir("blends")?;
+    let blend = |params: &str| {
+        scene(&format!(
+            "    <shape type=\"rectangle\"><bsdf type=\"blendbsdf\">{params}</bsdf></shape>\n    <emitter type=\"constant\"/>"
+        ))
+    };
+    let diffuse = "<bsdf type=\"diffuse\"/>";
+    let metal = "<bsdf type=\"roughconductor\"/>";
+    let weight = "<float name=\"weight\" value=\"0.25\"/>";
+    let path = write(
+        &dir,
+        "blend.xml",
+        &blend(&format!("{weight}{diffuse}{metal}")),
+    )?;
+    let built = load(&path, &[], false)?.builder.build()?;
+    let material = built.materials().first().ok_or("no material")?;
+    let Bsdf::Blend(b) = &material.bsdf else {
+        return Err(format!("not a blend: {:?}", material.bsdf).into());
+    };
+    assert_eq!(b.weight, Fraction::Constant(0.25));
+    assert!(matches!(b.bsdfs[0], Bsdf::Lambert { .. }));
+    assert!(matches!(b.bsdfs[1], Bsdf::Conductor { .. }));
+    assert!(material.front_only(), "two one-sided BSDFs blend into one");
+    refused(
+        "blend-no-weight",
+        &blend(&format!("{diffuse}{metal}")),
+        8,
+        &["needs `weight`"],
+    )?;
+    refused(
+        "blend-one",
+        &blend(&format!("{weight}{diffuse}")),
+        8,
+        &["needs two nested BSDFs"],
+    )?;
+    refused(
+        "blend-sides",
+        &blend(&format!(
+            "{weight}{diffuse}<bsdf type=\"twosided\">{metal}</bsdf>"
+        )),
+        8,
+        &["a one-sided and a two-sided BSDF cannot be blended"],
+    )?;
     Ok(())
 }

@@ -841,7 +841,7 @@ fn cylinder_keys_refuse_bad_values_with_one_line() -> TestResult {
 /// a grey PNG's values as stored.
 #[test]
 fn toml_opacity_cuts_a_card_out() -> TestResult {
-    use simd_tracer::shading::material::{Bsdf, Opacity, Sides};
+    use simd_tracer::shading::material::{Bsdf, Fraction, Sides};
     let text = |card: &str| {
         format!(
             r#"
@@ -884,7 +884,7 @@ transform = [{{ translate = [0, 0, 1] }}]
     let Bsdf::Mask(mask) = &card.bsdf else {
         return Err("the card is not masked".into());
     };
-    assert_eq!(mask.opacity, Opacity::Constant(0.3));
+    assert_eq!(mask.opacity, Fraction::Constant(0.3));
     assert!(mask.nested_front_only, "the nested lambert keeps `front`");
     let (_dir, open_path) = scene("card-open", &text("opacity = 0"))?;
     let open = load(&open_path)?;
@@ -918,7 +918,7 @@ transform = [{{ translate = [0, 0, 1] }}]
     let Bsdf::Mask(mask) = &card.bsdf else {
         return Err("the card is not masked".into());
     };
-    let Opacity::Texture(id) = mask.opacity else {
+    let Fraction::Texture(id) = mask.opacity else {
         return Err("not a texture".into());
     };
     let value = textured.material_tables().textures[id.index()].scalar_at(0.125, 0.875);

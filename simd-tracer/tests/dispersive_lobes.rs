@@ -63,6 +63,7 @@ fn point(front: bool, hero_nm: Option<f32>) -> ShadingPoint {
         front,
         uv: Vec2::ZERO,
         hero_nm,
+        lobe: 0.0,
     }
 }
 

@@ -19,7 +19,7 @@ use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderSettings, render};
 use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::{Scene, SceneBuilder};
-use simd_tracer::shading::material::{Albedo, Bsdf, Mask, Material, Opacity};
+use simd_tracer::shading::material::{Albedo, Bsdf, Fraction, Mask, Material};
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::texture::{FilterMode, Texture, TextureSampling};
 use simd_tracer::transport::{FourierTransport, SampledTransport, Transport};
@@ -84,7 +84,7 @@ fn square(z: f32, s: f32, up: bool) -> [Vec3; 4] {
 
 /// A card with a black nested BSDF: it scatters nothing, so all that
 /// crosses it comes through its holes.
-fn black_card(b: &mut SceneBuilder, opacity: Opacity) -> TestResult<MaterialId> {
+fn black_card(b: &mut SceneBuilder, opacity: Fraction) -> TestResult<MaterialId> {
     let black = b.add_spectrum("card", SpectrumSource::Constant(0.0))?;
     let bsdf = Bsdf::Mask(Box::new(Mask {
         opacity,
@@ -107,7 +107,7 @@ fn add_lamp(b: &mut SceneBuilder, quad: [Vec3; 4]) -> TestResult {
 }
 
 /// A lamp facing the camera, behind a card of `opacity` (none: no card).
-fn lamp_behind_card(opacity: Option<Opacity>, texture: Option<Texture>) -> TestResult<Scene> {
+fn lamp_behind_card(opacity: Option<Fraction>, texture: Option<Texture>) -> TestResult<Scene> {
     let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
     add_lamp(&mut b, square(0.0, 4.0, true))?;
     if let Some(texture) = texture {
@@ -147,7 +147,7 @@ fn sampled() -> SampledTransport<4> {
 #[test]
 fn a_card_passes_one_minus_its_opacity() -> TestResult {
     let s = settings(64);
-    let masked = lamp_behind_card(Some(Opacity::Constant(ALPHA)), None)?;
+    let masked = lamp_behind_card(Some(Fraction::Constant(ALPHA)), None)?;
     let lamp_only = lamp_behind_card(None, None)?;
     let passes = 1.0 - f64::from(ALPHA);
     let samples = f64::from(s.width * s.height * s.spp);
@@ -215,14 +215,14 @@ fn an_opacity_texture_cuts_the_card_per_texel() -> TestResult {
         Ok((side(true), side(false)))
     };
     let (left, right) = halves(&lamp_behind_card(
-        Some(Opacity::Texture(simd_tracer::ids::TextureId(0))),
+        Some(Fraction::Texture(simd_tracer::ids::TextureId(0))),
         Some(texture(vec![0.0, 1.0])?),
     )?)?;
     println!("lamp {lamp:.5}: left {left:.5}, right {right:.5}");
     assert!((left / lamp - 1.0).abs() < 1e-4, "the clear half: {left}");
     assert!(right.abs() < 1e-9, "the opaque half: {right}");
     let (left, right) = halves(&lamp_behind_card(
-        Some(Opacity::Texture(simd_tracer::ids::TextureId(0))),
+        Some(Fraction::Texture(simd_tracer::ids::TextureId(0))),
         Some(texture(vec![1.0, 0.0])?),
     )?)?;
     assert!(left.abs() < 1e-9 && (right / lamp - 1.0).abs() < 1e-4);
@@ -244,7 +244,7 @@ fn light_through_the_holes_reaches_the_floor_by_bsdf_sampling() -> TestResult {
         b.add_quad(square(0.0, 1.0, true), floor);
         add_lamp(&mut b, square(2.0, 1.0, false))?;
         if card {
-            let card = black_card(&mut b, Opacity::Constant(ALPHA))?;
+            let card = black_card(&mut b, Fraction::Constant(ALPHA))?;
             b.add_quad(square(1.0, 50.0, true), card);
         }
         b.set_camera(Camera::look_at(

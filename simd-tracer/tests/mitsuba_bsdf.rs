@@ -385,6 +385,7 @@ fn ours(f: &Fixture, bsdf: &Bsdf, p: &Point, how: Spectral) -> (f64, f64) {
         front: side > 0.0,
         uv: Vec2::ZERO,
         hero_nm: None,
+        lobe: 0.0,
     };
     let e = bsdf.eval(&f.scene.material_tables(), &at, p.camera, p.light);
     (
@@ -555,6 +556,7 @@ fn smooth_plastic_delta_lobes_are_mitsubas() -> TestResult {
             front: true,
             uv: Vec2::ZERO,
             hero_nm: None,
+            lobe: 0.0,
         };
         let tables = f.scene.material_tables();
         let s = c

@@ -53,6 +53,7 @@ fn point(front: bool) -> ShadingPoint {
         front,
         uv: Vec2::ZERO,
         hero_nm: None,
+        lobe: 0.0,
     }
 }
 

@@ -99,6 +99,7 @@ impl<'a> Shading<'a> {
                 front: front & (1 << lane) != 0,
                 uv,
                 hero_nm: transport.hero_wavelength(wavelengths, lane),
+                lobe: 0.0,
             }
         });
         Self::General { bsdfs, points }
@@ -189,6 +190,27 @@ impl<'a> Shading<'a> {
                 })
             })
             .fold(LaneMask::NONE, LaneMask::with)
+    }
+
+    /// The lanes of `lanes` whose BSDF reads the lobe number when it is
+    /// evaluated ([`Bsdf::needs_lobe`]).
+    pub(super) fn needs_lobe(&self, lanes: LaneMask) -> LaneMask {
+        let Self::General { bsdfs, .. } = self else {
+            return LaneMask::NONE;
+        };
+        lanes
+            .iter()
+            .filter(|&lane| bsdfs[lane].is_some_and(Bsdf::needs_lobe))
+            .fold(LaneMask::NONE, LaneMask::with)
+    }
+
+    /// Gives every shading point its lobe number ([`ShadingPoint::lobe`]).
+    pub(super) fn set_lobes(&mut self, u_lobe: &[f32; LANES]) {
+        if let Self::General { points, .. } = self {
+            for (point, &u) in points.iter_mut().zip(u_lobe) {
+                point.lobe = u;
+            }
+        }
     }
 
     /// Gives the shading points of `lanes` their hero wavelengths (lanes

@@ -8,6 +8,7 @@
 //! | `thindielectric` | `int_ior`, `ext_ior` | thin slab, two-sided |
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` (0.5), `int_ior` (`polypropylene`), `ext_ior` (`air`), `nonlinear` (false); `alpha` (0.1), `distribution` (`beckmann`) | dielectric coat over a diffuse base, one-sided |
 //! | `twosided` | one or two nested BSDFs without transmission (Mitsuba refuses dielectrics and masks) | one: that BSDF on both faces; two: the first on the front face, the second on the back (`Bsdf::Faces`) |
+//! | `blendbsdf` | `weight` (required; a number or a `bitmap`), two nested BSDFs, both one-sided or both two-sided | `(1 − w) f_0 + w f_1` (`simd_tracer`'s `Blend`: one component per bounce) |
 //! | `null` | none | every ray passes (a mask of opacity 0); shadow rays stop at it, as at every surface |
 //! | `mask` | `opacity` (0.5; a number or a `bitmap`), one nested BSDF | the nested BSDF where opaque, a hole elsewhere (`simd_tracer`'s `Mask`); the nested BSDF keeps its sides (`mask(twosided(…))` for a two-sided card) |
 //!
@@ -34,7 +35,7 @@ use crate::scene_file::construction::ConductorIndex;
 use crate::scene_file::source::Spot;
 use simd_tracer::ids::SpectrumId;
 use simd_tracer::shading::material::{
-    Albedo, Bsdf, Mask, Material, MitsubaPlastic, Opacity, Sides,
+    Albedo, Blend, Bsdf, Fraction, Mask, Material, MitsubaPlastic, Sides,
 };
 use simd_tracer::shading::microfacet::{Distribution, Microfacet};
 use simd_tracer::spectra::SpectrumSource;
@@ -207,19 +208,47 @@ impl<'e> Importer<'e, '_> {
                     one_sided: false,
                 });
             }
+            "blendbsdf" => {
+                let weight = self.fraction(&object, "weight", None)?;
+                let nested: Vec<_> = object
+                    .objects()
+                    .into_iter()
+                    .filter(|p| p.name != "weight")
+                    .collect();
+                let [first, second] = match nested.as_slice() {
+                    [a, b] => [self.object_of(a, &["bsdf"])?, self.object_of(b, &["bsdf"])?],
+                    _ => return Err(object.error("needs two nested BSDFs")),
+                };
+                let (first, second) = (self.bsdf(Some(first))?, self.bsdf(Some(second))?);
+                let sided = |b: &BuiltBsdf| b.one_sided && !b.bsdf.transmits();
+                if !first.bsdf.transmits()
+                    && !second.bsdf.transmits()
+                    && sided(&first) != sided(&second)
+                {
+                    return Err(object.error(
+                        "a one-sided and a two-sided BSDF cannot be blended here (make both twosided, or neither)",
+                    ));
+                }
+                let one_sided = first.one_sided && second.one_sided;
+                let blend = Blend {
+                    weight,
+                    bsdfs: [first.bsdf, second.bsdf],
+                };
+                (Bsdf::Blend(Box::new(blend)), one_sided)
+            }
             "null" => {
                 // Mitsuba's null BSDF: every ray passes; a mask that is all
                 // hole (its nested BSDF is never used).
                 let nested = self.black_bsdf()?.bsdf;
                 let mask = Mask {
-                    opacity: Opacity::Constant(0.0),
+                    opacity: Fraction::Constant(0.0),
                     nested,
                     nested_front_only: false,
                 };
                 (Bsdf::Mask(Box::new(mask)), false)
             }
             "mask" => {
-                let opacity = self.opacity(&object)?;
+                let opacity = self.fraction(&object, "opacity", Some(DEFAULT_OPACITY))?;
                 let nested: Vec<_> = object
                     .objects()
                     .into_iter()
@@ -370,25 +399,34 @@ impl<'e> Importer<'e, '_> {
         }
     }
 
-    /// A mask's `opacity`: a number (clamped to [0, 1] as Mitsuba clamps
-    /// it, with a warning) or a `bitmap` texture; 0.5 by default.
-    fn opacity(&mut self, object: &Object<'e>) -> Result<Opacity, CliError> {
-        if let Some(texture) = self.texture_property(object, "opacity")? {
-            return Ok(Opacity::Texture(self.texture_opacity(texture)?));
+    /// A fraction parameter (`mask`'s `opacity`, `blendbsdf`'s `weight`):
+    /// a number (clamped to [0, 1] as Mitsuba clamps it, with a warning) or
+    /// a `bitmap` texture; `default` where absent (`None`: required).
+    fn fraction(
+        &mut self,
+        object: &Object<'e>,
+        name: &str,
+        default: Option<f64>,
+    ) -> Result<Fraction, CliError> {
+        if let Some(texture) = self.texture_property(object, name)? {
+            return Ok(Fraction::Texture(self.texture_fraction(texture)?));
         }
-        let value = self.scalar(object, "opacity", DEFAULT_OPACITY)?;
+        let value = match (object.get(name), default) {
+            (None, None) => return Err(object.error(format!("needs `{name}`"))),
+            (_, default) => self.scalar(object, name, default.unwrap_or(0.0))?,
+        };
         if !value.is_finite() {
-            return Err(object.error(format!("opacity {value}: must be a finite number")));
+            return Err(object.error(format!("{name} {value}: must be a finite number")));
         }
         let clamped = value.clamp(0.0, 1.0);
         if clamped != value {
             let spot = Self::spot(object.element, object.describe());
             self.cx.warn(
                 &spot,
-                format!("opacity {value} is clamped to {clamped}, as Mitsuba clamps it"),
+                format!("{name} {value} is clamped to {clamped}, as Mitsuba clamps it"),
             );
         }
-        Ok(Opacity::Constant(clamped as f32))
+        Ok(Fraction::Constant(clamped as f32))
     }
 
     /// A conductor's `specular_reflectance`: a spectrum (a reflectance, as

@@ -134,7 +134,7 @@ fn load(input: Input<'_>, options: &MitsubaOptions) -> Result<LoadedScene, CliEr
         bsdfs: HashMap::new(),
         materials: HashMap::new(),
         textures: HashMap::new(),
-        opacity_textures: HashMap::new(),
+        fraction_textures: HashMap::new(),
         render: RenderDefaults::default(),
         camera_set: false,
         root_spot: Importer::spot(&root, String::new()),
@@ -190,8 +190,9 @@ pub(super) struct Importer<'e, 's> {
     materials: HashMap<MaterialKey, MaterialId>,
     /// Textures added, by element address.
     textures: HashMap<usize, simd_tracer::ids::TextureId>,
-    /// Opacity textures added (`mask`), by element address.
-    opacity_textures: HashMap<usize, simd_tracer::ids::TextureId>,
+    /// Scalar textures added (`mask`'s opacity, `blendbsdf`'s weight), by
+    /// element address.
+    fraction_textures: HashMap<usize, simd_tracer::ids::TextureId>,
     render: RenderDefaults,
     camera_set: bool,
     /// The scene element's spot, for what no element states.

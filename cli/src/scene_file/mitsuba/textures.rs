@@ -135,26 +135,26 @@ impl<'e> Importer<'e, '_> {
         Ok(Albedo::Texture(id))
     }
 
-    /// A scalar texture of opacities (`mask`'s `opacity`, built once per
-    /// element): a `bitmap`, read as Mitsuba's `eval_1` reads it in its
+    /// A scalar texture of fractions (`mask`'s `opacity`, `blendbsdf`'s
+    /// `weight`; built once per element): a `bitmap`, read as Mitsuba's `eval_1` reads it in its
     /// spectral variants: a grey image's values (sRGB-decoded unless
     /// `raw`), or the luminance of a colour image with `raw` (without
     /// `raw` Mitsuba refuses a colour image here, and so do we).
-    pub(crate) fn texture_opacity(&mut self, e: &'e Element) -> Result<TextureId, CliError> {
+    pub(crate) fn texture_fraction(&mut self, e: &'e Element) -> Result<TextureId, CliError> {
         let key = super::address(e);
-        if let Some(&id) = self.opacity_textures.get(&key) {
+        if let Some(&id) = self.fraction_textures.get(&key) {
             return Ok(id);
         }
         let object = Object::new(e)?;
         let to_uv = object.transform("to_uv")?;
         if object.plugin != "bitmap" {
-            return Err(object.error("is not supported as an opacity (bitmap)"));
+            return Err(object.error("is not supported as an opacity or weight (bitmap)"));
         }
         let (image, sampling) = self.bitmap(&object, &to_uv)?;
         let grey = image.texels.iter().all(|&[r, g, b]| r == g && g == b);
         if !grey && !object.boolean("raw", false)? {
             return Err(object.error(format!(
-                "{}: a colour image as an opacity needs raw=true (Mitsuba refuses it without)",
+                "{}: a colour image as an opacity or weight needs raw=true (Mitsuba refuses it without)",
                 image.describe
             )));
         }
@@ -167,7 +167,7 @@ impl<'e> Importer<'e, '_> {
             .map_err(|err| object.error(format!("{}: {err}", image.describe)))?;
         let id = self.cx.add_texture(texture.with_sampling(sampling));
         self.check_unused(&object)?;
-        self.opacity_textures.insert(key, id);
+        self.fraction_textures.insert(key, id);
         Ok(id)
     }
 

@@ -10,7 +10,7 @@ use crate::scene_file::toml_reader::{Item, Table};
 use crate::texture_file::TextureUse;
 use simd_tracer::ids::MaterialId;
 use simd_tracer::scene::builtin::fluorescence::PEAK_ABSORPTANCE;
-use simd_tracer::shading::material::{Albedo, Bsdf, Material, Opacity, Sides};
+use simd_tracer::shading::material::{Albedo, Bsdf, Fraction, Material, Sides};
 use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
@@ -165,7 +165,7 @@ impl Loader<'_> {
     /// `opacity` (a number in [0, 1]) or `opacity_texture` (a grey image,
     /// its values used as stored: coverage is linear, as PNG's alpha is),
     /// not both; `None` without either.
-    fn opacity(&mut self, table: &Table<'_, '_>) -> Result<Option<Opacity>, CliError> {
+    fn opacity(&mut self, table: &Table<'_, '_>) -> Result<Option<Fraction>, CliError> {
         match (table.get("opacity"), table.get("opacity_texture")) {
             (None, None) => Ok(None),
             (Some(value), None) => {
@@ -173,9 +173,9 @@ impl Loader<'_> {
                 if !(0.0..=1.0).contains(&alpha) {
                     return Err(value.err(&self.src, format!("opacity {alpha}: must be in [0, 1]")));
                 }
-                Ok(Some(Opacity::Constant(alpha as f32)))
+                Ok(Some(Fraction::Constant(alpha as f32)))
             }
-            (None, Some(texture)) => Ok(Some(Opacity::Texture(
+            (None, Some(texture)) => Ok(Some(Fraction::Texture(
                 self.texture(&texture, TextureUse::Scalar)?,
             ))),
             (Some(_), Some(texture)) => Err(texture.err(

@@ -28,48 +28,20 @@
 //!   the surface passes the ray with probability `1 − α` and ends the path
 //!   otherwise, as Mitsuba's failed nested sample does
 //!   ([`Mask::nested_front_only`]).
-//! * **Opacity** is clamped to `[0, 1]` ([`Opacity::at`]); a scalar
+//! * **Fraction** is clamped to `[0, 1]` ([`Fraction::at`]); a scalar
 //!   texture gives it per texel (grey images).
 
+use super::Fraction;
 use super::frame::Frame;
 use super::lane_spectrum::LaneSpectrum;
 use super::{Bsdf, BsdfEval, BsdfSample, MaterialTables, ShadingPoint};
-use crate::ids::TextureId;
-use glam::{Vec2, Vec3};
-
-/// Where a mask's opacity comes from.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Opacity {
-    /// One value for the whole surface (finite; clamped to `[0, 1]`).
-    Constant(f32),
-    /// A scalar texture ([`crate::spectra::texture::Texture::scalar_at`]).
-    Texture(TextureId),
-}
-
-impl Opacity {
-    /// The opacity at `uv`, in `[0, 1]` (an unknown texture or a NaN reads
-    /// as opaque: the nested BSDF, never a silent hole).
-    pub fn at(self, tables: &MaterialTables<'_>, uv: Vec2) -> f32 {
-        let value = match self {
-            Self::Constant(alpha) => alpha,
-            Self::Texture(id) => tables
-                .textures
-                .get(id.index())
-                .map_or(1.0, |t| t.scalar_at(uv.x, uv.y)),
-        };
-        if value.is_nan() {
-            1.0
-        } else {
-            value.clamp(0.0, 1.0)
-        }
-    }
-}
+use glam::Vec3;
 
 /// A cut-out BSDF (module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mask {
     /// The opacity.
-    pub opacity: Opacity,
+    pub opacity: Fraction,
     /// What the opaque part scatters.
     pub nested: Bsdf,
     /// The nested BSDF scatters only from the front face (it does not
@@ -157,15 +129,10 @@ mod tests {
     use super::*;
     use crate::ids::SpectrumId;
     use crate::shading::material::Albedo;
-    use crate::spectra::texture::Texture;
-    use spectral_core::SpectralRange;
+    use glam::Vec2;
     use std::f32::consts::FRAC_1_PI;
 
-    const TABLES: MaterialTables<'static> = MaterialTables {
-        spectra: &[],
-        angular: &[],
-        textures: &[],
-    };
+    const TABLES: MaterialTables<'static> = crate::shading::material::NO_TABLES;
 
     fn lambert() -> Bsdf {
         Bsdf::Lambert {
@@ -175,7 +142,7 @@ mod tests {
 
     fn mask(alpha: f32, nested_front_only: bool) -> Bsdf {
         Bsdf::Mask(Box::new(Mask {
-            opacity: Opacity::Constant(alpha),
+            opacity: Fraction::Constant(alpha),
             nested: lambert(),
             nested_front_only,
         }))
@@ -187,6 +154,7 @@ mod tests {
             front,
             uv: Vec2::new(0.25, 0.75),
             hero_nm: None,
+            lobe: 0.0,
         }
     }
 
@@ -280,26 +248,5 @@ mod tests {
                 .is_some()
         );
         assert!(two_sided.eval(&TABLES, &behind, wo, Vec3::Z).value > 0.0);
-    }
-
-    #[test]
-    fn opacities_are_clamped_and_textures_read_per_texel() {
-        assert_eq!(Opacity::Constant(1.7).at(&TABLES, Vec2::ZERO), 1.0);
-        assert_eq!(Opacity::Constant(-0.2).at(&TABLES, Vec2::ZERO), 0.0);
-        assert_eq!(Opacity::Constant(f32::NAN).at(&TABLES, Vec2::ZERO), 1.0);
-        // A 2 × 1 texture: 0.25 on the left half, 0.75 on the right
-        // (nearest texel at the texel centres).
-        let texture =
-            Texture::scalar(2, 1, vec![0.25, 0.75], SpectralRange::VISIBLE).expect("valid");
-        let textures = [texture];
-        let tables = MaterialTables {
-            textures: &textures,
-            ..TABLES
-        };
-        let opacity = Opacity::Texture(TextureId(0));
-        assert!((opacity.at(&tables, Vec2::new(0.25, 0.5)) - 0.25).abs() < 1e-6);
-        assert!((opacity.at(&tables, Vec2::new(0.75, 0.5)) - 0.75).abs() < 1e-6);
-        // An unknown texture is opaque.
-        assert_eq!(Opacity::Texture(TextureId(3)).at(&tables, Vec2::ZERO), 1.0);
     }
 }

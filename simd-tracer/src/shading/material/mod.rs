@@ -16,6 +16,7 @@
 //! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
 //! | Mask | a nested BSDF where the opacity `α` says, a hole elsewhere (Mitsuba 3.9.1's `mask`, src/bsdfs/mask.cpp): `f = α f_nested + (1 − α) δ(wi + wo)/|cos θi|`; the hole is sampled with probability `1 − α` (straight on, weight 1, delta), the nested BSDF with `α` (its weight, pdf `α p`); formulas, sides and shadow rays in `mask.rs` |
 //! | Faces | a BSDF per face, `[front, back]`: the face the viewer sees scatters, as itself seen from the front (Mitsuba's `twosided` with two BSDFs) |
+//! | Blend | `(1 − w) f_0 + w f_1` (Mitsuba's `blendbsdf`): the bounce's lobe number chooses one component for both its light sample and its BSDF sample (`blend.rs`: unbiased, with the component's own weights and MIS) |
 //! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1; achromatic, delta, the same from both faces |
 //!
 //! **Sides.** [`Material::sides`] says which faces scatter. With
@@ -54,8 +55,12 @@ pub use plastic::{
 };
 mod interface;
 pub use interface::thin_dielectric_reflectance;
+mod blend;
+pub use blend::Blend;
+mod fraction;
+pub use fraction::Fraction;
 mod mask;
-pub use mask::{Mask, Opacity};
+pub use mask::Mask;
 mod fluorescent;
 pub use fluorescent::{FLUORESCENT_LOBE_PROBABILITY, SceneFluorophore, tabulated_sides};
 mod packet;
@@ -76,6 +81,15 @@ pub struct MaterialTables<'a> {
     /// Textures, indexed by [`TextureId`].
     pub textures: &'a [Texture],
 }
+
+/// Tables of a scene without spectra, angular spectra or textures, for
+/// the unit tests of BSDFs that read none.
+#[cfg(test)]
+const NO_TABLES: MaterialTables<'static> = MaterialTables {
+    spectra: &[],
+    angular: &[],
+    textures: &[],
+};
 
 /// A reflectance that is a spectrum or a texture.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -173,6 +187,9 @@ pub enum Bsdf {
     /// of the normal turned towards the viewer ([`ShadingPoint::front`]
     /// picks the face).
     Faces(Box<[Bsdf; 2]>),
+    /// A mix of two BSDFs, `(1 − w) f_0 + w f_1`, one component chosen per
+    /// bounce (`blend.rs`).
+    Blend(Box<Blend>),
 }
 
 /// A material.
@@ -211,6 +228,15 @@ pub struct References {
     pub textures: Vec<TextureId>,
 }
 
+impl References {
+    /// Adds `other`'s ids.
+    fn append(&mut self, other: References) {
+        self.spectra.extend(other.spectra);
+        self.angular.extend(other.angular);
+        self.textures.extend(other.textures);
+    }
+}
+
 impl Material {
     /// A non-emissive Lambertian material.
     pub fn lambert(name: &str, albedo: SpectrumId) -> Self {
@@ -236,7 +262,7 @@ impl Material {
     /// This material cut out by `opacity` (`mask.rs`): its BSDF nested in
     /// a [`Mask`] that keeps the BSDF's sides, while the material scatters
     /// from both faces (its holes pass light either way).
-    pub fn masked(self, opacity: Opacity) -> Self {
+    pub fn masked(self, opacity: Fraction) -> Self {
         let nested_front_only = self.front_only();
         Self {
             bsdf: Bsdf::Mask(Box::new(Mask {
@@ -295,28 +321,29 @@ impl Bsdf {
             }
             Bsdf::Mask(mask) => {
                 r = mask.nested.references();
-                if let Opacity::Texture(id) = mask.opacity {
+                if let Fraction::Texture(id) = mask.opacity {
                     r.textures.push(id);
                 }
             }
-            Bsdf::Faces(faces) => {
-                for face in faces.iter() {
-                    let inner = face.references();
-                    r.spectra.extend(inner.spectra);
-                    r.angular.extend(inner.angular);
-                    r.textures.extend(inner.textures);
+            Bsdf::Faces(faces) => faces.iter().for_each(|f| r.append(f.references())),
+            Bsdf::Blend(blend) => {
+                if let Fraction::Texture(id) = blend.weight {
+                    r.textures.push(id);
                 }
+                blend.bsdfs.iter().for_each(|b| r.append(b.references()));
             }
         }
         r
     }
 
-    /// The BSDFs that scatter, under any masks and faces: the BSDF itself
-    /// unless it is a [`Bsdf::Mask`] or [`Bsdf::Faces`].
+    /// The BSDFs that scatter, under any masks, faces and blends: the BSDF
+    /// itself unless it is a [`Bsdf::Mask`], [`Bsdf::Faces`] or
+    /// [`Bsdf::Blend`].
     pub fn leaves(&self) -> Vec<&Bsdf> {
         match self {
             Self::Mask(mask) => mask.nested.leaves(),
             Self::Faces(faces) => faces.iter().flat_map(Bsdf::leaves).collect(),
+            Self::Blend(blend) => blend.bsdfs.iter().flat_map(Bsdf::leaves).collect(),
             other => vec![other],
         }
     }
@@ -332,6 +359,17 @@ impl Bsdf {
             .any(|b| matches!(b, Self::Dielectric { ior, .. } if ior.is_dispersive()))
     }
 
+    /// Whether evaluating the BSDF needs the bounce's lobe number
+    /// ([`ShadingPoint::lobe`]): a blend anywhere in it.
+    pub fn needs_lobe(&self) -> bool {
+        match self {
+            Self::Blend(_) => true,
+            Self::Mask(mask) => mask.nested.needs_lobe(),
+            Self::Faces(faces) => faces.iter().any(Bsdf::needs_lobe),
+            _ => false,
+        }
+    }
+
     /// Whether the BSDF transmits light through the surface (then it
     /// scatters from both faces whatever [`Material::sides`] says; a mask
     /// passes light through its holes and its nested BSDF keeps its own
@@ -340,6 +378,7 @@ impl Bsdf {
         match self {
             Self::Dielectric { .. } | Self::ThinDielectric { .. } | Self::Mask(_) => true,
             Self::Faces(faces) => faces.iter().any(Bsdf::transmits),
+            Self::Blend(blend) => blend.bsdfs.iter().any(Bsdf::transmits),
             Self::ThinFilm {
                 front_transmittance,
                 ..
@@ -363,6 +402,10 @@ pub struct ShadingPoint {
     pub uv: Vec2,
     /// The hero wavelength of sampled transports (`None` for Fourier).
     pub hero_nm: Option<f32>,
+    /// The bounce's lobe number, where a BSDF chooses a component before
+    /// it is evaluated (a blend, `blend.rs`: the light sample evaluates
+    /// the component the BSDF sample takes); 0 elsewhere.
+    pub lobe: f32,
 }
 
 /// A sampled scattering direction.
@@ -452,11 +495,7 @@ mod tests {
         };
         let faces = Bsdf::Faces(Box::new([lambert(3), lambert(5)]));
         let swapped = Bsdf::Faces(Box::new([lambert(5), lambert(3)]));
-        let tables = MaterialTables {
-            spectra: &[],
-            angular: &[],
-            textures: &[],
-        };
+        let tables = NO_TABLES;
         let (wo, wi) = (
             Vec3::new(0.2, 0.1, 0.9).normalize(),
             Vec3::new(-0.3, 0.2, 0.8).normalize(),
@@ -467,6 +506,7 @@ mod tests {
                 front,
                 uv: Vec2::ZERO,
                 hero_nm: None,
+                lobe: 0.0,
             };
             let sampled = b
                 .sample(&tables, &p, wo, 0.5, 0.3, 0.6)
@@ -612,6 +652,7 @@ mod tests {
                 front: true,
                 uv: Vec2::ZERO,
                 hero_nm: None,
+                lobe: 0.0,
             });
             let n = Vec3x8::from_lanes(&normals);
             let (wo8, wi8) = (Vec3x8::from_lanes(&wo), Vec3x8::from_lanes(&wi));

@@ -36,6 +36,7 @@ impl Bsdf {
         match self {
             Self::Mask(mask) => mask.sample(tables, p, wo, u_lobe, [u, v]),
             Self::Faces(faces) => faces[usize::from(!p.front)].sample(tables, p, wo, u_lobe, u, v),
+            Self::Blend(blend) => blend.sample(tables, p, wo, u_lobe, [u, v]),
             Self::Lambert { albedo } => {
                 let wi = sample_cosine(p.n, u, v);
                 let cos = wi.dot(p.n);
@@ -259,6 +260,9 @@ impl Bsdf {
                 return faces[usize::from(!p.front)]
                     .direction_depends_on_wavelength(tables, p, wo, u_lobe);
             }
+            Self::Blend(blend) => {
+                return blend.direction_depends_on_wavelength(tables, p, wo, u_lobe);
+            }
             _ => {}
         }
         let Self::Dielectric {
@@ -360,6 +364,7 @@ impl Bsdf {
             Self::ThinFilm { .. } | Self::ThinDielectric { .. } => BsdfEval::ZERO,
             Self::Mask(mask) => mask.eval(tables, p, wo, wi),
             Self::Faces(faces) => faces[usize::from(!p.front)].eval(tables, p, wo, wi),
+            Self::Blend(blend) => blend.eval(tables, p, wo, wi),
         }
     }
 }
