@@ -442,7 +442,7 @@ impl<S: Copy> PathState<S> {
             }
             // A blend evaluates the component its lobe number chooses, for
             // the light sample below as for the BSDF sample (`blend.rs`).
-            if !shading.needs_lobe(active).is_empty() {
+            if scene.needs_lobe() && !shading.needs_lobe(active).is_empty() {
                 let u_lobe = *early_lobe
                     .get_or_insert_with(|| uniforms(rngs, dimensions.bsdf_lobe, active).to_array());
                 shading.set_lobes(&u_lobe);

@@ -125,6 +125,10 @@ pub struct Scene {
     materials: Vec<Material>,
     /// Fluorophores of fluorescent materials.
     fluorophores: Vec<SceneFluorophore>,
+    /// Whether a material evaluates with the bounce's lobe number (a blend,
+    /// [`Bsdf::needs_lobe`]): only then does the integrator draw it before
+    /// the light sample.
+    needs_lobe: bool,
     /// Triangle vertices (non-degenerate ones only), in a vector or in the
     /// BVH's 8-wide tree ([`triangle_store`]).
     triangles: TriangleStore,
@@ -191,6 +195,12 @@ impl Scene {
     /// textures
     pub fn fluorophores(&self) -> &[SceneFluorophore] {
         &self.fluorophores
+    }
+
+    /// Whether a material's BSDF reads the bounce's lobe number when it is
+    /// evaluated ([`Bsdf::needs_lobe`]).
+    pub fn needs_lobe(&self) -> bool {
+        self.needs_lobe
     }
 
     /// textures
@@ -1569,6 +1579,7 @@ impl SceneBuilder {
         }
         let emitters = emitters(&bvh, &packed_surfaces);
         let spectrum_registers = SpectrumRegisters::new(&self.spectra);
+        let needs_lobe = self.materials.iter().any(|m| m.bsdf.needs_lobe());
         Ok(Scene {
             range: self.range,
             spectra: self.spectra,
@@ -1576,6 +1587,7 @@ impl SceneBuilder {
             textures: self.textures,
             materials: self.materials,
             fluorophores: self.fluorophores,
+            needs_lobe,
             triangles,
             uvs: self.uvs,
             vertex_normals: self.vertex_normals,
