@@ -906,5 +906,12 @@ fn blends_follow_mitsuba() -> TestResult {
         8,
         &["a one-sided and a two-sided BSDF cannot be blended"],
     )?;
+    // A dielectric scatters from both faces, a diffuse BSDF from one.
+    refused(
+        "blend-glass",
+        &blend(&format!("{weight}{diffuse}<bsdf type=\"dielectric\"/>")),
+        8,
+        &["a one-sided and a two-sided BSDF cannot be blended"],
+    )?;
     Ok(())
 }

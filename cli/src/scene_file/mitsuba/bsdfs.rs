@@ -68,6 +68,12 @@ pub(crate) struct BuiltBsdf {
 }
 
 impl BuiltBsdf {
+    /// Whether only its front face scatters: one-sided and not
+    /// transmitting (`Material::front_only` of its material).
+    fn front_only(&self) -> bool {
+        self.one_sided && !self.bsdf.transmits()
+    }
+
     /// The material of this BSDF with `emission` (front face only, as
     /// Mitsuba's area emitters).
     pub(crate) fn material(&self, emission: Option<SpectrumId>) -> Material {
@@ -210,21 +216,12 @@ impl<'e> Importer<'e, '_> {
             }
             "blendbsdf" => {
                 let weight = self.fraction(&object, "weight", None)?;
-                let nested: Vec<_> = object
-                    .objects()
-                    .into_iter()
-                    .filter(|p| p.name != "weight")
-                    .collect();
-                let [first, second] = match nested.as_slice() {
-                    [a, b] => [self.object_of(a, &["bsdf"])?, self.object_of(b, &["bsdf"])?],
+                let [first, second] = match self.nested_bsdfs(&object, "weight")?.as_slice() {
+                    &[a, b] => [a, b],
                     _ => return Err(object.error("needs two nested BSDFs")),
                 };
                 let (first, second) = (self.bsdf(Some(first))?, self.bsdf(Some(second))?);
-                let sided = |b: &BuiltBsdf| b.one_sided && !b.bsdf.transmits();
-                if !first.bsdf.transmits()
-                    && !second.bsdf.transmits()
-                    && sided(&first) != sided(&second)
-                {
+                if first.front_only() != second.front_only() {
                     return Err(object.error(
                         "a one-sided and a two-sided BSDF cannot be blended here (make both twosided, or neither)",
                     ));
@@ -249,17 +246,12 @@ impl<'e> Importer<'e, '_> {
             }
             "mask" => {
                 let opacity = self.fraction(&object, "opacity", Some(DEFAULT_OPACITY))?;
-                let nested: Vec<_> = object
-                    .objects()
-                    .into_iter()
-                    .filter(|p| p.name != "opacity")
-                    .collect();
-                let nested = match nested.as_slice() {
-                    [one] => self.object_of(one, &["bsdf"])?,
+                let nested = match self.nested_bsdfs(&object, "opacity")?.as_slice() {
+                    &[one] => one,
                     _ => return Err(object.error("needs one nested BSDF")),
                 };
                 let nested = self.bsdf(Some(nested))?;
-                let nested_front_only = nested.one_sided && !nested.bsdf.transmits();
+                let nested_front_only = nested.front_only();
                 let mask = Mask {
                     opacity,
                     nested: nested.bsdf,
@@ -397,6 +389,21 @@ impl<'e> Importer<'e, '_> {
                 _ => Err(p.error("must be a number here (textured values are not supported)")),
             },
         }
+    }
+
+    /// The nested BSDFs of `object`: its nested or referenced objects
+    /// other than its parameter `parameter` (a texture), each a `<bsdf>`.
+    fn nested_bsdfs(
+        &mut self,
+        object: &Object<'e>,
+        parameter: &str,
+    ) -> Result<Vec<&'e Element>, CliError> {
+        object
+            .objects()
+            .into_iter()
+            .filter(|p| p.name != parameter)
+            .map(|p| self.object_of(p, &["bsdf"]))
+            .collect()
     }
 
     /// A fraction parameter (`mask`'s `opacity`, `blendbsdf`'s `weight`):
