@@ -7,7 +7,8 @@ Steps (all by default; `--only STEP` for one):
 
 * `assets`: writes the files the scenes read that the project makes itself:
   textures/colours.png (4 x 4 sRGB texels), textures/grey.png (4 x 4, one
-  channel), spectra/led.spd (a white-LED-like emission spectrum) and
+  channel), textures/normal_bumps.png (16 x 16 tangent-space normals of
+  domes), spectra/led.spd (a white-LED-like emission spectrum) and
   meshes/ball.obj (a 12 x 8 UV sphere without normals). Deterministic.
 * `reference`: renders every scene with Mitsuba 3.9.1, variant
   `llvm_ad_spectral`, at the scene's reference sample count (`SCENES`), in
@@ -104,6 +105,7 @@ SCENES = {
     "bsdf_mask": {"suite": "materials", "ref_spp": 4096, "negative": {"alpha": "0.65"}},
     "twosided_faces": {"suite": "materials", "ref_spp": 4096, "negative": {"blue": "0.35"}},
     "bsdf_blend": {"suite": "materials", "ref_spp": 4096, "negative": {"weight": "0.7"}},
+    "bsdf_normalmap": {"suite": "materials", "ref_spp": 4096, "negative": {"angle": "90"}},
     # lights
     "point_light": {"suite": "lights", "ref_spp": 4096, "negative": {"light_x": "1.4"}},
     "spot_light": {"suite": "lights", "ref_spp": 4096, "negative": {"beam": "12"}},
@@ -231,6 +233,42 @@ def ball_obj(longitudes=12, latitudes=8, radius=0.6):
     return "\n".join(lines) + "\n"
 
 
+#: normal_bumps.png: texels per side, domes per side, and the domes'
+#: height over their radius (the steepest tilt, at a dome's rim, is
+#: atan(2 * BUMP_HEIGHT) = 50 degrees).
+NORMAL_MAP_TEXELS = 16
+NORMAL_MAP_DOMES = 2
+BUMP_HEIGHT = 0.6
+
+
+def normal_bumps_rows():
+    """A tangent-space normal map of NORMAL_MAP_DOMES x NORMAL_MAP_DOMES
+    paraboloid domes, h = BUMP_HEIGHT (1 - r^2) inside each cell's circle
+    of radius 1 (r in cell units) and flat outside, as 8-bit (n + 1) / 2
+    rows, top row first. The domes are cut off on the cell's +u side (a
+    step in h there is left out: the texels beyond x > 0.5 are flat), so
+    that a map whose u and v axes were swapped or mirrored shades
+    differently."""
+    rows = []
+    cell = NORMAL_MAP_TEXELS // NORMAL_MAP_DOMES
+    for j in range(NORMAL_MAP_TEXELS):
+        row = []
+        for i in range(NORMAL_MAP_TEXELS):
+            x = 2.0 * ((i % cell) + 0.5) / cell - 1.0
+            # Rows go down the image, as Mitsuba's v does (v = 0 is the
+            # top row), and the frame's t axis follows v.
+            y = 2.0 * ((j % cell) + 0.5) / cell - 1.0
+            if x * x + y * y < 1.0 and x < 0.5:
+                nx, ny = 2.0 * BUMP_HEIGHT * x, 2.0 * BUMP_HEIGHT * y
+            else:
+                nx, ny = 0.0, 0.0
+            length = math.sqrt(nx * nx + ny * ny + 1.0)
+            n = (nx / length, ny / length, 1.0 / length)
+            row.extend(round(255 * (c + 1.0) / 2.0) for c in n)
+        rows.append(row)
+    return rows
+
+
 def write_assets():
     (SCENE_DIR / "textures").mkdir(exist_ok=True)
     (SCENE_DIR / "spectra").mkdir(exist_ok=True)
@@ -238,6 +276,8 @@ def write_assets():
     rgb_rows = [[c for texel in row for c in texel] for row in COLOURS]
     (SCENE_DIR / "textures" / "colours.png").write_bytes(png_bytes(4, 4, 3, rgb_rows))
     (SCENE_DIR / "textures" / "grey.png").write_bytes(png_bytes(4, 4, 1, GREYS))
+    (SCENE_DIR / "textures" / "normal_bumps.png").write_bytes(
+        png_bytes(NORMAL_MAP_TEXELS, NORMAL_MAP_TEXELS, 3, normal_bumps_rows()))
     (SCENE_DIR / "spectra" / "led.spd").write_text(led_spd())
     (SCENE_DIR / "meshes" / "ball.obj").write_text(ball_obj())
 

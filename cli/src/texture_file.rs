@@ -1,5 +1,6 @@
 //! Loading textures for scene files: PNG and OpenEXR images as spectral
-//! (albedo) or scalar (film thickness) [`Texture`]s.
+//! (albedo), scalar (film thickness, opacity) or vector (normal map)
+//! [`Texture`]s.
 //!
 //! # Formats
 //!
@@ -11,7 +12,9 @@
 //!     [`spectral_core::color::srgb_decode`] (grey images as grey colours),
 //!     then upsampled per texel ([`Texture::rgb`]);
 //!   * thickness: must be grey; the value `v / (2^bits − 1)` is used as it is
-//!     (linear, 0 … 1).
+//!     (linear, 0 … 1);
+//!   * normals (a normal map's `(n + 1)/2`): must be in colour; each
+//!     channel's `v / (2^bits − 1)` as it is.
 //! * **OpenEXR** (first part; values are linear):
 //!   * albedo: channels `F0 … F{N−1}` make a Fourier texture read with
 //!     [`crate::image_out::read_coefficients_exr`] (its `fourierRangeNm` must equal the
@@ -21,7 +24,8 @@
 //!     [`SPECTRAL_TEXTURE_COEFFS`] coefficients, the polyline between the
 //!     wavelengths held constant beyond them; otherwise `R`, `G`, `B` (linear sRGB reflectance,
 //!     clamped to [0, 1] by the upsampling) or `Y` (grey);
-//!   * thickness: `Y`, else the only channel of a single-channel image.
+//!   * thickness: `Y`, else the only channel of a single-channel image;
+//!   * normals: `R`, `G`, `B` as stored.
 //!
 //! # Limits
 //!
@@ -66,6 +70,20 @@ pub enum TextureUse {
     /// A scalar in [0, 1], values as stored (a film thickness within its
     /// range, an opacity).
     Scalar,
+    /// A normal map's tangent-space normals `(n + 1)/2`: three values per
+    /// texel, as stored.
+    Normals,
+}
+
+impl TextureUse {
+    /// What an image must be for this use, for messages.
+    fn image_kind(self) -> &'static str {
+        match self {
+            Self::Albedo => "an albedo texture must be an image of colours or spectra",
+            Self::Scalar => "a thickness or opacity texture must be a grey image",
+            Self::Normals => "a normal map must be an RGB image",
+        }
+    }
 }
 
 enum Format {
@@ -326,6 +344,21 @@ fn load_png(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Text
             let values = (0..count).map(|i| texel(i)[0]).collect();
             Texture::scalar(pixels.width, pixels.height, values, range).map_err(describe)
         }
+        TextureUse::Normals => {
+            if pixels.channels < 3 {
+                return Err(error(
+                    path,
+                    "a normal map must be an RGB image (this PNG is grey)",
+                ));
+            }
+            let texels = (0..count)
+                .map(|i| {
+                    let t = texel(i);
+                    [t[0], t[1], t[2]]
+                })
+                .collect();
+            Texture::vector(pixels.width, pixels.height, texels, range).map_err(describe)
+        }
     }
 }
 
@@ -426,10 +459,13 @@ fn load_exr(
     let has_f0 = header.channels.list.iter().any(|c| c.name.eq("F0"));
     let describe = |e| error(path, format!("invalid texture: {e}"));
     if has_f0 {
-        if usage == TextureUse::Scalar {
+        if usage != TextureUse::Albedo {
             return Err(error(
                 path,
-                "a thickness or opacity texture must be a grey image (this EXR holds Fourier coefficients)",
+                format!(
+                    "{} (this EXR holds Fourier coefficients)",
+                    usage.image_kind()
+                ),
             ));
         }
         let image = read_coefficients_exr_from(reader, path)?;
@@ -438,10 +474,10 @@ fn load_exr(
             .map_err(describe);
     }
     if spectral_kind_of(&header, SpectralKind::Reflective).is_some() {
-        if usage == TextureUse::Scalar {
+        if usage != TextureUse::Albedo {
             return Err(error(
                 path,
-                "a thickness or opacity texture must be a grey image (this EXR holds spectra)",
+                format!("{} (this EXR holds spectra)", usage.image_kind()),
             ));
         }
         let image = read_spectral_exr_from(reader, path, SpectralKind::Reflective)?;
@@ -504,6 +540,22 @@ fn load_exr(
             };
             Texture::scalar(w32, h32, values, range).map_err(describe)
         }
+        TextureUse::Normals => {
+            let (Some(r), Some(g), Some(b)) = (channel("R"), channel("G"), channel("B")) else {
+                return Err(error(
+                    path,
+                    format!(
+                        "a normal map EXR needs R, G and B channels (found {})",
+                        image.names()
+                    ),
+                ));
+            };
+            let at = |values: &[f32], i: usize| values.get(i).copied().unwrap_or(0.0);
+            let texels = (0..count)
+                .map(|i| [at(&r, i), at(&g, i), at(&b, i)])
+                .collect();
+            Texture::vector(w32, h32, texels, range).map_err(describe)
+        }
     }
 }
 
@@ -540,7 +592,7 @@ pub fn fuzz_coefficient_exr(bytes: &[u8]) {
         assert!(lo.is_finite() && hi.is_finite() && lo < hi, "{lo}..{hi}");
     }
     let range = SpectralRange::VISIBLE;
-    for usage in [TextureUse::Albedo, TextureUse::Scalar] {
+    for usage in [TextureUse::Albedo, TextureUse::Scalar, TextureUse::Normals] {
         let Ok(texture) = load_exr(std::io::Cursor::new(bytes), name, usage, range) else {
             continue;
         };

@@ -737,6 +737,116 @@ fn masks_follow_mitsuba() -> TestResult {
     Ok(())
 }
 
+/// Mitsuba's `normalmap`: a raw bitmap's texels as stored, the nested
+/// BSDF's sides, the frame turned to the viewer inside a `twosided` and
+/// kept on the surface outside one, both switches read; every way to get
+/// it wrong is one line.
+#[test]
+fn normal_maps_follow_mitsuba() -> TestResult {
+    use simd_tracer::shading::material::{Bsdf, MapFrame, NormalMap};
+    let dir = test_dir("normal-maps")?;
+    let bumps = suite_texture("normal_bumps.png");
+    let bitmap = |raw: &str| {
+        format!(
+            "<texture type=\"bitmap\" name=\"normalmap\"><string name=\"filename\" value=\"{bumps}\"/>{raw}</texture>"
+        )
+    };
+    let raw = bitmap("<boolean name=\"raw\" value=\"true\"/>");
+    let mapped = |inner: &str| format!("<bsdf type=\"normalmap\">{raw}{inner}</bsdf>");
+    let diffuse = "<bsdf type=\"diffuse\"/>";
+    let on_rectangle = |bsdf: &str| {
+        scene(&format!(
+            "    <shape type=\"rectangle\">{bsdf}</shape>\n    <emitter type=\"constant\"/>"
+        ))
+    };
+    let map_of = |bsdf: &str, name: &str| -> TestResult<(NormalMap, simd_tracer::scene::Scene)> {
+        let path = write(&dir, name, &on_rectangle(bsdf))?;
+        let built = load(&path, &[], false)?.builder.build()?;
+        let map = built
+            .materials()
+            .iter()
+            .find_map(|m| m.bsdf.normal_maps().first().map(|&map| map.clone()))
+            .ok_or("no normal map")?;
+        Ok((map, built))
+    };
+    let (plain, built) = map_of(&mapped(diffuse), "plain.xml")?;
+    assert_eq!(plain.frame, MapFrame::Surface);
+    assert!(plain.flip_invalid && plain.shadowing, "Mitsuba's defaults");
+    assert!(plain.nested_front_only);
+    assert!(matches!(plain.nested, Bsdf::Lambert { .. }));
+    assert!(built.needs_tangent());
+    // normal_bumps.png's texel in column 2, row 3 (Mitsuba's v = 0 is the
+    // top row), inside a dome: (n + 1)/2 in bytes, as stored (no sRGB
+    // decoding); tools/mitsuba_conformance.py wrote it.
+    let texture = &built.material_tables().textures[plain.texture.index()];
+    let got = texture
+        .vector_at(2.5 / 16.0, 3.5 / 16.0)
+        .ok_or("not a vector texture")?;
+    let (x, y) = (2.0 * 2.5 / 8.0 - 1.0, 2.0 * 3.5 / 8.0 - 1.0);
+    let n = glam::Vec3::new(1.2 * x, 1.2 * y, 1.0).normalize();
+    let expected = ((n + glam::Vec3::ONE) / 2.0 * 255.0).round() / 255.0;
+    assert!(
+        (glam::Vec3::from_array(got) - expected).length() < 1e-6,
+        "{got:?} against {expected}"
+    );
+    let (outside, _) = map_of(
+        &mapped("<bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf>"),
+        "outside.xml",
+    )?;
+    assert_eq!(outside.frame, MapFrame::Surface);
+    assert!(!outside.nested_front_only);
+    let (inside_twosided, _) = map_of(
+        &format!("<bsdf type=\"twosided\">{}</bsdf>", mapped(diffuse)),
+        "inside.xml",
+    )?;
+    assert_eq!(inside_twosided.frame, MapFrame::Viewer);
+    assert!(inside_twosided.nested_front_only);
+    let (switched, _) = map_of(
+        &format!(
+            "<bsdf type=\"normalmap\">{raw}<boolean name=\"flip_invalid_normals\" value=\"false\"/>\
+             <boolean name=\"use_shadowing_function\" value=\"false\"/>{diffuse}</bsdf>"
+        ),
+        "switched.xml",
+    )?;
+    assert!(!switched.flip_invalid && !switched.shadowing);
+    refused(
+        "normalmap-not-raw",
+        &on_rectangle(&format!(
+            "<bsdf type=\"normalmap\">{}{diffuse}</bsdf>",
+            bitmap("")
+        )),
+        8,
+        &["a normal map needs raw=true"],
+    )?;
+    refused(
+        "normalmap-missing",
+        &on_rectangle(&format!("<bsdf type=\"normalmap\">{diffuse}</bsdf>")),
+        8,
+        &["normalmap", "needs a `normalmap` texture"],
+    )?;
+    refused(
+        "normalmap-nested",
+        &on_rectangle(&mapped(&mapped(diffuse))),
+        8,
+        &["a normalmap inside a normalmap is not supported"],
+    )?;
+    refused(
+        "normalmap-two",
+        &on_rectangle(&mapped(&format!("{diffuse}{diffuse}"))),
+        8,
+        &["needs one nested BSDF"],
+    )?;
+    refused(
+        "normalmap-checkerboard",
+        &on_rectangle(&format!(
+            "<bsdf type=\"normalmap\"><texture type=\"checkerboard\" name=\"normalmap\"/>{diffuse}</bsdf>"
+        )),
+        8,
+        &["is not supported as a normal map (bitmap)"],
+    )?;
+    Ok(())
+}
+
 /// The sRGB transfer function's inverse (IEC 61966-2-1).
 fn srgb_decode(v: f64) -> f64 {
     if v <= 0.04045 {

@@ -966,6 +966,122 @@ fn opacity_keys_refuse_bad_values_with_one_line() -> TestResult {
     Ok(())
 }
 
+/// `normal_texture` on a TOML material: a Lambertian floor under a
+/// directional light from 40° towards `+x`, seen from above, with a 1 × 1
+/// map whose texel tilts the normal along the rectangle's `u` (`+x`): the
+/// image is the unmapped one times `(l · n') G / (l · n)` (Mitsuba's
+/// `normalmap`, `G` Estevez et al.'s shadowing term), computed here from
+/// the texel's bytes. Noise-free (the light sample is exact), so the bound
+/// is `f32` rounding; the same tilt along `−x` (the frame mirrored) is far
+/// outside it. The map keeps the material's sides, in the surface's
+/// frame.
+#[test]
+fn toml_normal_texture_tilts_the_shading_normal() -> TestResult {
+    use simd_tracer::shading::material::{Bsdf, MapFrame};
+    let dir = test_dir("real-scenes", "normal-texture")?;
+    let tilt_deg = 25.0f64;
+    let texel = [
+        (255.0 * (tilt_deg.to_radians().sin() + 1.0) / 2.0).round() as u8,
+        128,
+        (255.0 * (tilt_deg.to_radians().cos() + 1.0) / 2.0).round() as u8,
+    ];
+    let png = dir.join("tilt.png");
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(fs::File::create(&png)?), 1, 1);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(&texel)?;
+    writer.finish()?;
+    let light_deg = 40.0f64;
+    let (sin_l, cos_l) = light_deg.to_radians().sin_cos();
+    let text = |keys: &str| {
+        format!(
+            r#"
+[camera]
+position = [0, 0, 3]
+target = [0, 0, 0]
+fov_deg = 20
+
+[materials.floor]
+type = "lambert"
+albedo = {{ constant = 0.5 }}
+{keys}
+
+[[shapes]]
+type = "rectangle"
+material = "floor"
+transform = [{{ scale = 2 }}]
+
+[[lights]]
+type = "directional"
+direction = [{}, 0, {}]
+irradiance = {{ constant = 3 }}
+"#,
+            -sin_l, -cos_l
+        )
+    };
+    let (_d, flat_path) = scene("normal-flat", &text(""))?;
+    let (_d, mapped_path) = scene(
+        "normal-mapped",
+        &text(&format!("normal_texture = \"{}\"", png.display())),
+    )?;
+    let mapped = load(&mapped_path)?;
+    let floor = mapped
+        .materials()
+        .iter()
+        .find(|m| m.name == "floor")
+        .ok_or("no floor")?;
+    let Bsdf::NormalMap(map) = &floor.bsdf else {
+        return Err("the floor has no normal map".into());
+    };
+    assert_eq!(map.frame, MapFrame::Surface);
+    assert!(map.flip_invalid && map.shadowing && !map.nested_front_only);
+    let fourier = FourierTransport::<8>::new(mapped.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
+    let mean_y = |image: Vec<Xyz>| image.iter().map(|x| x.y).sum::<f64>() / image.len() as f64;
+    let ratio = mean_y(render_xyz(&fourier, &mapped, 4, 1)?)
+        / mean_y(render_xyz(&fourier, &load(&flat_path)?, 4, 1)?);
+    let n = texel.map(|b| 2.0 * f64::from(b) / 255.0 - 1.0);
+    let length = n.iter().map(|c| c * c).sum::<f64>().sqrt();
+    let [nx, _, nz] = n.map(|c| c / length);
+    let alpha_sq = ((1.0 - nz * nz) / (nz * nz) / 8.0).min(1.0);
+    let g = 2.0 / (1.0 + (1.0 + alpha_sq * (sin_l / cos_l).powi(2)).sqrt());
+    let expected = (nx * sin_l + nz * cos_l) * g / cos_l;
+    let mirrored = (-nx * sin_l + nz * cos_l) * g / cos_l;
+    println!("normal texture: ratio {ratio:.6}, closed form {expected:.6}");
+    assert!(
+        (ratio / expected - 1.0).abs() < 1e-3,
+        "{ratio} against {expected}"
+    );
+    assert!(
+        (ratio / mirrored - 1.0).abs() > 0.1,
+        "{ratio} against {mirrored}"
+    );
+    // A grey image or a checkerboard is no normal map.
+    let grey = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/conformance/scenes/textures/grey.png")
+        .display()
+        .to_string();
+    for (name, keys, needle) in [
+        (
+            "normal-grey",
+            format!("normal_texture = \"{grey}\"\n"),
+            "a normal map must be an RGB image",
+        ),
+        (
+            "normal-checkerboard",
+            "normal_texture = { checkerboard = [{ constant = 0.5 }, { constant = 1 }] }\n"
+                .to_string(),
+            "a normal map must be an image file",
+        ),
+    ] {
+        let body = format!(
+            "[materials.card]\ntype = \"lambert\"\nalbedo = {{ constant = 0.5 }}\n{keys}\n[[shapes]]\ntype = \"cube\"\nmaterial = \"card\"\n"
+        );
+        error_at(name, &body, "normal_texture", needle)?;
+    }
+    Ok(())
+}
+
 /// A TOML conductor's `tint` multiplies its Fresnel term; a tint that is
 /// not a spectrum is refused with one line.
 #[test]

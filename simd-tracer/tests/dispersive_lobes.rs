@@ -62,6 +62,7 @@ fn point(front: bool, hero_nm: Option<f32>) -> ShadingPoint {
         n: Vec3::Z,
         front,
         uv: Vec2::ZERO,
+        tangent: Vec3::ZERO,
         hero_nm,
         lobe: 0.0,
     }

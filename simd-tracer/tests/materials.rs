@@ -237,6 +237,7 @@ fn point(front: bool) -> ShadingPoint {
         n: Vec3::Z,
         front,
         uv: Vec2::ZERO,
+        tangent: Vec3::ZERO,
         hero_nm: None,
         lobe: 0.0,
     }

@@ -384,6 +384,7 @@ fn ours(f: &Fixture, bsdf: &Bsdf, p: &Point, how: Spectral) -> (f64, f64) {
         n: Vec3::Z * side,
         front: side > 0.0,
         uv: Vec2::ZERO,
+        tangent: Vec3::ZERO,
         hero_nm: None,
         lobe: 0.0,
     };
@@ -555,6 +556,7 @@ fn smooth_plastic_delta_lobes_are_mitsubas() -> TestResult {
             n: Vec3::Z,
             front: true,
             uv: Vec2::ZERO,
+            tangent: Vec3::ZERO,
             hero_nm: None,
             lobe: 0.0,
         };

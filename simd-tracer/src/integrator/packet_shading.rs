@@ -87,6 +87,15 @@ impl<'a> Shading<'a> {
             }
         });
         let (normal_lanes, front) = (normal.to_lanes(), front.to_bitmask());
+        // Only normal maps read the tangent (`Bsdf::needs_tangent`).
+        let tangent = |lane: usize| {
+            let mapped = scene.needs_tangent() && bsdfs[lane].is_some_and(Bsdf::needs_tangent);
+            if mapped {
+                scene.hit_tangent(hit.triangle[lane], hit.instance[lane])
+            } else {
+                Vec3::ZERO
+            }
+        };
         let (hit_u, hit_v) = (hit.u.to_array(), hit.v.to_array());
         let points = core::array::from_fn(|lane| {
             let uv = scene
@@ -98,6 +107,7 @@ impl<'a> Shading<'a> {
                 n: normal_lanes[lane],
                 front: front & (1 << lane) != 0,
                 uv,
+                tangent: tangent(lane),
                 hero_nm: transport.hero_wavelength(wavelengths, lane),
                 lobe: 0.0,
             }

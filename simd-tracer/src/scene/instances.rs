@@ -334,6 +334,16 @@ impl Instances {
         mesh.uvs.get(index).copied()
     }
 
+    /// The world-space `∂p/∂u` of `triangle` in instance `instance`
+    /// (`super::tangent`): the object-space one mapped as a vector.
+    pub fn tangent(&self, triangle: u32, instance: u32) -> Option<Vec3> {
+        let (_, mesh, index) = self.at(triangle, instance)?;
+        let vertices = mesh.triangles.get(index)?;
+        let object = super::tangent::surface_tangent(vertices, mesh.uvs.get(index));
+        let placement = self.placements.get(instance as usize)?;
+        Some(placement.transform.affine().transform_vector3(object))
+    }
+
     /// The world-space unit geometric normal of `triangle` in instance
     /// `instance` (module docs).
     pub fn normal(&self, triangle: u32, instance: u32) -> Option<Vec3> {

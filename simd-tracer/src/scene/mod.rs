@@ -19,6 +19,7 @@ pub mod ply;
 mod relight;
 pub mod serialized;
 pub mod shapes;
+pub mod tangent;
 pub mod transform;
 mod triangle_store;
 
@@ -43,7 +44,7 @@ use crate::shading::surface::{PackedSurfaces, Surface, triangle_area};
 use crate::simd::{LANES, LaneMask};
 use crate::spectra::angular::{AngularFunction, AngularSpectrum};
 use crate::spectra::environment::EnvironmentMap;
-use crate::spectra::texture::Texture;
+use crate::spectra::texture::{Texture, TextureData};
 use crate::spectra::{SceneSpectrum, SpectrumRegisters, SpectrumSource};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -129,6 +130,11 @@ pub struct Scene {
     /// [`Bsdf::needs_lobe`]): only then does the integrator draw it before
     /// the light sample.
     needs_lobe: bool,
+    /// Whether a material has a normal map ([`Bsdf::needs_tangent`]).
+    needs_tangent: bool,
+    /// `∂p/∂u` of the triangles whose material has a normal map
+    /// ([`tangent`]); no others.
+    tangents: SparseAttribute<Vec3>,
     /// Triangle vertices (non-degenerate ones only), in a vector or in the
     /// BVH's 8-wide tree ([`triangle_store`]).
     triangles: TriangleStore,
@@ -476,6 +482,26 @@ impl Scene {
         self.instances.as_ref()?.uvs(triangle, instance)
     }
 
+    /// Whether a material has a normal map ([`Bsdf::needs_tangent`]):
+    /// only then does shading read [`Scene::hit_tangent`].
+    pub fn needs_tangent(&self) -> bool {
+        self.needs_tangent
+    }
+
+    /// The world-space `∂p/∂u` of a hit triangle ([`tangent`]); zero where
+    /// its material has no normal map.
+    #[inline]
+    pub fn hit_tangent(&self, triangle: u32, instance: u32) -> Vec3 {
+        let tangent = if instance == NO_INSTANCE {
+            self.tangents.get(triangle as usize).copied()
+        } else {
+            self.instances
+                .as_ref()
+                .and_then(|i| i.tangent(triangle, instance))
+        };
+        tangent.unwrap_or(Vec3::ZERO)
+    }
+
     /// The unit geometric normal of a hit triangle, in world space.
     #[inline]
     pub fn hit_normal(&self, triangle: u32, instance: u32) -> Option<Vec3> {
@@ -612,6 +638,7 @@ impl Scene {
     pub fn memory_bytes(&self) -> usize {
         let geometry = self.triangles.memory_bytes()
             + self.uvs.memory_bytes()
+            + self.tangents.memory_bytes()
             + self.vertex_normals.memory_bytes()
             + self.packed_surfaces.memory_bytes();
         let bvh =
@@ -1420,6 +1447,31 @@ impl SceneBuilder {
             .map_err(SceneError::Bvh)
     }
 
+    /// `∂p/∂u` of every triangle whose material has a normal map
+    /// ([`tangent`]), none when no material has one.
+    fn tangents(&self) -> SparseAttribute<Vec3> {
+        let mut tangents = SparseAttribute::default();
+        let mapped: Vec<bool> = self
+            .materials
+            .iter()
+            .map(|m| m.bsdf.needs_tangent())
+            .collect();
+        if !mapped.contains(&true) {
+            return tangents;
+        }
+        let triangles = self.triangles.iter().zip(&self.triangle_material);
+        for (index, (vertices, id)) in triangles.enumerate() {
+            if mapped.get(id.index()) == Some(&true) {
+                tangents.set(
+                    index,
+                    tangent::surface_tangent(vertices, self.uvs.get(index)),
+                );
+            }
+        }
+        tangents.finish(self.triangles.len());
+        tangents
+    }
+
     /// Builds the BVH and the light distribution.
     pub fn build(mut self) -> Result<Scene, SceneError> {
         let instances = self.resolve_instances()?;
@@ -1460,6 +1512,18 @@ impl SceneBuilder {
             }
         }
         for material in &self.materials {
+            for map in material.bsdf.normal_maps() {
+                let texture = self.textures.get(map.texture.index());
+                if !texture.is_some_and(|t| matches!(t.data(), TextureData::Vector(_))) {
+                    return Err(SceneError::Reference(
+                        material.name.clone(),
+                        "vector texture (of a normal map)",
+                        map.texture.0,
+                    ));
+                }
+            }
+        }
+        for material in &self.materials {
             for leaf in material.bsdf.leaves() {
                 if let Bsdf::Fluorescent { fluorophore, .. } = *leaf
                     && fluorophore.index() >= self.fluorophores.len()
@@ -1482,6 +1546,7 @@ impl SceneBuilder {
                 env.0,
             ));
         }
+        let tangents = self.tangents();
         let bvh = Bvh::build(&self.triangles);
         let full = self.checks == DerivedChecks::Full;
         if full {
@@ -1580,6 +1645,7 @@ impl SceneBuilder {
         let emitters = emitters(&bvh, &packed_surfaces);
         let spectrum_registers = SpectrumRegisters::new(&self.spectra);
         let needs_lobe = self.materials.iter().any(|m| m.bsdf.needs_lobe());
+        let needs_tangent = self.materials.iter().any(|m| m.bsdf.needs_tangent());
         Ok(Scene {
             range: self.range,
             spectra: self.spectra,
@@ -1588,6 +1654,8 @@ impl SceneBuilder {
             materials: self.materials,
             fluorophores: self.fluorophores,
             needs_lobe,
+            needs_tangent,
+            tangents,
             triangles,
             uvs: self.uvs,
             vertex_normals: self.vertex_normals,

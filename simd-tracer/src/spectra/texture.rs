@@ -11,6 +11,9 @@
 //!   `F0 … F{N−1}`); sampled transports evaluate the series (negative lobes
 //!   clamped to 0).
 //! * Scalar textures (e.g. a film thickness in [0, 1] of its range).
+//! * Vector textures: three values per texel as stored, interpolated
+//!   channel by channel (the tangent-space normals of a normal map,
+//!   `shading/material/normal_map.rs`); no spectral lookup reads them.
 //! * Checkerboards hold two prepared [`SceneSpectrum`]s (below).
 //!
 //! # UV transform
@@ -257,6 +260,8 @@ pub enum TextureData {
     },
     /// One value per texel.
     Scalar(Vec<f32>),
+    /// Three values per texel, as stored (a normal map's `(r, g, b)`).
+    Vector(Vec<[f32; 3]>),
     /// Mitsuba 3's checkerboard of two spectra (module docs).
     Checkerboard {
         /// Where the halves of `u'` and `v'` agree (Mitsuba's `color0`).
@@ -408,6 +413,26 @@ impl Texture {
         ))
     }
 
+    /// A texture of three values per texel, as stored (`texels` row-major
+    /// from the top-left; all finite).
+    pub fn vector(
+        width: u32,
+        height: u32,
+        texels: Vec<[f32; 3]>,
+        range: SpectralRange,
+    ) -> Result<Self, SpectralError> {
+        check_size(width, height, texels.len(), 1)?;
+        if let Some(index) = texels.iter().position(|t| !t.iter().all(|v| v.is_finite())) {
+            return Err(SpectralError::NonFiniteValue { index });
+        }
+        Ok(Self::with_data(
+            width,
+            height,
+            TextureData::Vector(texels),
+            range,
+        ))
+    }
+
     /// Mitsuba 3's checkerboard (module docs): `color0` on the squares
     /// `[0, ½]²` and `(½, 1)²` of every unit cell of the transformed
     /// coordinates, `color1` on the others. Both spectra must have been
@@ -455,6 +480,7 @@ impl Texture {
             TextureData::Rgb { sigmoid, fourier } => 12 * sigmoid.len() + 4 * fourier.len(),
             TextureData::Fourier { coeffs, .. } => 4 * coeffs.len(),
             TextureData::Scalar(values) => 4 * values.len(),
+            TextureData::Vector(texels) => 12 * texels.len(),
             TextureData::Checkerboard { color0, color1 } => {
                 color0.memory_bytes() + color1.memory_bytes()
             }
@@ -517,7 +543,7 @@ impl Texture {
         let (n, data): (usize, &[f32]) = match &self.data {
             TextureData::Rgb { fourier, .. } => (TEXTURE_COEFFS, fourier),
             TextureData::Fourier { n, coeffs } => (*n, coeffs),
-            TextureData::Scalar(_) => {
+            TextureData::Scalar(_) | TextureData::Vector(_) => {
                 out[0] = self.scalar_at(u, v);
                 return out;
             }
@@ -559,14 +585,15 @@ impl Texture {
                     }));
                 (series.eval_cos(x) as f32).max(0.0)
             }
-            TextureData::Scalar(_) => self.scalar_at(u, v),
+            TextureData::Scalar(_) | TextureData::Vector(_) => self.scalar_at(u, v),
             TextureData::Checkerboard { color0, color1 } => {
                 self.square(color0, color1, u, v).value(lambda_nm)
             }
         }
     }
 
-    /// The scalar value at `(u, v)` (the mean `c_0` of spectral textures).
+    /// The scalar value at `(u, v)` (the mean `c_0` of spectral textures,
+    /// the mean of a vector texture's three values).
     pub fn scalar_at(&self, u: f32, v: f32) -> f32 {
         match &self.data {
             TextureData::Scalar(values) => self
@@ -575,8 +602,28 @@ impl Texture {
                 .iter()
                 .map(|&(texel, weight)| weight * values.get(texel).copied().unwrap_or(0.0))
                 .sum(),
+            TextureData::Vector(_) => {
+                let [a, b, c] = self.vector_at(u, v).unwrap_or_default();
+                (a + b + c) / 3.0
+            }
             _ => self.fourier_at(u, v)[0],
         }
+    }
+
+    /// The three values of a vector texture at `(u, v)`, each channel
+    /// filtered as a scalar texture's value (`None` for other textures).
+    pub fn vector_at(&self, u: f32, v: f32) -> Option<[f32; 3]> {
+        let TextureData::Vector(texels) = &self.data else {
+            return None;
+        };
+        let mut out = [0.0f32; 3];
+        for &(texel, weight) in self.footprint(u, v).taps() {
+            let values = texels.get(texel).copied().unwrap_or_default();
+            for (o, value) in out.iter_mut().zip(values) {
+                *o += weight * value;
+            }
+        }
+        Some(out)
     }
 }
 
@@ -804,6 +851,36 @@ mod tests {
                 (0.875, -0.3, 8.0, 128.0, 128.0),
             ],
         );
+    }
+
+    /// Each channel of a vector texture is looked up as a scalar texture of
+    /// that channel alone (the same footprint and weights), and only vector
+    /// textures answer [`Texture::vector_at`].
+    #[test]
+    fn vector_textures_filter_each_channel_as_a_scalar_texture() {
+        let range = SpectralRange::VISIBLE;
+        let texels = vec![
+            [0.5, 0.5, 1.0],
+            [1.0, 0.5, 0.5],
+            [0.5, 0.0, 0.5],
+            [0.25, 0.75, 0.9],
+        ];
+        let vector = Texture::vector(2, 2, texels.clone(), range).unwrap();
+        let channel =
+            |k: usize| Texture::scalar(2, 2, texels.iter().map(|t| t[k]).collect(), range).unwrap();
+        for (u, v) in [(0.25, 0.75), (0.4, 0.6), (0.9, 0.1), (-0.3, 1.7)] {
+            let got = vector.vector_at(u, v).unwrap();
+            for (k, value) in got.into_iter().enumerate() {
+                assert_eq!(value.to_bits(), channel(k).scalar_at(u, v).to_bits());
+            }
+        }
+        assert_eq!(vector.vector_at(0.25, 0.75), Some([0.5, 0.5, 1.0]));
+        assert_eq!(channel(0).vector_at(0.25, 0.75), None);
+        assert_eq!(vector.memory_bytes(), 48);
+        // Negative control: a non-finite texel is refused.
+        let mut bad = texels;
+        bad[2][1] = f32::NAN;
+        assert!(Texture::vector(2, 2, bad, range).is_err());
     }
 
     #[test]

@@ -72,6 +72,11 @@ impl Construction<'_> {
         usage: TextureUse,
         sampling: TextureSampling,
     ) -> Result<TextureId, CliError> {
+        if usage == TextureUse::Normals {
+            return Err(self
+                .src
+                .error_at(at, "a normal map must be an image file, not a checkerboard"));
+        }
         if usage == TextureUse::Albedo {
             for (spot, id) in &colors {
                 self.warn_reflectance_above_one(spot, *id);

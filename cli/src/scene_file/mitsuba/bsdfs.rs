@@ -11,6 +11,7 @@
 //! | `blendbsdf` | `weight` (required; a number or a `bitmap`), two nested BSDFs, both one-sided or both two-sided | `(1 − w) f_0 + w f_1` (`simd_tracer`'s `Blend`: one component per bounce) |
 //! | `null` | none | every ray passes (a mask of opacity 0); shadow rays stop at it, as at every surface |
 //! | `mask` | `opacity` (0.5; a number or a `bitmap`), one nested BSDF | the nested BSDF where opaque, a hole elsewhere (`simd_tracer`'s `Mask`); the nested BSDF keeps its sides (`mask(twosided(…))` for a two-sided card) |
+//! | `normalmap` | `normalmap` (required; a `bitmap` with `raw=true`), `flip_invalid_normals` (true), `use_shadowing_function` (true), one nested BSDF (not itself normal-mapped) | the nested BSDF shaded at the tilted normal (`simd_tracer`'s `NormalMap`), with the nested BSDF's sides; inside a `twosided` the map's frame follows the normal turned to the viewer, as Mitsuba's `twosided` turns the frame over before its nested BSDF sees it |
 //!
 //! * One-sided (Mitsuba's reflective BSDFs): a ray that reaches the back
 //!   face (against the shading normal) scatters nothing; `twosided` lifts
@@ -35,7 +36,7 @@ use crate::scene_file::construction::ConductorIndex;
 use crate::scene_file::source::Spot;
 use simd_tracer::ids::SpectrumId;
 use simd_tracer::shading::material::{
-    Albedo, Blend, Bsdf, Fraction, Mask, Material, MitsubaPlastic, Sides,
+    Albedo, Blend, Bsdf, Fraction, MapFrame, Mask, Material, MitsubaPlastic, NormalMap, Sides,
 };
 use simd_tracer::shading::microfacet::{Distribution, Microfacet};
 use simd_tracer::spectra::SpectrumSource;
@@ -194,12 +195,13 @@ impl<'e> Importer<'e, '_> {
                 self.check_unused(&object)?;
                 let mut faces = Vec::with_capacity(elements.len());
                 for element in elements {
-                    let built = self.bsdf(Some(element))?;
+                    let mut built = self.bsdf(Some(element))?;
                     if built.bsdf.transmits() {
                         return Err(object.error(
                             "only BSDFs without transmission can be nested (as in Mitsuba; put a mask around the twosided)",
                         ));
                     }
+                    seen_from_the_viewer(&mut built.bsdf);
                     faces.push(built.bsdf);
                 }
                 let bsdf = match <[Bsdf; 2]>::try_from(faces) {
@@ -243,6 +245,31 @@ impl<'e> Importer<'e, '_> {
                     nested_front_only: false,
                 };
                 (Bsdf::Mask(Box::new(mask)), false)
+            }
+            "normalmap" => {
+                let Some(texture) = self.texture_property(&object, "normalmap")? else {
+                    return Err(object.error("needs a `normalmap` texture (a raw bitmap)"));
+                };
+                let texture = self.texture_vector(texture)?;
+                let flip_invalid = object.boolean("flip_invalid_normals", true)?;
+                let shadowing = object.boolean("use_shadowing_function", true)?;
+                let nested = match self.nested_bsdfs(&object, "normalmap")?.as_slice() {
+                    &[one] => one,
+                    _ => return Err(object.error("needs one nested BSDF")),
+                };
+                let nested = self.bsdf(Some(nested))?;
+                if nested.bsdf.needs_tangent() {
+                    return Err(object.error("a normalmap inside a normalmap is not supported"));
+                }
+                let map = NormalMap {
+                    texture,
+                    nested_front_only: nested.front_only(),
+                    nested: nested.bsdf,
+                    frame: MapFrame::Surface,
+                    flip_invalid,
+                    shadowing,
+                };
+                (Bsdf::NormalMap(Box::new(map)), nested.one_sided)
             }
             "mask" => {
                 let opacity = self.fraction(&object, "opacity", Some(DEFAULT_OPACITY))?;
@@ -610,6 +637,19 @@ impl Roughness {
     /// The rough coat of a `roughplastic`, `None` for a smooth one.
     fn coat(self) -> Option<Microfacet> {
         (self.alpha > 0.0).then(|| self.microfacet())
+    }
+}
+
+/// Points the frames of the normal maps in a BSDF nested in a `twosided`
+/// at the viewer (`simd_tracer`'s `MapFrame::Viewer`): Mitsuba's
+/// `twosided` turns the shading frame over before its nested BSDFs see it.
+fn seen_from_the_viewer(bsdf: &mut Bsdf) {
+    match bsdf {
+        Bsdf::NormalMap(map) => map.frame = MapFrame::Viewer,
+        Bsdf::Blend(blend) => blend.bsdfs.iter_mut().for_each(seen_from_the_viewer),
+        Bsdf::Faces(faces) => faces.iter_mut().for_each(seen_from_the_viewer),
+        Bsdf::Mask(mask) => seen_from_the_viewer(&mut mask.nested),
+        _ => {}
     }
 }
 

@@ -135,6 +135,7 @@ fn load(input: Input<'_>, options: &MitsubaOptions) -> Result<LoadedScene, CliEr
         materials: HashMap::new(),
         textures: HashMap::new(),
         fraction_textures: HashMap::new(),
+        vector_textures: HashMap::new(),
         render: RenderDefaults::default(),
         camera_set: false,
         root_spot: Importer::spot(&root, String::new()),
@@ -193,6 +194,8 @@ pub(super) struct Importer<'e, 's> {
     /// Scalar textures added (`mask`'s opacity, `blendbsdf`'s weight), by
     /// element address.
     fraction_textures: HashMap<usize, simd_tracer::ids::TextureId>,
+    /// Normal maps' textures (`normalmap`), by element address.
+    vector_textures: HashMap<usize, simd_tracer::ids::TextureId>,
     render: RenderDefaults,
     camera_set: bool,
     /// The scene element's spot, for what no element states.

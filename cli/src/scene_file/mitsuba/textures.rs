@@ -1,12 +1,13 @@
 //! Textures as Mitsuba 3.9.1 defines them (`src/textures/*.cpp`), for
-//! reflectances.
+//! reflectances, fractions (opacities, blend weights) and normal maps.
 //!
 //! * `bitmap`: `filename` (PNG, JPEG, OpenEXR, Radiance RGBE; recognised by
 //!   content), `raw` (false: PNG and JPEG values are sRGB-decoded; EXR and
 //!   RGBE are linear either way), `filter_type` (`bilinear` | `nearest`),
 //!   `wrap_mode` (`repeat` | `mirror` | `clamp`), `to_uv`. Each texel is
 //!   upsampled as an sRGB reflectance, clamped to [0, 1] as Mitsuba's
-//!   `srgb_model_fetch` clamps it.
+//!   `srgb_model_fetch` clamps it. As a normal map (`normalmap`) a bitmap
+//!   needs `raw=true` and keeps its three channels as stored.
 //! * `checkerboard`: `color0` (0.4), `color1` (0.2), `to_uv`.
 //!
 //! # Coordinates
@@ -168,6 +169,39 @@ impl<'e> Importer<'e, '_> {
         let id = self.cx.add_texture(texture.with_sampling(sampling));
         self.check_unused(&object)?;
         self.fraction_textures.insert(key, id);
+        Ok(id)
+    }
+
+    /// A normal map's texture (`normalmap`'s `normalmap`; built once per
+    /// element): a `bitmap` with `raw=true`, its three channels as stored
+    /// (Mitsuba's `eval_3`, which its spectral variants refuse on a bitmap
+    /// without `raw`, and so do we).
+    pub(crate) fn texture_vector(&mut self, e: &'e Element) -> Result<TextureId, CliError> {
+        let key = super::address(e);
+        if let Some(&id) = self.vector_textures.get(&key) {
+            return Ok(id);
+        }
+        let object = Object::new(e)?;
+        let to_uv = object.transform("to_uv")?;
+        if object.plugin != "bitmap" {
+            return Err(object.error("is not supported as a normal map (bitmap)"));
+        }
+        if !object.boolean("raw", false)? {
+            return Err(object.error(
+                "a normal map needs raw=true (its values are directions, not colours; Mitsuba refuses it without)",
+            ));
+        }
+        let (image, sampling) = self.bitmap(&object, &to_uv)?;
+        let texture = Texture::vector(
+            image.width,
+            image.height,
+            image.texels,
+            SpectralRange::VISIBLE,
+        )
+        .map_err(|err| object.error(format!("{}: {err}", image.describe)))?;
+        let id = self.cx.add_texture(texture.with_sampling(sampling));
+        self.check_unused(&object)?;
+        self.vector_textures.insert(key, id);
         Ok(id)
     }
 

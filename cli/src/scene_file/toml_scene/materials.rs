@@ -27,6 +27,7 @@ const COMMON_KEYS: &[&str] = &[
     "sides",
     "opacity",
     "opacity_texture",
+    "normal_texture",
 ];
 /// The keys of each material type, besides [`COMMON_KEYS`].
 const LAMBERT_KEYS: &[&str] = &["albedo", "albedo_texture"];
@@ -155,6 +156,9 @@ impl Loader<'_> {
                     ));
                 }
             };
+        }
+        if let Some(texture) = table.get("normal_texture") {
+            material = material.normal_mapped(self.texture(&texture, TextureUse::Normals)?);
         }
         if let Some(opacity) = self.opacity(&table)? {
             material = material.masked(opacity);

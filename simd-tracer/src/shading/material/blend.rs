@@ -118,6 +118,7 @@ mod tests {
             n: Vec3::Z,
             front: true,
             uv: Vec2::ZERO,
+            tangent: Vec3::ZERO,
             hero_nm: None,
             lobe,
         }

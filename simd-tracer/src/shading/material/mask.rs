@@ -153,6 +153,7 @@ mod tests {
             n: Vec3::Z,
             front,
             uv: Vec2::new(0.25, 0.75),
+            tangent: Vec3::ZERO,
             hero_nm: None,
             lobe: 0.0,
         }

@@ -17,6 +17,7 @@
 //! | Mask | a nested BSDF where the opacity `α` says, a hole elsewhere (Mitsuba 3.9.1's `mask`, src/bsdfs/mask.cpp): `f = α f_nested + (1 − α) δ(wi + wo)/|cos θi|`; the hole is sampled with probability `1 − α` (straight on, weight 1, delta), the nested BSDF with `α` (its weight, pdf `α p`); formulas, sides and shadow rays in `mask.rs` |
 //! | Faces | a BSDF per face, `[front, back]`: the face the viewer sees scatters, as itself seen from the front (Mitsuba's `twosided` with two BSDFs) |
 //! | Blend | `(1 − w) f_0 + w f_1` (Mitsuba's `blendbsdf`): the bounce's lobe number chooses one component for both its light sample and its BSDF sample (`blend.rs`: unbiased, with the component's own weights and MIS) |
+//! | NormalMap | a nested BSDF shaded at a normal that an image tilts in the frame of the shading normal and the texture's `u` direction (Mitsuba's `normalmap`), times Estevez et al.'s shadowing term; formulas, sides and flips in `normal_map.rs` |
 //! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1; achromatic, delta, the same from both faces |
 //!
 //! **Sides.** [`Material::sides`] says which faces scatter. With
@@ -61,6 +62,8 @@ mod fraction;
 pub use fraction::Fraction;
 mod mask;
 pub use mask::Mask;
+mod normal_map;
+pub use normal_map::{MapFrame, NormalMap};
 mod fluorescent;
 pub use fluorescent::{FLUORESCENT_LOBE_PROBABILITY, SceneFluorophore, tabulated_sides};
 mod packet;
@@ -190,6 +193,8 @@ pub enum Bsdf {
     /// A mix of two BSDFs, `(1 − w) f_0 + w f_1`, one component chosen per
     /// bounce (`blend.rs`).
     Blend(Box<Blend>),
+    /// A nested BSDF shaded at a normal an image tilts (`normal_map.rs`).
+    NormalMap(Box<NormalMap>),
 }
 
 /// A material.
@@ -275,6 +280,26 @@ impl Material {
         }
     }
 
+    /// This material with a normal map (`normal_map.rs`): its BSDF nested
+    /// in a [`NormalMap`] of the vector texture `texture` in the surface's
+    /// frame (a bump seen from behind is a dent), with Mitsuba's defaults
+    /// (invalid normals flipped, the shadowing term on); the material
+    /// keeps its sides.
+    pub fn normal_mapped(self, texture: TextureId) -> Self {
+        let nested_front_only = self.front_only();
+        Self {
+            bsdf: Bsdf::NormalMap(Box::new(NormalMap {
+                texture,
+                nested: self.bsdf,
+                frame: MapFrame::Surface,
+                flip_invalid: true,
+                shadowing: true,
+                nested_front_only,
+            })),
+            ..self
+        }
+    }
+
     /// Whether only the front face scatters: [`Sides::Front`] with a BSDF
     /// that does not transmit (module docs).
     pub fn front_only(&self) -> bool {
@@ -326,6 +351,10 @@ impl Bsdf {
                 }
             }
             Bsdf::Faces(faces) => faces.iter().for_each(|f| r.append(f.references())),
+            Bsdf::NormalMap(map) => {
+                r = map.nested.references();
+                r.textures.push(map.texture);
+            }
             Bsdf::Blend(blend) => {
                 if let Fraction::Texture(id) = blend.weight {
                     r.textures.push(id);
@@ -336,12 +365,13 @@ impl Bsdf {
         r
     }
 
-    /// The BSDFs that scatter, under any masks, faces and blends: the BSDF
-    /// itself unless it is a [`Bsdf::Mask`], [`Bsdf::Faces`] or
-    /// [`Bsdf::Blend`].
+    /// The BSDFs that scatter, under any masks, faces, blends and normal
+    /// maps: the BSDF itself unless it is a [`Bsdf::Mask`],
+    /// [`Bsdf::Faces`], [`Bsdf::Blend`] or [`Bsdf::NormalMap`].
     pub fn leaves(&self) -> Vec<&Bsdf> {
         match self {
             Self::Mask(mask) => mask.nested.leaves(),
+            Self::NormalMap(map) => map.nested.leaves(),
             Self::Faces(faces) => faces.iter().flat_map(Bsdf::leaves).collect(),
             Self::Blend(blend) => blend.bsdfs.iter().flat_map(Bsdf::leaves).collect(),
             other => vec![other],
@@ -365,9 +395,31 @@ impl Bsdf {
         match self {
             Self::Blend(_) => true,
             Self::Mask(mask) => mask.nested.needs_lobe(),
+            Self::NormalMap(map) => map.nested.needs_lobe(),
             Self::Faces(faces) => faces.iter().any(Bsdf::needs_lobe),
             _ => false,
         }
+    }
+
+    /// The normal maps anywhere in it.
+    pub fn normal_maps(&self) -> Vec<&NormalMap> {
+        match self {
+            Self::NormalMap(map) => {
+                let mut maps = map.nested.normal_maps();
+                maps.push(map);
+                maps
+            }
+            Self::Mask(mask) => mask.nested.normal_maps(),
+            Self::Faces(faces) => faces.iter().flat_map(Bsdf::normal_maps).collect(),
+            Self::Blend(blend) => blend.bsdfs.iter().flat_map(Bsdf::normal_maps).collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// Whether shading needs the hit's tangent ([`ShadingPoint::tangent`]):
+    /// a normal map anywhere in it.
+    pub fn needs_tangent(&self) -> bool {
+        !self.normal_maps().is_empty()
     }
 
     /// Whether the BSDF transmits light through the surface (then it
@@ -379,6 +431,7 @@ impl Bsdf {
             Self::Dielectric { .. } | Self::ThinDielectric { .. } | Self::Mask(_) => true,
             Self::Faces(faces) => faces.iter().any(Bsdf::transmits),
             Self::Blend(blend) => blend.bsdfs.iter().any(Bsdf::transmits),
+            Self::NormalMap(map) => map.nested.transmits(),
             Self::ThinFilm {
                 front_transmittance,
                 ..
@@ -400,6 +453,10 @@ pub struct ShadingPoint {
     pub front: bool,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// The surface's `∂p/∂u` in the world (not unit; zero where unknown),
+    /// where a normal map needs it ([`Bsdf::needs_tangent`]; zero
+    /// elsewhere).
+    pub tangent: Vec3,
     /// The hero wavelength of sampled transports (`None` for Fourier).
     pub hero_nm: Option<f32>,
     /// The bounce's lobe number, where a BSDF chooses a component before
@@ -505,6 +562,7 @@ mod tests {
                 n: Vec3::Z,
                 front,
                 uv: Vec2::ZERO,
+                tangent: Vec3::ZERO,
                 hero_nm: None,
                 lobe: 0.0,
             };
@@ -651,6 +709,7 @@ mod tests {
                 n: normals[lane],
                 front: true,
                 uv: Vec2::ZERO,
+                tangent: Vec3::ZERO,
                 hero_nm: None,
                 lobe: 0.0,
             });

@@ -37,6 +37,7 @@ impl Bsdf {
             Self::Mask(mask) => mask.sample(tables, p, wo, u_lobe, [u, v]),
             Self::Faces(faces) => faces[usize::from(!p.front)].sample(tables, p, wo, u_lobe, u, v),
             Self::Blend(blend) => blend.sample(tables, p, wo, u_lobe, [u, v]),
+            Self::NormalMap(map) => map.sample(tables, p, wo, u_lobe, [u, v]),
             Self::Lambert { albedo } => {
                 let wi = sample_cosine(p.n, u, v);
                 let cos = wi.dot(p.n);
@@ -263,6 +264,9 @@ impl Bsdf {
             Self::Blend(blend) => {
                 return blend.direction_depends_on_wavelength(tables, p, wo, u_lobe);
             }
+            Self::NormalMap(map) => {
+                return map.direction_depends_on_wavelength(tables, p, wo, u_lobe);
+            }
             _ => {}
         }
         let Self::Dielectric {
@@ -365,6 +369,7 @@ impl Bsdf {
             Self::Mask(mask) => mask.eval(tables, p, wo, wi),
             Self::Faces(faces) => faces[usize::from(!p.front)].eval(tables, p, wo, wi),
             Self::Blend(blend) => blend.eval(tables, p, wo, wi),
+            Self::NormalMap(map) => map.eval(tables, p, wo, wi),
         }
     }
 }
