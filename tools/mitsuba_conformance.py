@@ -106,6 +106,7 @@ SCENES = {
     "twosided_faces": {"suite": "materials", "ref_spp": 4096, "negative": {"blue": "0.35"}},
     "bsdf_blend": {"suite": "materials", "ref_spp": 4096, "negative": {"weight": "0.7"}},
     "bsdf_normalmap": {"suite": "materials", "ref_spp": 4096, "negative": {"angle": "90"}},
+    "bsdf_bumpmap": {"suite": "materials", "ref_spp": 4096, "negative": {"scale": "-0.3"}},
     # lights
     "point_light": {"suite": "lights", "ref_spp": 4096, "negative": {"light_x": "1.4"}},
     "spot_light": {"suite": "lights", "ref_spp": 4096, "negative": {"beam": "12"}},
@@ -269,6 +270,26 @@ def normal_bumps_rows():
     return rows
 
 
+def bump_heights_rows():
+    """heights.png: NORMAL_MAP_TEXELS x NORMAL_MAP_TEXELS grey bytes, top
+    row first, of the domes of normal_bumps.png as heights (1 - r^2 inside
+    each cell's circle, 0 outside; cut off on the +u side, so that swapped
+    or mirrored axes shade differently) over a slope along v (a tenth of
+    the range across a cell)."""
+    rows = []
+    cell = NORMAL_MAP_TEXELS // NORMAL_MAP_DOMES
+    for j in range(NORMAL_MAP_TEXELS):
+        row = []
+        for i in range(NORMAL_MAP_TEXELS):
+            x = 2.0 * ((i % cell) + 0.5) / cell - 1.0
+            y = 2.0 * ((j % cell) + 0.5) / cell - 1.0
+            dome = 1.0 - x * x - y * y if x * x + y * y < 1.0 and x < 0.5 else 0.0
+            slope = 0.1 * (y + 1.0) / 2.0
+            row.append(round(255 * (0.9 * dome + slope)))
+        rows.append(row)
+    return rows
+
+
 def write_assets():
     (SCENE_DIR / "textures").mkdir(exist_ok=True)
     (SCENE_DIR / "spectra").mkdir(exist_ok=True)
@@ -278,6 +299,8 @@ def write_assets():
     (SCENE_DIR / "textures" / "grey.png").write_bytes(png_bytes(4, 4, 1, GREYS))
     (SCENE_DIR / "textures" / "normal_bumps.png").write_bytes(
         png_bytes(NORMAL_MAP_TEXELS, NORMAL_MAP_TEXELS, 3, normal_bumps_rows()))
+    (SCENE_DIR / "textures" / "heights.png").write_bytes(
+        png_bytes(NORMAL_MAP_TEXELS, NORMAL_MAP_TEXELS, 1, bump_heights_rows()))
     (SCENE_DIR / "spectra" / "led.spd").write_text(led_spd())
     (SCENE_DIR / "meshes" / "ball.obj").write_text(ball_obj())
 

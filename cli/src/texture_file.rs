@@ -80,7 +80,7 @@ impl TextureUse {
     fn image_kind(self) -> &'static str {
         match self {
             Self::Albedo => "an albedo texture must be an image of colours or spectra",
-            Self::Scalar => "a thickness or opacity texture must be a grey image",
+            Self::Scalar => "a thickness, opacity or bump texture must be a grey image",
             Self::Normals => "a normal map must be an RGB image",
         }
     }
@@ -338,7 +338,7 @@ fn load_png(path: &Path, usage: TextureUse, range: SpectralRange) -> Result<Text
             if pixels.channels >= 3 {
                 return Err(error(
                     path,
-                    "a thickness or opacity texture must be a grey image (this PNG is in colour)",
+                    "a thickness, opacity or bump texture must be a grey image (this PNG is in colour)",
                 ));
             }
             let values = (0..count).map(|i| texel(i)[0]).collect();

@@ -778,7 +778,7 @@ fn normal_maps_follow_mitsuba() -> TestResult {
     // normal_bumps.png's texel in column 2, row 3 (Mitsuba's v = 0 is the
     // top row), inside a dome: (n + 1)/2 in bytes, as stored (no sRGB
     // decoding); tools/mitsuba_conformance.py wrote it.
-    let texture = &built.material_tables().textures[plain.texture.index()];
+    let texture = &built.material_tables().textures[plain.relief.texture().index()];
     let got = texture
         .vector_at(2.5 / 16.0, 3.5 / 16.0)
         .ok_or("not a vector texture")?;
@@ -828,7 +828,7 @@ fn normal_maps_follow_mitsuba() -> TestResult {
         "normalmap-nested",
         &on_rectangle(&mapped(&mapped(diffuse))),
         8,
-        &["a normalmap inside a normalmap is not supported"],
+        &["a normalmap or bumpmap inside a normalmap or bumpmap is not supported"],
     )?;
     refused(
         "normalmap-two",
@@ -843,6 +843,90 @@ fn normal_maps_follow_mitsuba() -> TestResult {
         )),
         8,
         &["is not supported as a normal map (bitmap)"],
+    )?;
+    Ok(())
+}
+
+/// Mitsuba's `bumpmap`: one texture of any name read as heights (a grey
+/// bitmap's values sRGB-decoded unless `raw`, not clamped), `scale` and
+/// the switches; a colour bitmap without `raw`, a second texture, a
+/// missing BSDF or a non-finite scale are one line each.
+#[test]
+fn bump_maps_follow_mitsuba() -> TestResult {
+    use simd_tracer::shading::material::{MapFrame, Relief};
+    let dir = test_dir("bump-maps")?;
+    let grey = suite_texture("grey.png");
+    let colours = suite_texture("colours.png");
+    let bitmap = |file: &str, extra: &str| {
+        format!(
+            "<texture type=\"bitmap\" name=\"heights\"><string name=\"filename\" value=\"{file}\"/>{extra}</texture>"
+        )
+    };
+    let diffuse = "<bsdf type=\"diffuse\"/>";
+    let on_rectangle = |bsdf: &str| {
+        scene(&format!(
+            "    <shape type=\"rectangle\">{bsdf}</shape>\n    <emitter type=\"constant\"/>"
+        ))
+    };
+    let path = write(
+        &dir,
+        "bumps.xml",
+        &on_rectangle(&format!(
+            "<bsdf type=\"twosided\"><bsdf type=\"bumpmap\">{}<float name=\"scale\" value=\"0.25\"/>{diffuse}</bsdf></bsdf>",
+            bitmap(&grey, "")
+        )),
+    )?;
+    let built = load(&path, &[], false)?.builder.build()?;
+    let map = built
+        .materials()
+        .iter()
+        .find_map(|m| m.bsdf.normal_maps().first().map(|&map| map.clone()))
+        .ok_or("no bump map")?;
+    let Relief::Heights { texture, scale } = map.relief else {
+        return Err("not a bump map".into());
+    };
+    assert_eq!(scale, 0.25);
+    assert_eq!(map.frame, MapFrame::Viewer, "inside a twosided");
+    assert!(map.flip_invalid && map.shadowing);
+    // grey.png's top-left texel is 230, sRGB-decoded (no clamp needed).
+    let value = built.material_tables().textures[texture.index()].scalar_at(0.125, 0.125);
+    assert!((f64::from(value) - srgb_decode(230.0 / 255.0)).abs() < 1e-5);
+    refused(
+        "bumpmap-colour",
+        &on_rectangle(&format!(
+            "<bsdf type=\"bumpmap\">{}{diffuse}</bsdf>",
+            bitmap(&colours, "")
+        )),
+        8,
+        &["a colour image as a bump map needs raw=true"],
+    )?;
+    refused(
+        "bumpmap-two-textures",
+        &on_rectangle(&format!(
+            "<bsdf type=\"bumpmap\">{}{}{diffuse}</bsdf>",
+            bitmap(&grey, ""),
+            bitmap(&grey, "").replace("heights", "more")
+        )),
+        8,
+        &["needs one nested texture and one nested BSDF"],
+    )?;
+    refused(
+        "bumpmap-no-bsdf",
+        &on_rectangle(&format!(
+            "<bsdf type=\"bumpmap\">{}</bsdf>",
+            bitmap(&grey, "")
+        )),
+        8,
+        &["needs one nested texture and one nested BSDF"],
+    )?;
+    refused(
+        "bumpmap-nan",
+        &on_rectangle(&format!(
+            "<bsdf type=\"bumpmap\">{}<float name=\"scale\" value=\"nan\"/>{diffuse}</bsdf>",
+            bitmap(&grey, "")
+        )),
+        8,
+        &["\"nan\" is not a finite number"],
     )?;
     Ok(())
 }

@@ -974,9 +974,10 @@ fn opacity_keys_refuse_bad_values_with_one_line() -> TestResult {
 /// the texel's bytes. Noise-free (the light sample is exact), so the bound
 /// is `f32` rounding; the same tilt along `−x` (the frame mirrored) is far
 /// outside it. The map keeps the material's sides, in the surface's
-/// frame.
+/// frame. `bump_texture` with `bump_scale`: heights rising along `u` tilt
+/// the normal the other way, by their slope over `|∂p/∂u|`.
 #[test]
-fn toml_normal_texture_tilts_the_shading_normal() -> TestResult {
+fn toml_normal_and_bump_textures_tilt_the_shading_normal() -> TestResult {
     use simd_tracer::shading::material::{Bsdf, MapFrame};
     let dir = test_dir("real-scenes", "normal-texture")?;
     let tilt_deg = 25.0f64;
@@ -1056,28 +1057,78 @@ irradiance = {{ constant = 3 }}
         (ratio / mirrored - 1.0).abs() > 0.1,
         "{ratio} against {mirrored}"
     );
-    // A grey image or a checkerboard is no normal map.
+    // `bump_texture`: heights 0 and 1 (a 2 × 1 grey PNG, clamped) looked up
+    // at u' = 0.1 u + 0.5 rise by 0.1 · 2 per unit of u, times bump_scale 8:
+    // g = 1.6 over |∂p/∂u| = 4 (the rectangle spans 4 units), so the normal
+    // tilts away from the light by atan(0.4).
+    let ramp = dir.join("ramp.png");
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(fs::File::create(&ramp)?), 2, 1);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(&[0, 255])?;
+    writer.finish()?;
+    let (_d, bumped_path) = scene(
+        "bump-mapped",
+        &text(&format!(
+            "bump_texture = {{ file = \"{}\", wrap = \"clamp\", uv_scale = [0.1, 0.1], uv_offset = [0.5, 0.5] }}\nbump_scale = 8",
+            ramp.display()
+        )),
+    )?;
+    let bumped = load(&bumped_path)?;
+    let ratio = mean_y(render_xyz(&fourier, &bumped, 4, 1)?)
+        / mean_y(render_xyz(&fourier, &load(&flat_path)?, 4, 1)?);
+    let tilt = 0.4f64.atan();
+    let alpha_sq = (tilt.tan().powi(2) / 8.0).min(1.0);
+    let g = 2.0 / (1.0 + (1.0 + alpha_sq * (sin_l / cos_l).powi(2)).sqrt());
+    let light = light_deg.to_radians();
+    let (away, towards) = (
+        (light + tilt).cos() * g / cos_l,
+        (light - tilt).cos() * g / cos_l,
+    );
+    println!("bump texture: ratio {ratio:.6}, closed form {away:.6}");
+    assert!((ratio / away - 1.0).abs() < 1e-3, "{ratio} against {away}");
+    assert!(
+        (ratio / towards - 1.0).abs() > 0.1,
+        "{ratio} against {towards}"
+    );
+    // A grey image or a checkerboard is no normal map; the two maps and a
+    // scale without heights are refused.
     let grey = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/conformance/scenes/textures/grey.png")
         .display()
         .to_string();
-    for (name, keys, needle) in [
+    for (name, keys, key, needle) in [
         (
             "normal-grey",
             format!("normal_texture = \"{grey}\"\n"),
+            "normal_texture",
             "a normal map must be an RGB image",
+        ),
+        (
+            "bump-and-normal",
+            format!("normal_texture = \"{grey}\"\nbump_texture = \"{grey}\"\n"),
+            "bump_texture",
+            "not both",
+        ),
+        (
+            "bump-scale-alone",
+            "bump_scale = 2\n".to_string(),
+            "bump_scale",
+            "`bump_scale` needs `bump_texture`",
         ),
         (
             "normal-checkerboard",
             "normal_texture = { checkerboard = [{ constant = 0.5 }, { constant = 1 }] }\n"
                 .to_string(),
+            "normal_texture",
             "a normal map must be an image file",
         ),
     ] {
         let body = format!(
             "[materials.card]\ntype = \"lambert\"\nalbedo = {{ constant = 0.5 }}\n{keys}\n[[shapes]]\ntype = \"cube\"\nmaterial = \"card\"\n"
         );
-        error_at(name, &body, "normal_texture", needle)?;
+        error_at(name, &body, key, needle)?;
     }
     Ok(())
 }

@@ -62,7 +62,7 @@ fn point(front: bool, hero_nm: Option<f32>) -> ShadingPoint {
         n: Vec3::Z,
         front,
         uv: Vec2::ZERO,
-        tangent: Vec3::ZERO,
+        dp_duv: [Vec3::ZERO; 2],
         hero_nm,
         lobe: 0.0,
     }

@@ -237,7 +237,7 @@ fn point(front: bool) -> ShadingPoint {
         n: Vec3::Z,
         front,
         uv: Vec2::ZERO,
-        tangent: Vec3::ZERO,
+        dp_duv: [Vec3::ZERO; 2],
         hero_nm: None,
         lobe: 0.0,
     }

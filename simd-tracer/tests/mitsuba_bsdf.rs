@@ -384,7 +384,7 @@ fn ours(f: &Fixture, bsdf: &Bsdf, p: &Point, how: Spectral) -> (f64, f64) {
         n: Vec3::Z * side,
         front: side > 0.0,
         uv: Vec2::ZERO,
-        tangent: Vec3::ZERO,
+        dp_duv: [Vec3::ZERO; 2],
         hero_nm: None,
         lobe: 0.0,
     };
@@ -556,7 +556,7 @@ fn smooth_plastic_delta_lobes_are_mitsubas() -> TestResult {
             n: Vec3::Z,
             front: true,
             uv: Vec2::ZERO,
-            tangent: Vec3::ZERO,
+            dp_duv: [Vec3::ZERO; 2],
             hero_nm: None,
             lobe: 0.0,
         };

@@ -15,7 +15,9 @@
 //! along `−x` (the tangent frame follows the texture, not the world). The
 //! floor is tested as plain triangles and as instances turned by 180°
 //! about `z` (their `u` then runs along `−x` in the world). Negative
-//! control: the other ratio is far outside the tolerance.
+//! control: the other ratio is far outside the tolerance. A bump map of
+//! heights rising along `u` tilts the normal the other way, by the slope
+//! over `|∂p/∂u|` (`sloped_heights_tilt_the_normal_down_the_slope`).
 
 use glam::{Vec2, Vec3};
 use simd_tracer::film::filter::Filter;
@@ -29,9 +31,9 @@ use simd_tracer::scene::mesh::MeshData;
 use simd_tracer::scene::transform::Transform;
 use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::shading::light_sampler::DirectionalLight;
-use simd_tracer::shading::material::{Bsdf, MapFrame, Material};
+use simd_tracer::shading::material::{Bsdf, MapFrame, Material, Relief as ReliefSource};
 use simd_tracer::spectra::SpectrumSource;
-use simd_tracer::spectra::texture::Texture;
+use simd_tracer::spectra::texture::{FilterMode, Texture, TextureSampling, UvTransform, WrapMode};
 use simd_tracer::transport::FourierTransport;
 use spectral_core::SpectralRange;
 use spectral_core::xyz::XyzRoute;
@@ -64,18 +66,56 @@ fn tilted_texel(deg: f32) -> [f32; 3] {
     [(sin + 1.0) / 2.0, 0.5, (cos + 1.0) / 2.0]
 }
 
-fn floor_scene(floor: Floor, mapped: bool) -> TestResult<Scene> {
+/// The floor's relief.
+#[derive(Clone, Copy, PartialEq)]
+enum Relief {
+    /// A normal map of the flat texel `(½, ½, 1)`.
+    Flat,
+    /// A normal map tilting the normal by [`TILT_DEG`] towards `+u`.
+    Tilted,
+    /// A bump map whose heights rise along `u` with slope [`BUMP_SLOPE`].
+    Sloped,
+}
+
+/// `∂h/∂u` of the sloped floor's heights: a 2 × 1 texture `[0, 1]`,
+/// clamped, looked up at `u' = 0.1 u + 0.5` (inside the texel centres
+/// `0.25 … 0.75` over the floor's `u ∈ [−2, 2]`), so
+/// `∂h/∂u = 0.1 · 2 · (1 − 0) = 0.2`, times [`BUMP_SCALE`].
+const BUMP_SLOPE: f32 = 0.2 * BUMP_SCALE;
+/// The bump map's `scale`.
+const BUMP_SCALE: f32 = 2.0;
+
+fn floor_scene(floor: Floor, relief: Relief) -> TestResult<Scene> {
     let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
     let grey = b.add_spectrum("grey", SpectrumSource::Constant(0.5))?;
     let sun = b.add_spectrum("sun", SpectrumSource::Constant(3.0))?;
-    let texel = if mapped {
-        tilted_texel(TILT_DEG)
-    } else {
-        [0.5, 0.5, 1.0]
+    let range = SpectralRange::VISIBLE;
+    let floor_material = Material::lambert("floor", grey);
+    let material = match relief {
+        Relief::Flat | Relief::Tilted => {
+            let texel = if relief == Relief::Tilted {
+                tilted_texel(TILT_DEG)
+            } else {
+                [0.5, 0.5, 1.0]
+            };
+            let texture: TextureId = b.add_texture(Texture::vector(1, 1, vec![texel], range)?);
+            floor_material.with_relief(ReliefSource::Normals(texture))
+        }
+        Relief::Sloped => {
+            let heights =
+                Texture::scalar(2, 1, vec![0.0, 1.0], range)?.with_sampling(TextureSampling {
+                    wrap: WrapMode::Clamp,
+                    filter: FilterMode::Bilinear,
+                    uv: UvTransform::new([0.1, 0.1], [0.5, 0.5], 0.0)?,
+                });
+            let texture = b.add_texture(heights);
+            floor_material.with_relief(ReliefSource::Heights {
+                texture,
+                scale: BUMP_SCALE,
+            })
+        }
     };
-    let texture: TextureId =
-        b.add_texture(Texture::vector(1, 1, vec![texel], SpectralRange::VISIBLE)?);
-    let material = b.add_material(Material::lambert("floor", grey).normal_mapped(texture));
+    let material = b.add_material(material);
     let half = 2.0f32;
     let corners = [
         Vec3::new(-half, -half, 0.0),
@@ -175,12 +215,14 @@ fn mean_y(scene: &Scene) -> TestResult<(f64, f64)> {
     Ok((mean, spread))
 }
 
-/// `cos(θ_l ∓ θ_n) G / cos θ_l` (module docs).
+/// `cos(θ_l ∓ θ_n) G / cos θ_l` (module docs) for the map's tilt.
 fn expected_ratio(towards_light: bool) -> f64 {
-    let (light, tilt) = (
-        f64::from(LIGHT_DEG).to_radians(),
-        f64::from(TILT_DEG).to_radians(),
-    );
+    ratio_for_tilt(f64::from(TILT_DEG).to_radians(), towards_light)
+}
+
+/// `cos(θ_l ∓ tilt) G / cos θ_l`.
+fn ratio_for_tilt(tilt: f64, towards_light: bool) -> f64 {
+    let light = f64::from(LIGHT_DEG).to_radians();
     let alpha_sq = (tilt.tan().powi(2) / 8.0).min(1.0);
     let g = 2.0 / (1.0 + (1.0 + alpha_sq * light.tan().powi(2)).sqrt());
     let between = if towards_light {
@@ -193,7 +235,7 @@ fn expected_ratio(towards_light: bool) -> f64 {
 
 #[test]
 fn a_tilted_map_scales_lambert_by_the_cosine_to_the_tilted_normal() -> TestResult {
-    let scene = floor_scene(Floor::Plain, false)?;
+    let scene = floor_scene(Floor::Plain, Relief::Flat)?;
     let Bsdf::NormalMap(map) = &scene.materials()[0].bsdf else {
         return Err("no normal map".into());
     };
@@ -217,7 +259,7 @@ fn a_tilted_map_scales_lambert_by_the_cosine_to_the_tilted_normal() -> TestResul
         ),
     ];
     for (name, floor, want) in cases {
-        let scene = floor_scene(floor, true)?;
+        let scene = floor_scene(floor, Relief::Tilted)?;
         if let Floor::Turned(instancing) = floor {
             assert_eq!(
                 scene.instances().is_some(),
@@ -246,7 +288,8 @@ fn a_normal_map_of_a_scalar_texture_is_refused() -> TestResult {
     let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
     let grey = b.add_spectrum("grey", SpectrumSource::Constant(0.5))?;
     let texture = b.add_texture(Texture::scalar(1, 1, vec![0.5], SpectralRange::VISIBLE)?);
-    let material = b.add_material(Material::lambert("bumpy", grey).normal_mapped(texture));
+    let material = b
+        .add_material(Material::lambert("bumpy", grey).with_relief(ReliefSource::Normals(texture)));
     b.add_quad(
         [
             Vec3::new(-1.0, -1.0, 0.0),
@@ -266,5 +309,41 @@ fn a_normal_map_of_a_scalar_texture_is_refused() -> TestResult {
         "{message}"
     );
     assert_eq!(message.lines().count(), 1);
+    Ok(())
+}
+
+/// A bump map whose heights rise along `u` at the slope `g` tilts the
+/// normal away from `+u` by `atan(g / |∂p/∂u|)` (`∂p/∂u = (L, 0, 0)`: the
+/// normal of `(L, 0, g) × (0, L, 0)` is `(−g L, 0, L²)`), so the plain
+/// floor (`L = 1`) lit from `+x` darkens by `cos(θ_l + θ_b) G / cos θ_l`;
+/// the turned tiles (`u` across 2 units along `−x`: `L = 2`) tilt towards
+/// the light by `atan(g / 2)` and brighten. Negative control: the other
+/// sign is far outside the tolerance.
+#[test]
+fn sloped_heights_tilt_the_normal_down_the_slope() -> TestResult {
+    let (flat, _) = mean_y(&floor_scene(Floor::Plain, Relief::Flat)?)?;
+    let tilt = |length: f64| (f64::from(BUMP_SLOPE) / length).atan();
+    let cases = [
+        ("plain", Floor::Plain, tilt(1.0), false),
+        (
+            "turned instances",
+            Floor::Turned(Instancing::Auto),
+            tilt(2.0),
+            true,
+        ),
+    ];
+    for (name, floor, tilt, towards_light) in cases {
+        let want = ratio_for_tilt(tilt, towards_light);
+        let wrong = ratio_for_tilt(tilt, !towards_light);
+        let (bumped, spread) = mean_y(&floor_scene(floor, Relief::Sloped)?)?;
+        let ratio = bumped / flat;
+        println!("bump map, {name}: ratio {ratio:.6}, closed form {want:.6}");
+        assert!(spread < TOLERANCE, "{name}: pixels spread by {spread}");
+        assert!(
+            (ratio / want - 1.0).abs() < TOLERANCE,
+            "{name}: {ratio} against {want}"
+        );
+        assert!((ratio / wrong - 1.0).abs() > 10.0 * TOLERANCE, "{name}");
+    }
     Ok(())
 }

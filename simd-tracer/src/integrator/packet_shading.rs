@@ -88,12 +88,12 @@ impl<'a> Shading<'a> {
         });
         let (normal_lanes, front) = (normal.to_lanes(), front.to_bitmask());
         // Only normal maps read the tangent (`Bsdf::needs_tangent`).
-        let tangent = |lane: usize| {
+        let tangents = |lane: usize| {
             let mapped = scene.needs_tangent() && bsdfs[lane].is_some_and(Bsdf::needs_tangent);
             if mapped {
-                scene.hit_tangent(hit.triangle[lane], hit.instance[lane])
+                scene.hit_tangents(hit.triangle[lane], hit.instance[lane])
             } else {
-                Vec3::ZERO
+                [Vec3::ZERO; 2]
             }
         };
         let (hit_u, hit_v) = (hit.u.to_array(), hit.v.to_array());
@@ -107,7 +107,7 @@ impl<'a> Shading<'a> {
                 n: normal_lanes[lane],
                 front: front & (1 << lane) != 0,
                 uv,
-                tangent: tangent(lane),
+                dp_duv: tangents(lane),
                 hero_nm: transport.hero_wavelength(wavelengths, lane),
                 lobe: 0.0,
             }

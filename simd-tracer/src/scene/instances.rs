@@ -334,14 +334,15 @@ impl Instances {
         mesh.uvs.get(index).copied()
     }
 
-    /// The world-space `∂p/∂u` of `triangle` in instance `instance`
-    /// (`super::tangent`): the object-space one mapped as a vector.
-    pub fn tangent(&self, triangle: u32, instance: u32) -> Option<Vec3> {
+    /// The world-space `[∂p/∂u, ∂p/∂v]` of `triangle` in instance
+    /// `instance` (`super::tangent`): the object-space ones mapped as
+    /// vectors.
+    pub fn tangents(&self, triangle: u32, instance: u32) -> Option<[Vec3; 2]> {
         let (_, mesh, index) = self.at(triangle, instance)?;
         let vertices = mesh.triangles.get(index)?;
-        let object = super::tangent::surface_tangent(vertices, mesh.uvs.get(index));
-        let placement = self.placements.get(instance as usize)?;
-        Some(placement.transform.affine().transform_vector3(object))
+        let object = super::tangent::surface_derivatives(vertices, mesh.uvs.get(index));
+        let to_world = self.placements.get(instance as usize)?.transform.affine();
+        Some(object.map(|d| to_world.transform_vector3(d)))
     }
 
     /// The world-space unit geometric normal of `triangle` in instance

@@ -38,7 +38,9 @@ use crate::scene::transform::Transform;
 use crate::scene::triangle_store::TriangleStore;
 use crate::shading::light::{Light, LightSet};
 use crate::shading::light_sampler::{DirectionalLight, LightSampler, PointLight, SceneLights};
-use crate::shading::material::{Bsdf, Material, MaterialTables, SceneFluorophore, tabulated_sides};
+use crate::shading::material::{
+    Bsdf, Material, MaterialTables, Relief, SceneFluorophore, tabulated_sides,
+};
 use crate::shading::surface::SurfacePacket;
 use crate::shading::surface::{PackedSurfaces, Surface, triangle_area};
 use crate::simd::{LANES, LaneMask};
@@ -132,9 +134,9 @@ pub struct Scene {
     needs_lobe: bool,
     /// Whether a material has a normal map ([`Bsdf::needs_tangent`]).
     needs_tangent: bool,
-    /// `∂p/∂u` of the triangles whose material has a normal map
+    /// `[∂p/∂u, ∂p/∂v]` of the triangles whose material has a normal map
     /// ([`tangent`]); no others.
-    tangents: SparseAttribute<Vec3>,
+    tangents: SparseAttribute<[Vec3; 2]>,
     /// Triangle vertices (non-degenerate ones only), in a vector or in the
     /// BVH's 8-wide tree ([`triangle_store`]).
     triangles: TriangleStore,
@@ -483,23 +485,23 @@ impl Scene {
     }
 
     /// Whether a material has a normal map ([`Bsdf::needs_tangent`]):
-    /// only then does shading read [`Scene::hit_tangent`].
+    /// only then does shading read [`Scene::hit_tangents`].
     pub fn needs_tangent(&self) -> bool {
         self.needs_tangent
     }
 
-    /// The world-space `∂p/∂u` of a hit triangle ([`tangent`]); zero where
-    /// its material has no normal map.
+    /// The world-space `[∂p/∂u, ∂p/∂v]` of a hit triangle ([`tangent`]);
+    /// zero where its material has no normal map.
     #[inline]
-    pub fn hit_tangent(&self, triangle: u32, instance: u32) -> Vec3 {
-        let tangent = if instance == NO_INSTANCE {
+    pub fn hit_tangents(&self, triangle: u32, instance: u32) -> [Vec3; 2] {
+        let tangents = if instance == NO_INSTANCE {
             self.tangents.get(triangle as usize).copied()
         } else {
             self.instances
                 .as_ref()
-                .and_then(|i| i.tangent(triangle, instance))
+                .and_then(|i| i.tangents(triangle, instance))
         };
-        tangent.unwrap_or(Vec3::ZERO)
+        tangents.unwrap_or([Vec3::ZERO; 2])
     }
 
     /// The unit geometric normal of a hit triangle, in world space.
@@ -1447,9 +1449,9 @@ impl SceneBuilder {
             .map_err(SceneError::Bvh)
     }
 
-    /// `∂p/∂u` of every triangle whose material has a normal map
+    /// `[∂p/∂u, ∂p/∂v]` of every triangle whose material has a normal map
     /// ([`tangent`]), none when no material has one.
-    fn tangents(&self) -> SparseAttribute<Vec3> {
+    fn tangents(&self) -> SparseAttribute<[Vec3; 2]> {
         let mut tangents = SparseAttribute::default();
         let mapped: Vec<bool> = self
             .materials
@@ -1464,7 +1466,7 @@ impl SceneBuilder {
             if mapped.get(id.index()) == Some(&true) {
                 tangents.set(
                     index,
-                    tangent::surface_tangent(vertices, self.uvs.get(index)),
+                    tangent::surface_derivatives(vertices, self.uvs.get(index)),
                 );
             }
         }
@@ -1513,13 +1515,20 @@ impl SceneBuilder {
         }
         for material in &self.materials {
             for map in material.bsdf.normal_maps() {
-                let texture = self.textures.get(map.texture.index());
-                if !texture.is_some_and(|t| matches!(t.data(), TextureData::Vector(_))) {
-                    return Err(SceneError::Reference(
-                        material.name.clone(),
+                let id = map.relief.texture();
+                let texture = self.textures.get(id.index()).map(Texture::data);
+                let (fits, kind) = match map.relief {
+                    Relief::Normals(_) => (
+                        matches!(texture, Some(TextureData::Vector(_))),
                         "vector texture (of a normal map)",
-                        map.texture.0,
-                    ));
+                    ),
+                    Relief::Heights { .. } => (
+                        matches!(texture, Some(TextureData::Scalar(_))),
+                        "scalar texture (of a bump map)",
+                    ),
+                };
+                if !fits {
+                    return Err(SceneError::Reference(material.name.clone(), kind, id.0));
                 }
             }
         }

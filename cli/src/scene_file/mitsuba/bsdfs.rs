@@ -11,7 +11,8 @@
 //! | `blendbsdf` | `weight` (required; a number or a `bitmap`), two nested BSDFs, both one-sided or both two-sided | `(1 − w) f_0 + w f_1` (`simd_tracer`'s `Blend`: one component per bounce) |
 //! | `null` | none | every ray passes (a mask of opacity 0); shadow rays stop at it, as at every surface |
 //! | `mask` | `opacity` (0.5; a number or a `bitmap`), one nested BSDF | the nested BSDF where opaque, a hole elsewhere (`simd_tracer`'s `Mask`); the nested BSDF keeps its sides (`mask(twosided(…))` for a two-sided card) |
-//! | `normalmap` | `normalmap` (required; a `bitmap` with `raw=true`), `flip_invalid_normals` (true), `use_shadowing_function` (true), one nested BSDF (not itself normal-mapped) | the nested BSDF shaded at the tilted normal (`simd_tracer`'s `NormalMap`), with the nested BSDF's sides; inside a `twosided` the map's frame follows the normal turned to the viewer, as Mitsuba's `twosided` turns the frame over before its nested BSDF sees it |
+//! | `normalmap` | `normalmap` (required; a `bitmap` with `raw=true`), `flip_invalid_normals` (true), `use_shadowing_function` (true), one nested BSDF (not itself normal- or bump-mapped) | the nested BSDF shaded at the tilted normal (`simd_tracer`'s `NormalMap`), with the nested BSDF's sides; inside a `twosided` the map's frame follows the normal turned to the viewer, as Mitsuba's `twosided` turns the frame over before its nested BSDF sees it |
+//! | `bumpmap` | one texture of any name (a `bitmap`: a grey image's values, sRGB-decoded unless `raw`, or with `raw` a colour image's luminance; not clamped), `scale` (1), `flip_invalid_normals` (true), `use_shadowing_function` (true), one nested BSDF | the same with the normal of the heights' slopes (`Relief::Heights`) |
 //!
 //! * One-sided (Mitsuba's reflective BSDFs): a ray that reaches the back
 //!   face (against the shading normal) scatters nothing; `twosided` lifts
@@ -36,7 +37,8 @@ use crate::scene_file::construction::ConductorIndex;
 use crate::scene_file::source::Spot;
 use simd_tracer::ids::SpectrumId;
 use simd_tracer::shading::material::{
-    Albedo, Blend, Bsdf, Fraction, MapFrame, Mask, Material, MitsubaPlastic, NormalMap, Sides,
+    Albedo, Blend, Bsdf, Fraction, MapFrame, Mask, Material, MitsubaPlastic, NormalMap, Relief,
+    Sides,
 };
 use simd_tracer::shading::microfacet::{Distribution, Microfacet};
 use simd_tracer::spectra::SpectrumSource;
@@ -250,26 +252,37 @@ impl<'e> Importer<'e, '_> {
                 let Some(texture) = self.texture_property(&object, "normalmap")? else {
                     return Err(object.error("needs a `normalmap` texture (a raw bitmap)"));
                 };
-                let texture = self.texture_vector(texture)?;
-                let flip_invalid = object.boolean("flip_invalid_normals", true)?;
-                let shadowing = object.boolean("use_shadowing_function", true)?;
+                let relief = Relief::Normals(self.texture_vector(texture)?);
                 let nested = match self.nested_bsdfs(&object, "normalmap")?.as_slice() {
                     &[one] => one,
                     _ => return Err(object.error("needs one nested BSDF")),
                 };
-                let nested = self.bsdf(Some(nested))?;
-                if nested.bsdf.needs_tangent() {
-                    return Err(object.error("a normalmap inside a normalmap is not supported"));
+                self.relief_bsdf(&object, relief, nested)?
+            }
+            "bumpmap" => {
+                // Mitsuba takes its one texture and one BSDF whatever
+                // their names.
+                let (mut textures, mut bsdfs) = (Vec::new(), Vec::new());
+                for p in object.objects() {
+                    let element = self.object_of(p, &["bsdf", "texture"])?;
+                    if element.tag == "texture" {
+                        textures.push(element);
+                    } else {
+                        bsdfs.push(element);
+                    }
                 }
-                let map = NormalMap {
-                    texture,
-                    nested_front_only: nested.front_only(),
-                    nested: nested.bsdf,
-                    frame: MapFrame::Surface,
-                    flip_invalid,
-                    shadowing,
+                let (&[texture], &[nested]) = (textures.as_slice(), bsdfs.as_slice()) else {
+                    return Err(object.error("needs one nested texture and one nested BSDF"));
                 };
-                (Bsdf::NormalMap(Box::new(map)), nested.one_sided)
+                let scale = object.float("scale", 1.0)?;
+                if !scale.is_finite() {
+                    return Err(object.error(format!("scale {scale}: must be a finite number")));
+                }
+                let relief = Relief::Heights {
+                    texture: self.texture_heights(texture)?,
+                    scale: scale as f32,
+                };
+                self.relief_bsdf(&object, relief, nested)?
             }
             "mask" => {
                 let opacity = self.fraction(&object, "opacity", Some(DEFAULT_OPACITY))?;
@@ -307,6 +320,33 @@ impl<'e> Importer<'e, '_> {
             bsdf,
             one_sided,
         })
+    }
+
+    /// A `normalmap` or `bumpmap` of `relief` around the BSDF `nested`,
+    /// with its switches (`flip_invalid_normals`, `use_shadowing_function`,
+    /// both on by default) and the nested BSDF's sides.
+    fn relief_bsdf(
+        &mut self,
+        object: &Object<'e>,
+        relief: Relief,
+        nested: &'e Element,
+    ) -> Result<(Bsdf, bool), CliError> {
+        let flip_invalid = object.boolean("flip_invalid_normals", true)?;
+        let shadowing = object.boolean("use_shadowing_function", true)?;
+        let nested = self.bsdf(Some(nested))?;
+        if nested.bsdf.needs_tangent() {
+            return Err(object
+                .error("a normalmap or bumpmap inside a normalmap or bumpmap is not supported"));
+        }
+        let map = NormalMap {
+            relief,
+            nested_front_only: nested.front_only(),
+            nested: nested.bsdf,
+            frame: MapFrame::Surface,
+            flip_invalid,
+            shadowing,
+        };
+        Ok((Bsdf::NormalMap(Box::new(map)), nested.one_sided))
     }
 
     /// Mitsuba's `plastic` / `roughplastic` (`simd_tracer`'s

@@ -193,7 +193,9 @@ pub(super) struct Importer<'e, 's> {
     textures: HashMap<usize, simd_tracer::ids::TextureId>,
     /// Scalar textures added (`mask`'s opacity, `blendbsdf`'s weight), by
     /// element address.
-    fraction_textures: HashMap<usize, simd_tracer::ids::TextureId>,
+    /// (and bump maps' heights, unclamped: `true` in the key's second
+    /// place).
+    fraction_textures: HashMap<(usize, bool), simd_tracer::ids::TextureId>,
     /// Normal maps' textures (`normalmap`), by element address.
     vector_textures: HashMap<usize, simd_tracer::ids::TextureId>,
     render: RenderDefaults,

@@ -42,6 +42,15 @@ const LUMINANCE_G: f32 = 0.715_160;
 /// The blue weight.
 const LUMINANCE_B: f32 = 0.072_169;
 
+/// What a scalar texture is read for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ScalarUse {
+    /// A fraction in [0, 1] (an opacity, a blend weight): clamped.
+    Fraction,
+    /// A bump map's heights: as they are.
+    Heights,
+}
+
 /// A decoded bitmap and its file's name for messages.
 struct Bitmap {
     width: u32,
@@ -142,27 +151,49 @@ impl<'e> Importer<'e, '_> {
     /// `raw`), or the luminance of a colour image with `raw` (without
     /// `raw` Mitsuba refuses a colour image here, and so do we).
     pub(crate) fn texture_fraction(&mut self, e: &'e Element) -> Result<TextureId, CliError> {
-        let key = super::address(e);
+        self.scalar_bitmap(e, ScalarUse::Fraction)
+    }
+
+    /// A bump map's heights (`bumpmap`'s texture; built once per element):
+    /// a `bitmap` read as [`Importer::texture_fraction`] reads one, its
+    /// values not clamped (Mitsuba's `eval_1_grad` takes them as they are).
+    pub(crate) fn texture_heights(&mut self, e: &'e Element) -> Result<TextureId, CliError> {
+        self.scalar_bitmap(e, ScalarUse::Heights)
+    }
+
+    /// The scalar texture of a `bitmap` for `usage`.
+    fn scalar_bitmap(&mut self, e: &'e Element, usage: ScalarUse) -> Result<TextureId, CliError> {
+        let key = (super::address(e), usage == ScalarUse::Heights);
         if let Some(&id) = self.fraction_textures.get(&key) {
             return Ok(id);
         }
         let object = Object::new(e)?;
         let to_uv = object.transform("to_uv")?;
+        let what = match usage {
+            ScalarUse::Fraction => "an opacity or weight",
+            ScalarUse::Heights => "a bump map",
+        };
         if object.plugin != "bitmap" {
-            return Err(object.error("is not supported as an opacity or weight (bitmap)"));
+            return Err(object.error(format!("is not supported as {what} (bitmap)")));
         }
         let (image, sampling) = self.bitmap(&object, &to_uv)?;
         let grey = image.texels.iter().all(|&[r, g, b]| r == g && g == b);
         if !grey && !object.boolean("raw", false)? {
             return Err(object.error(format!(
-                "{}: a colour image as an opacity or weight needs raw=true (Mitsuba refuses it without)",
+                "{}: a colour image as {what} needs raw=true (Mitsuba refuses it without)",
                 image.describe
             )));
         }
+        let (low, high) = match usage {
+            ScalarUse::Fraction => (0.0, 1.0),
+            ScalarUse::Heights => (f32::MIN, f32::MAX),
+        };
         let values = image
             .texels
             .iter()
-            .map(|&[r, g, b]| (LUMINANCE_R * r + LUMINANCE_G * g + LUMINANCE_B * b).clamp(0.0, 1.0))
+            .map(|&[r, g, b]| {
+                (LUMINANCE_R * r + LUMINANCE_G * g + LUMINANCE_B * b).clamp(low, high)
+            })
             .collect();
         let texture = Texture::scalar(image.width, image.height, values, SpectralRange::VISIBLE)
             .map_err(|err| object.error(format!("{}: {err}", image.describe)))?;

@@ -10,7 +10,7 @@ use crate::scene_file::toml_reader::{Item, Table};
 use crate::texture_file::TextureUse;
 use simd_tracer::ids::MaterialId;
 use simd_tracer::scene::builtin::fluorescence::PEAK_ABSORPTANCE;
-use simd_tracer::shading::material::{Albedo, Bsdf, Fraction, Material, Sides};
+use simd_tracer::shading::material::{Albedo, Bsdf, Fraction, Material, Relief, Sides};
 use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
@@ -28,6 +28,8 @@ const COMMON_KEYS: &[&str] = &[
     "opacity",
     "opacity_texture",
     "normal_texture",
+    "bump_texture",
+    "bump_scale",
 ];
 /// The keys of each material type, besides [`COMMON_KEYS`].
 const LAMBERT_KEYS: &[&str] = &["albedo", "albedo_texture"];
@@ -157,13 +159,47 @@ impl Loader<'_> {
                 }
             };
         }
-        if let Some(texture) = table.get("normal_texture") {
-            material = material.normal_mapped(self.texture(&texture, TextureUse::Normals)?);
+        if let Some(relief) = self.relief(&table)? {
+            material = material.with_relief(relief);
         }
         if let Some(opacity) = self.opacity(&table)? {
             material = material.masked(opacity);
         }
         Ok(self.cx.add_material(material))
+    }
+
+    /// `normal_texture` (an RGB image of `(n + 1)/2`) or `bump_texture` (a
+    /// grey image of heights, values as stored) with `bump_scale` (a finite
+    /// number, default 1, Mitsuba's `scale`), not both; `None` without
+    /// either.
+    fn relief(&mut self, table: &Table<'_, '_>) -> Result<Option<Relief>, CliError> {
+        let scale = match table.get("bump_scale") {
+            Some(item) => {
+                if !table.has("bump_texture") {
+                    return Err(item.err(&self.src, "`bump_scale` needs `bump_texture`"));
+                }
+                let scale = item.number(&self.src)?;
+                if !scale.is_finite() {
+                    return Err(item.err(&self.src, format!("bump_scale {scale}: must be finite")));
+                }
+                scale as f32
+            }
+            None => 1.0,
+        };
+        match (table.get("normal_texture"), table.get("bump_texture")) {
+            (None, None) => Ok(None),
+            (Some(normals), None) => Ok(Some(Relief::Normals(
+                self.texture(&normals, TextureUse::Normals)?,
+            ))),
+            (None, Some(heights)) => Ok(Some(Relief::Heights {
+                texture: self.texture(&heights, TextureUse::Scalar)?,
+                scale,
+            })),
+            (Some(_), Some(heights)) => Err(heights.err(
+                &self.src,
+                "give either `normal_texture` or `bump_texture`, not both",
+            )),
+        }
     }
 
     /// `opacity` (a number in [0, 1]) or `opacity_texture` (a grey image,

@@ -118,7 +118,7 @@ mod tests {
             n: Vec3::Z,
             front: true,
             uv: Vec2::ZERO,
-            tangent: Vec3::ZERO,
+            dp_duv: [Vec3::ZERO; 2],
             hero_nm: None,
             lobe,
         }

@@ -153,7 +153,7 @@ mod tests {
             n: Vec3::Z,
             front,
             uv: Vec2::new(0.25, 0.75),
-            tangent: Vec3::ZERO,
+            dp_duv: [Vec3::ZERO; 2],
             hero_nm: None,
             lobe: 0.0,
         }

@@ -17,7 +17,7 @@
 //! | Mask | a nested BSDF where the opacity `α` says, a hole elsewhere (Mitsuba 3.9.1's `mask`, src/bsdfs/mask.cpp): `f = α f_nested + (1 − α) δ(wi + wo)/|cos θi|`; the hole is sampled with probability `1 − α` (straight on, weight 1, delta), the nested BSDF with `α` (its weight, pdf `α p`); formulas, sides and shadow rays in `mask.rs` |
 //! | Faces | a BSDF per face, `[front, back]`: the face the viewer sees scatters, as itself seen from the front (Mitsuba's `twosided` with two BSDFs) |
 //! | Blend | `(1 − w) f_0 + w f_1` (Mitsuba's `blendbsdf`): the bounce's lobe number chooses one component for both its light sample and its BSDF sample (`blend.rs`: unbiased, with the component's own weights and MIS) |
-//! | NormalMap | a nested BSDF shaded at a normal that an image tilts in the frame of the shading normal and the texture's `u` direction (Mitsuba's `normalmap`), times Estevez et al.'s shadowing term; formulas, sides and flips in `normal_map.rs` |
+//! | NormalMap | a nested BSDF shaded at a normal that an image of normals (Mitsuba's `normalmap`) or the slopes of an image of heights (`bumpmap`) tilt in the frame of the shading normal and the texture's `u` direction, times Estevez et al.'s shadowing term; formulas, sides and flips in `normal_map.rs` |
 //! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1; achromatic, delta, the same from both faces |
 //!
 //! **Sides.** [`Material::sides`] says which faces scatter. With
@@ -63,7 +63,7 @@ pub use fraction::Fraction;
 mod mask;
 pub use mask::Mask;
 mod normal_map;
-pub use normal_map::{MapFrame, NormalMap};
+pub use normal_map::{MapFrame, NormalMap, Relief};
 mod fluorescent;
 pub use fluorescent::{FLUORESCENT_LOBE_PROBABILITY, SceneFluorophore, tabulated_sides};
 mod packet;
@@ -280,16 +280,16 @@ impl Material {
         }
     }
 
-    /// This material with a normal map (`normal_map.rs`): its BSDF nested
-    /// in a [`NormalMap`] of the vector texture `texture` in the surface's
-    /// frame (a bump seen from behind is a dent), with Mitsuba's defaults
-    /// (invalid normals flipped, the shadowing term on); the material
-    /// keeps its sides.
-    pub fn normal_mapped(self, texture: TextureId) -> Self {
+    /// This material with a normal or bump map (`normal_map.rs`): its BSDF
+    /// nested in a [`NormalMap`] of `relief` in the surface's frame (a bump
+    /// seen from behind is a dent), with Mitsuba's defaults (invalid
+    /// normals flipped, the shadowing term on); the material keeps its
+    /// sides.
+    pub fn with_relief(self, relief: Relief) -> Self {
         let nested_front_only = self.front_only();
         Self {
             bsdf: Bsdf::NormalMap(Box::new(NormalMap {
-                texture,
+                relief,
                 nested: self.bsdf,
                 frame: MapFrame::Surface,
                 flip_invalid: true,
@@ -353,7 +353,7 @@ impl Bsdf {
             Bsdf::Faces(faces) => faces.iter().for_each(|f| r.append(f.references())),
             Bsdf::NormalMap(map) => {
                 r = map.nested.references();
-                r.textures.push(map.texture);
+                r.textures.push(map.relief.texture());
             }
             Bsdf::Blend(blend) => {
                 if let Fraction::Texture(id) = blend.weight {
@@ -416,7 +416,7 @@ impl Bsdf {
         }
     }
 
-    /// Whether shading needs the hit's tangent ([`ShadingPoint::tangent`]):
+    /// Whether shading needs the hit's tangent ([`ShadingPoint::dp_duv`]):
     /// a normal map anywhere in it.
     pub fn needs_tangent(&self) -> bool {
         !self.normal_maps().is_empty()
@@ -453,10 +453,10 @@ pub struct ShadingPoint {
     pub front: bool,
     /// Texture coordinates.
     pub uv: Vec2,
-    /// The surface's `∂p/∂u` in the world (not unit; zero where unknown),
-    /// where a normal map needs it ([`Bsdf::needs_tangent`]; zero
+    /// The surface's `[∂p/∂u, ∂p/∂v]` in the world (not unit), where a
+    /// normal or bump map needs them ([`Bsdf::needs_tangent`]; zero
     /// elsewhere).
-    pub tangent: Vec3,
+    pub dp_duv: [Vec3; 2],
     /// The hero wavelength of sampled transports (`None` for Fourier).
     pub hero_nm: Option<f32>,
     /// The bounce's lobe number, where a BSDF chooses a component before
@@ -562,7 +562,7 @@ mod tests {
                 n: Vec3::Z,
                 front,
                 uv: Vec2::ZERO,
-                tangent: Vec3::ZERO,
+                dp_duv: [Vec3::ZERO; 2],
                 hero_nm: None,
                 lobe: 0.0,
             };
@@ -709,7 +709,7 @@ mod tests {
                 n: normals[lane],
                 front: true,
                 uv: Vec2::ZERO,
-                tangent: Vec3::ZERO,
+                dp_duv: [Vec3::ZERO; 2],
                 hero_nm: None,
                 lobe: 0.0,
             });

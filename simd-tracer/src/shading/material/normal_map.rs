@@ -1,16 +1,27 @@
-//! Normal maps: a nested BSDF shaded in a frame whose normal an image
-//! tilts (Mitsuba 3.9.1's `normalmap`, src/bsdfs/normalmap.cpp, with
-//! src/bsdfs/normalmap_helpers.h), for surface detail (wrinkles, tiles,
-//! scratches) without geometry.
+//! Normal and bump maps: a nested BSDF shaded in a frame whose normal an
+//! image tilts (Mitsuba 3.9.1's `normalmap`, src/bsdfs/normalmap.cpp, and
+//! `bumpmap`, src/bsdfs/bumpmap.cpp, with src/bsdfs/normalmap_helpers.h),
+//! for surface detail (wrinkles, tiles, scratches) without geometry.
 //!
 //! **The map.** A texel `(r, g, b)` is a unit normal in the shading frame,
 //! `ñ = 2 (r, g, b) − 1`: `(0.5, 0.5, 1)` leaves the surface as it is.
 //! The frame is Mitsuba's: `z` the shading normal, `s` the texture's `u`
 //! direction `∂p/∂u` made orthogonal to it (Gram–Schmidt,
-//! `s = normalize(∂p/∂u − z (z · ∂p/∂u))`, [`ShadingPoint::tangent`]; any
+//! `s = normalize(∂p/∂u − z (z · ∂p/∂u))`, [`ShadingPoint::dp_duv`]; any
 //! unit vector orthogonal to `z` where `∂p/∂u` vanishes or is parallel to
 //! it), `t = n × s` with `n` the surface's front normal. The perturbed
 //! normal is `n' = normalize(ñ_x s + ñ_y t + ñ_z z)`.
+//!
+//! **The bumps.** A bump map gives `ñ` from the slopes of a height field
+//! `h(u, v)` (a scalar texture times `scale`; its gradient
+//! [`crate::spectra::texture::Texture::scalar_gradient_at`]): the
+//! surface's derivatives move along the normal `n` by the heights' slopes,
+//! `∂p/∂u' = ∂p/∂u + n (∂h/∂u − n · ∂p/∂u)` and likewise for `v`, the
+//! bumped normal is `normalize(∂p/∂u' × ∂p/∂v')` turned to `n`'s side, and
+//! `ñ` its coordinates in the frame `(s, t, n)` ([`ShadingPoint::dp_duv`];
+//! a unit basis where the derivatives are unknown). Mitsuba turns it to
+//! the geometric normal's side, which the shading normal shares but at
+//! grazing smooth-shaded silhouettes. From `ñ` on both are the same.
 //!
 //! **Which side.** Mitsuba builds the frame from the shading normal as the
 //! surface has it (its front), also when the viewer is behind it, so that
@@ -62,11 +73,35 @@ pub enum MapFrame {
     Viewer,
 }
 
-/// A normal-mapped BSDF (module docs).
+/// Where the tilted normal comes from (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Relief {
+    /// The tangent-space normals as `(ñ + 1)/2`, a vector texture
+    /// (Mitsuba's `normalmap`).
+    Normals(TextureId),
+    /// Heights: a scalar texture times `scale` (Mitsuba's `bumpmap`).
+    Heights {
+        /// The heights, a scalar texture.
+        texture: TextureId,
+        /// Their multiplier (Mitsuba's `scale`).
+        scale: f32,
+    },
+}
+
+impl Relief {
+    /// The texture it reads.
+    pub fn texture(self) -> TextureId {
+        match self {
+            Self::Normals(texture) | Self::Heights { texture, .. } => texture,
+        }
+    }
+}
+
+/// A normal- or bump-mapped BSDF (module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct NormalMap {
-    /// The tangent-space normals as `(ñ + 1)/2`, a vector texture.
-    pub texture: TextureId,
+    /// The tilted normals or the heights.
+    pub relief: Relief,
     /// The BSDF shaded in the perturbed frame.
     pub nested: Bsdf,
     /// The frame's `z` axis behind the surface.
@@ -104,20 +139,36 @@ impl NormalMap {
         p: &ShadingPoint,
         wo: Vec3,
     ) -> Option<Perturbed> {
-        let texel = tables
-            .textures
-            .get(self.texture.index())
-            .and_then(|t| t.vector_at(p.uv.x, p.uv.y))?;
-        let mut local = Vec3::from_array(texel) * 2.0 - Vec3::ONE;
+        let texture = tables.textures.get(self.relief.texture().index())?;
         let surface_normal = if p.front { p.n } else { -p.n };
         let z = match self.frame {
             MapFrame::Surface => surface_normal,
             MapFrame::Viewer => p.n,
         };
-        let s = (p.tangent - z * z.dot(p.tangent))
+        let [dp_du, dp_dv] = p.dp_duv;
+        let s = (dp_du - z * z.dot(dp_du))
             .try_normalize()
             .unwrap_or_else(|| basis(z).0);
         let t = surface_normal.cross(s);
+        let mut local = match self.relief {
+            Relief::Normals(_) => {
+                Vec3::from_array(texture.vector_at(p.uv.x, p.uv.y)?) * 2.0 - Vec3::ONE
+            }
+            Relief::Heights { scale, .. } => {
+                let [dh_du, dh_dv] = texture.scalar_gradient_at(p.uv.x, p.uv.y);
+                let n = surface_normal;
+                let (dp_du, dp_dv) = if dp_du.cross(dp_dv).length_squared() > 0.0 {
+                    (dp_du, dp_dv)
+                } else {
+                    basis(n)
+                };
+                let bumped_u = dp_du + n * (scale * dh_du - n.dot(dp_du));
+                let bumped_v = dp_dv + n * (scale * dh_dv - n.dot(dp_dv));
+                let bumped = bumped_u.cross(bumped_v).try_normalize()?;
+                let bumped = if bumped.dot(n) < 0.0 { -bumped } else { bumped };
+                Vec3::new(bumped.dot(s), bumped.dot(t), bumped.dot(n))
+            }
+        };
         let wo_local = Vec3::new(wo.dot(s), wo.dot(t), wo.dot(z));
         if self.flip_invalid && wo_local.z * wo_local.dot(local) <= 0.0 {
             local = Vec3::new(-local.x, -local.y, local.z);
@@ -242,7 +293,7 @@ mod tests {
 
     fn map(frame: MapFrame) -> NormalMap {
         NormalMap {
-            texture: TextureId(0),
+            relief: Relief::Normals(TextureId(0)),
             nested: lambert(),
             frame,
             flip_invalid: true,
@@ -288,7 +339,7 @@ mod tests {
             n: if front { Vec3::Z } else { -Vec3::Z },
             front,
             uv: Vec2::new(0.5, 0.5),
-            tangent: Vec3::new(2.0, 0.0, 0.3),
+            dp_duv: [Vec3::new(2.0, 0.0, 0.3), Vec3::new(0.0, 1.5, 0.0)],
             hero_nm: None,
             lobe: 0.0,
         }
