@@ -242,6 +242,21 @@ NORMAL_MAP_DOMES = 2
 BUMP_HEIGHT = 0.6
 
 
+def cell_coordinates(i, j):
+    """Texel (i, j)'s centre in its dome cell, x and y in [-1, 1]. Rows go
+    down the image, as Mitsuba's v does (v = 0 is the top row), and the
+    frame's t axis follows v."""
+    cell = NORMAL_MAP_TEXELS // NORMAL_MAP_DOMES
+    return (2.0 * ((i % cell) + 0.5) / cell - 1.0,
+            2.0 * ((j % cell) + 0.5) / cell - 1.0)
+
+
+def on_dome(x, y):
+    """Whether (x, y) lies on its cell's dome: inside the unit circle and
+    short of the cut on the +u side."""
+    return x * x + y * y < 1.0 and x < 0.5
+
+
 def normal_bumps_rows():
     """A tangent-space normal map of NORMAL_MAP_DOMES x NORMAL_MAP_DOMES
     paraboloid domes, h = BUMP_HEIGHT (1 - r^2) inside each cell's circle
@@ -251,15 +266,11 @@ def normal_bumps_rows():
     that a map whose u and v axes were swapped or mirrored shades
     differently."""
     rows = []
-    cell = NORMAL_MAP_TEXELS // NORMAL_MAP_DOMES
     for j in range(NORMAL_MAP_TEXELS):
         row = []
         for i in range(NORMAL_MAP_TEXELS):
-            x = 2.0 * ((i % cell) + 0.5) / cell - 1.0
-            # Rows go down the image, as Mitsuba's v does (v = 0 is the
-            # top row), and the frame's t axis follows v.
-            y = 2.0 * ((j % cell) + 0.5) / cell - 1.0
-            if x * x + y * y < 1.0 and x < 0.5:
+            x, y = cell_coordinates(i, j)
+            if on_dome(x, y):
                 nx, ny = 2.0 * BUMP_HEIGHT * x, 2.0 * BUMP_HEIGHT * y
             else:
                 nx, ny = 0.0, 0.0
@@ -277,13 +288,11 @@ def bump_heights_rows():
     or mirrored axes shade differently) over a slope along v (a tenth of
     the range across a cell)."""
     rows = []
-    cell = NORMAL_MAP_TEXELS // NORMAL_MAP_DOMES
     for j in range(NORMAL_MAP_TEXELS):
         row = []
         for i in range(NORMAL_MAP_TEXELS):
-            x = 2.0 * ((i % cell) + 0.5) / cell - 1.0
-            y = 2.0 * ((j % cell) + 0.5) / cell - 1.0
-            dome = 1.0 - x * x - y * y if x * x + y * y < 1.0 and x < 0.5 else 0.0
+            x, y = cell_coordinates(i, j)
+            dome = 1.0 - x * x - y * y if on_dome(x, y) else 0.0
             slope = 0.1 * (y + 1.0) / 2.0
             row.append(round(255 * (0.9 * dome + slope)))
         rows.append(row)

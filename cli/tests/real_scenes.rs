@@ -966,6 +966,18 @@ fn opacity_keys_refuse_bad_values_with_one_line() -> TestResult {
     Ok(())
 }
 
+/// Writes an 8-bit PNG of `size` (width, height) texels of `color`.
+fn write_png(path: &Path, size: (u32, u32), color: png::ColorType, data: &[u8]) -> TestResult {
+    let file = std::io::BufWriter::new(fs::File::create(path)?);
+    let mut encoder = png::Encoder::new(file, size.0, size.1);
+    encoder.set_color(color);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(data)?;
+    writer.finish()?;
+    Ok(())
+}
+
 /// `normal_texture` on a TOML material: a Lambertian floor under a
 /// directional light from 40° towards `+x`, seen from above, with a 1 × 1
 /// map whose texel tilts the normal along the rectangle's `u` (`+x`): the
@@ -987,12 +999,7 @@ fn toml_normal_and_bump_textures_tilt_the_shading_normal() -> TestResult {
         (255.0 * (tilt_deg.to_radians().cos() + 1.0) / 2.0).round() as u8,
     ];
     let png = dir.join("tilt.png");
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(fs::File::create(&png)?), 1, 1);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header()?;
-    writer.write_image_data(&texel)?;
-    writer.finish()?;
+    write_png(&png, (1, 1), png::ColorType::Rgb, &texel)?;
     let light_deg = 40.0f64;
     let (sin_l, cos_l) = light_deg.to_radians().sin_cos();
     let text = |keys: &str| {
@@ -1062,12 +1069,7 @@ irradiance = {{ constant = 3 }}
     // g = 1.6 over |∂p/∂u| = 4 (the rectangle spans 4 units), so the normal
     // tilts away from the light by atan(0.4).
     let ramp = dir.join("ramp.png");
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(fs::File::create(&ramp)?), 2, 1);
-    encoder.set_color(png::ColorType::Grayscale);
-    encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header()?;
-    writer.write_image_data(&[0, 255])?;
-    writer.finish()?;
+    write_png(&ramp, (2, 1), png::ColorType::Grayscale, &[0, 255])?;
     let (_d, bumped_path) = scene(
         "bump-mapped",
         &text(&format!(

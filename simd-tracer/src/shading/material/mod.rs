@@ -417,9 +417,16 @@ impl Bsdf {
     }
 
     /// Whether shading needs the hit's tangent ([`ShadingPoint::dp_duv`]):
-    /// a normal map anywhere in it.
+    /// a normal map anywhere in it. Asked per lane and bounce, so it walks
+    /// the nesting without collecting ([`Bsdf::normal_maps`] allocates).
     pub fn needs_tangent(&self) -> bool {
-        !self.normal_maps().is_empty()
+        match self {
+            Self::NormalMap(_) => true,
+            Self::Mask(mask) => mask.nested.needs_tangent(),
+            Self::Faces(faces) => faces.iter().any(Bsdf::needs_tangent),
+            Self::Blend(blend) => blend.bsdfs.iter().any(Bsdf::needs_tangent),
+            _ => false,
+        }
     }
 
     /// Whether the BSDF transmits light through the surface (then it
