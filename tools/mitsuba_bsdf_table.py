@@ -25,7 +25,11 @@ Outputs (into --out, default simd-tracer/tests/data):
 * `mitsuba_bsdf_delta.csv`: the smooth plastics' delta lobe per camera
   angle: `reflectance` (the sampled weight times the lobe probability, i.e.
   the specular reflectance times F) and `probability` (Mitsuba's chance of
-  sampling the delta lobe).
+  sampling the delta lobe);
+* `mitsuba_principled_configs.csv` and `mitsuba_principled_eval.csv`: the
+  same for the `principled` BSDF (grey `base_color` 0.5, whose luminance in
+  `scalar_rgb` is 0.5, so the tints are white), `value` and `pdf` per
+  direction pair.
 
     pip install mitsuba==3.9.1
     python3 tools/mitsuba_bsdf_table.py
@@ -72,6 +76,52 @@ for distribution in ("ggx", "beckmann"):
                         distribution, 0.3, 0.0, 1.0, False, camera, light))
 
 
+# Principled: name, parameters (besides base_color 0.5), camera side, light
+# side. The transmitting ones from all four sides.
+PRINCIPLED_PARAMETERS = ["roughness", "metallic", "spec_trans", "spec_tint", "sheen",
+                         "sheen_tint", "clearcoat", "clearcoat_gloss", "flatness", "eta"]
+PRINCIPLED_CONFIGS = [
+    ("principled_defaults", {}, 1, 1),
+    ("principled_metal_tint", {"metallic": 0.7, "spec_tint": 0.6, "roughness": 0.3}, 1, 1),
+    ("principled_sheen_clearcoat_flat", {"sheen": 0.8, "sheen_tint": 0.5, "clearcoat": 0.9,
+                                         "clearcoat_gloss": 0.7, "flatness": 0.6,
+                                         "roughness": 0.8}, 1, 1),
+]
+for camera, light, what in ((1, 1, "reflect_outside"), (1, -1, "transmit_outside"),
+                            (-1, -1, "reflect_inside"), (-1, 1, "transmit_inside")):
+    PRINCIPLED_CONFIGS.append((f"principled_glass_{what}",
+                               {"spec_trans": 1.0, "roughness": 0.4, "eta": 1.45}, camera, light))
+    PRINCIPLED_CONFIGS.append((f"principled_mix_{what}",
+                               {"spec_trans": 0.5, "metallic": 0.2, "clearcoat": 0.5,
+                                "sheen": 0.5, "roughness": 0.5}, camera, light))
+PRINCIPLED_DEFAULTS = {"roughness": 0.5, "eta": 1.5}
+
+
+def principled_table(out):
+    """The principled BSDF's configurations and evaluations."""
+    everything = mi.BSDFContext()
+    rows = []
+    with open(out / "mitsuba_principled_configs.csv", "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["name"] + PRINCIPLED_PARAMETERS + ["camera_side", "light_side"])
+        for name, params, cs, ls in PRINCIPLED_CONFIGS:
+            values = [params.get(p, PRINCIPLED_DEFAULTS.get(p, 0.0)) for p in PRINCIPLED_PARAMETERS]
+            w.writerow([name] + values + [cs, ls])
+    for name, params, cs, ls in PRINCIPLED_CONFIGS:
+        d = {"type": "principled", "base_color": {"type": "rgb", "value": [GREY] * 3}}
+        d.update(params)
+        bsdf = mi.load_dict(d)
+        for theta_camera, theta_light, phi, si, wo in direction_pairs(cs, ls):
+            value = grey(bsdf.eval(everything, si, wo))
+            pdf = float(bsdf.pdf(everything, si, wo))
+            rows.append([name, theta_camera, theta_light, phi, f"{value:.9g}", f"{pdf:.9g}"])
+    with open(out / "mitsuba_principled_eval.csv", "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["config", "theta_camera_deg", "theta_light_deg", "phi_deg", "value", "pdf"])
+        w.writerows(rows)
+    print(f"{len(PRINCIPLED_CONFIGS)} principled configurations, {len(rows)} evaluations")
+
+
 def load(plugin, distribution, alpha, diffuse, specular, nonlinear):
     d = {"type": plugin}
     if plugin in ("plastic", "roughplastic"):
@@ -99,6 +149,18 @@ def grey(value):
     if max(channels) - min(channels) > 1e-6 * max(1.0, abs(channels[0])):
         raise ValueError(f"channels differ: {channels}")
     return channels[0]
+
+
+def direction_pairs(camera_side, light_side):
+    """Every (camera angle, light angle, azimuth, interaction, light
+    direction) of the grid, in the tables' order."""
+    for theta_camera in THETAS_DEG:
+        si = interaction(direction(theta_camera, 0.0, camera_side))
+        for theta_light in THETAS_DEG:
+            for phi in PHIS_DEG:
+                if theta_light == 0.0 and phi != 0.0:
+                    continue
+                yield theta_camera, theta_light, phi, si, direction(theta_light, phi, light_side)
 
 
 def interaction(camera):
@@ -137,16 +199,13 @@ def main():
                 probability = float(bs.pdf)
                 deltas.append([name, theta_camera, f"{grey(weight) * probability:.9g}",
                                f"{probability:.9g}"])
-            for theta_light in THETAS_DEG:
-                for phi in PHIS_DEG:
-                    if theta_light == 0.0 and phi != 0.0:
-                        continue
-                    wo = direction(theta_light, phi, ls)
-                    value = grey(bsdf.eval(everything, si, wo))
-                    pdf = float(bsdf.pdf(everything, si, wo))
-                    diff = grey(bsdf.eval(diffuse_only, si, wo)) if plastic else 0.0
-                    rows.append([name, theta_camera, theta_light, phi, f"{value:.9g}",
-                                 f"{pdf:.9g}", f"{diff:.9g}"])
+        for theta_camera, theta_light, phi, si, wo in direction_pairs(cs, ls):
+            value = grey(bsdf.eval(everything, si, wo))
+            pdf = float(bsdf.pdf(everything, si, wo))
+            diff = grey(bsdf.eval(diffuse_only, si, wo)) if plastic else 0.0
+            rows.append([name, theta_camera, theta_light, phi, f"{value:.9g}", f"{pdf:.9g}",
+                         f"{diff:.9g}"])
+
     with open(args.out / "mitsuba_bsdf_eval.csv", "w", newline="") as f:
         w = csv.writer(f, lineterminator="\n")
         w.writerow(["config", "theta_camera_deg", "theta_light_deg", "phi_deg", "value", "pdf",
@@ -157,6 +216,7 @@ def main():
         w.writerow(["config", "theta_camera_deg", "reflectance", "probability"])
         w.writerows(deltas)
     print(f"{len(CONFIGS)} configurations, {len(rows)} evaluations, {len(deltas)} delta rows")
+    principled_table(args.out)
 
 
 if __name__ == "__main__":

@@ -107,6 +107,9 @@ SCENES = {
     "bsdf_blend": {"suite": "materials", "ref_spp": 4096, "negative": {"weight": "0.7"}},
     "bsdf_normalmap": {"suite": "materials", "ref_spp": 4096, "negative": {"angle": "90"}},
     "bsdf_bumpmap": {"suite": "materials", "ref_spp": 4096, "negative": {"scale": "-0.3"}},
+    "bsdf_principled": {"suite": "materials", "ref_spp": 4096, "negative": {"metallic": "0.5"}},
+    "bsdf_principled_glass": {
+        "suite": "materials", "ref_spp": 4096, "negative": {"eta": "1.2"}},
     # lights
     "point_light": {"suite": "lights", "ref_spp": 4096, "negative": {"light_x": "1.4"}},
     "spot_light": {"suite": "lights", "ref_spp": 4096, "negative": {"beam": "12"}},

@@ -1109,3 +1109,144 @@ fn blends_follow_mitsuba() -> TestResult {
     )?;
     Ok(())
 }
+
+/// The principled BSDF of a scene's one material.
+fn principled_of(
+    built: &simd_tracer::scene::Scene,
+) -> TestResult<simd_tracer::shading::material::Principled> {
+    use simd_tracer::shading::material::Bsdf;
+    built
+        .materials()
+        .iter()
+        .find_map(|m| match &m.bsdf {
+            Bsdf::Principled(p) => Some((**p).clone()),
+            _ => None,
+        })
+        .ok_or_else(|| "no principled BSDF".into())
+}
+
+/// `principled`: Mitsuba's defaults and its `specular` → `η` map, the
+/// stand-ins for an index of 1 with transmission, `√ρ` of the base colour
+/// where it transmits, sides, textured fractions, and one line for each
+/// refused combination.
+#[test]
+fn principled_follows_mitsuba() -> TestResult {
+    use simd_tracer::shading::material::Fraction;
+    let dir = test_dir("principled")?;
+    let on_rectangle = |bsdf: &str| {
+        scene(&format!(
+            "    <shape type=\"rectangle\">{bsdf}</shape>\n    <emitter type=\"constant\"/>"
+        ))
+    };
+    let principled = |params: &str| format!("<bsdf type=\"principled\">{params}</bsdf>");
+    let load_one =
+        |name: &str, params: &str| -> TestResult<(simd_tracer::scene::Scene, Vec<String>)> {
+            let path = write(&dir, name, &on_rectangle(&principled(params)))?;
+            let loaded = load(&path, &[], false)?;
+            Ok((loaded.builder.build()?, loaded.warnings))
+        };
+    // Defaults: specular 0.5 is η = 1.5; roughness 0.5; base 0.5; opaque,
+    // so only the front face scatters.
+    let (built, warnings) = load_one("defaults.xml", "")?;
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let p = principled_of(&built)?;
+    assert!((p.eta - 1.5).abs() < 1e-6, "{}", p.eta);
+    assert_eq!(p.roughness, Fraction::Constant(0.5));
+    assert_eq!(p.spec_trans, Fraction::Constant(0.0));
+    assert!(p.base_color_sqrt.is_none());
+    assert!(built.materials().iter().all(|m| m.front_only()));
+    // Transmission: `eta` 1 becomes 1.001, `√ρ` is tabulated, both faces
+    // scatter.
+    let (built, _) = load_one(
+        "glass.xml",
+        "<rgb name=\"base_color\" value=\"1, 1, 1\"/><float name=\"spec_trans\" value=\"1\"/><float name=\"eta\" value=\"1\"/>",
+    )?;
+    let p = principled_of(&built)?;
+    assert!((p.eta - 1.001).abs() < 1e-6, "{}", p.eta);
+    assert!(
+        (p.base_luminance - 1.0).abs() < 0.01,
+        "{}",
+        p.base_luminance
+    );
+    assert!(built.materials().iter().all(|m| !m.front_only()));
+    let tables = built.material_tables();
+    let base = match p.base_color {
+        simd_tracer::shading::material::Albedo::Spectrum(id) => &tables.spectra[id.index()],
+        _ => return Err("base colour not a spectrum".into()),
+    };
+    let root = &tables.spectra[p.base_color_sqrt.ok_or("no √ρ")?.index()];
+    for lambda_nm in [420.0f32, 550.0, 680.0] {
+        let expected = base.value(lambda_nm).sqrt();
+        assert!(
+            (root.value(lambda_nm) - expected).abs() < 1e-3,
+            "{lambda_nm} nm"
+        );
+    }
+    // `specular` 0 with transmission is 10⁻³ (η = 2/(1 − √(8·10⁻⁵)) − 1).
+    let (built, _) = load_one(
+        "specular0.xml",
+        "<float name=\"spec_trans\" value=\"0.5\"/><float name=\"specular\" value=\"0\"/>",
+    )?;
+    let expected = 2.0 / (1.0 - (0.08f64 * 1e-3).sqrt()) - 1.0;
+    assert!((f64::from(principled_of(&built)?.eta) - expected).abs() < 1e-6);
+    // A textured roughness; anisotropy is approximated, with a warning.
+    let grey = suite_texture("grey.png");
+    let (built, warnings) = load_one(
+        "textured.xml",
+        &format!(
+            "<texture type=\"bitmap\" name=\"roughness\"><string name=\"filename\" value=\"{grey}\"/></texture><float name=\"anisotropic\" value=\"0.5\"/>"
+        ),
+    )?;
+    assert!(matches!(
+        principled_of(&built)?.roughness,
+        Fraction::Texture(_)
+    ));
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("anisotropic"), "{warnings:?}");
+    // Refused, one line each.
+    let colours = suite_texture("colours.png");
+    let textured_base = format!(
+        "<texture type=\"bitmap\" name=\"base_color\"><string name=\"filename\" value=\"{colours}\"/></texture>"
+    );
+    for (test, params, needle) in [
+        (
+            "principled-eta-and-specular",
+            "<float name=\"eta\" value=\"1.4\"/><float name=\"specular\" value=\"0.5\"/>"
+                .to_string(),
+            "either `eta` or `specular`",
+        ),
+        (
+            "principled-metallic-range",
+            "<float name=\"metallic\" value=\"1.5\"/>".to_string(),
+            "metallic 1.5: must be in [0, 1]",
+        ),
+        (
+            "principled-eta-zero",
+            "<float name=\"eta\" value=\"0\"/>".to_string(),
+            "eta 0: must be a positive number",
+        ),
+        (
+            "principled-specular-range",
+            "<float name=\"specular\" value=\"13\"/>".to_string(),
+            "specular 13: must be in [0, 12.5)",
+        ),
+        (
+            "principled-sampling-rate",
+            "<float name=\"clearcoat_sampling_rate\" value=\"-1\"/>".to_string(),
+            "clearcoat_sampling_rate -1: must be a number >= 0",
+        ),
+        (
+            "principled-textured-glass",
+            format!("{textured_base}<float name=\"spec_trans\" value=\"1\"/>"),
+            "transmission with a textured base colour",
+        ),
+        (
+            "principled-textured-tint",
+            format!("{textured_base}<float name=\"spec_tint\" value=\"0.3\"/>"),
+            "tint with a textured base colour",
+        ),
+    ] {
+        refused(test, &on_rectangle(&principled(&params)), 8, &[needle])?;
+    }
+    Ok(())
+}

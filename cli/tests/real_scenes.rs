@@ -978,6 +978,36 @@ fn write_png(path: &Path, size: (u32, u32), color: png::ColorType, data: &[u8]) 
     Ok(())
 }
 
+/// A scene of a 4 × 4 floor of the material `material` (its lines of
+/// `[materials.floor]`) seen from 3 units above with a field of view of
+/// `fov_deg`, under a directional light `light_deg` off the zenith
+/// (irradiance 3).
+fn floor_under_the_sun(material: &str, fov_deg: f64, light_deg: f64) -> String {
+    let (sin_l, cos_l) = light_deg.to_radians().sin_cos();
+    format!(
+        r#"
+[camera]
+position = [0, 0, 3]
+target = [0, 0, 0]
+fov_deg = {fov_deg}
+
+[materials.floor]
+{material}
+
+[[shapes]]
+type = "rectangle"
+material = "floor"
+transform = [{{ scale = 2 }}]
+
+[[lights]]
+type = "directional"
+direction = [{}, 0, {}]
+irradiance = {{ constant = 3 }}
+"#,
+        -sin_l, -cos_l
+    )
+}
+
 /// `normal_texture` on a TOML material: a Lambertian floor under a
 /// directional light from 40° towards `+x`, seen from above, with a 1 × 1
 /// map whose texel tilts the normal along the rectangle's `u` (`+x`): the
@@ -1003,29 +1033,10 @@ fn toml_normal_and_bump_textures_tilt_the_shading_normal() -> TestResult {
     let light_deg = 40.0f64;
     let (sin_l, cos_l) = light_deg.to_radians().sin_cos();
     let text = |keys: &str| {
-        format!(
-            r#"
-[camera]
-position = [0, 0, 3]
-target = [0, 0, 0]
-fov_deg = 20
-
-[materials.floor]
-type = "lambert"
-albedo = {{ constant = 0.5 }}
-{keys}
-
-[[shapes]]
-type = "rectangle"
-material = "floor"
-transform = [{{ scale = 2 }}]
-
-[[lights]]
-type = "directional"
-direction = [{}, 0, {}]
-irradiance = {{ constant = 3 }}
-"#,
-            -sin_l, -cos_l
+        floor_under_the_sun(
+            &format!("type = \"lambert\"\nalbedo = {{ constant = 0.5 }}\n{keys}"),
+            20.0,
+            light_deg,
         )
     };
     let (_d, flat_path) = scene("normal-flat", &text(""))?;
@@ -1168,5 +1179,121 @@ fn toml_conductor_tints_multiply_the_fresnel_term() -> TestResult {
         assert!((t - 0.4 * p).abs() < 1e-6, "{t} vs 0.4 × {p}");
     }
     error_in("tint-bad", &text("tint = 3"), "tint", "a spectrum")?;
+    Ok(())
+}
+
+/// A TOML `principled` material against its closed form: with `ior = 1`
+/// the dielectric Fresnel term is 0 (no specular lobe), with `roughness =
+/// 0` there is no retro-reflection, and with `flatness = 1` the diffuse
+/// lobe is Hanrahan–Krueger's `1.25 ((1 − w_o)(1 − w_i)(1/(cos θ_o +
+/// cos θ_i) − 0.5) + 0.5)` times Lambert's, `w = (1 − cos)⁵`. Under a
+/// directional light the floor's image mean over the Lambertian floor's is
+/// that factor averaged over the camera's view directions (uniform over
+/// the film plane). `flatness = 0` (Burley's diffuse lobe, here within
+/// `w_i/2` of Lambert's) is far from it; textures and the index are read
+/// into the BSDF as given.
+#[test]
+fn toml_principled_matches_its_closed_form() -> TestResult {
+    use simd_tracer::shading::material::{Bsdf, Fraction};
+    let light_deg = 40.0f64;
+    let fov_deg = 20.0f64;
+    let cos_l = light_deg.to_radians().cos();
+    let text = |material: &str| {
+        floor_under_the_sun(
+            &format!("{material}\nalbedo = {{ constant = 0.5 }}"),
+            fov_deg,
+            light_deg,
+        )
+    };
+    let principled = "type = \"principled\"\nior = 1\nroughness = 0\nmetallic = 0";
+    let (_d, flat_path) = scene(
+        "principled-flat",
+        &text(&format!("{principled}\nflatness = 1")),
+    )?;
+    let (_d, burley_path) = scene("principled-burley", &text(principled))?;
+    let (_d, lambert_path) = scene("principled-lambert", &text("type = \"lambert\""))?;
+    let flat = load(&flat_path)?;
+    let Some(Bsdf::Principled(p)) = flat
+        .materials()
+        .iter()
+        .find(|m| m.name == "floor")
+        .map(|m| &m.bsdf)
+    else {
+        return Err("the floor is not principled".into());
+    };
+    assert_eq!(
+        (p.eta, p.flatness, p.roughness),
+        (1.0, Fraction::Constant(1.0), Fraction::Constant(0.0))
+    );
+    let fourier = FourierTransport::<8>::new(flat.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
+    let mean_y = |image: Vec<Xyz>| image.iter().map(|x| x.y).sum::<f64>() / image.len() as f64;
+    let lambert = mean_y(render_xyz(&fourier, &load(&lambert_path)?, 4, 1)?);
+    let ratio = mean_y(render_xyz(&fourier, &flat, 4, 1)?) / lambert;
+    let burley = mean_y(render_xyz(&fourier, &load(&burley_path)?, 4, 1)?) / lambert;
+    // The closed form over the film plane: the smaller side spans the
+    // field of view.
+    let w = |cos: f64| (1.0 - cos).clamp(0.0, 1.0).powi(5);
+    let half = (fov_deg / 2.0).to_radians().tan();
+    let (wide, high) = (f64::from(SIZE.0), f64::from(SIZE.1));
+    let steps = 400;
+    let mut sum = 0.0;
+    for i in 0..steps {
+        for j in 0..steps {
+            let x = half * wide / high * (2.0 * (i as f64 + 0.5) / steps as f64 - 1.0);
+            let y = half * (2.0 * (j as f64 + 0.5) / steps as f64 - 1.0);
+            let cos_o = 1.0 / (1.0 + x * x + y * y).sqrt();
+            let fss = (1.0 - w(cos_o)) * (1.0 - w(cos_l));
+            sum += 1.25 * (fss * (1.0 / (cos_o + cos_l) - 0.5) + 0.5);
+        }
+    }
+    let expected = sum / (steps * steps) as f64;
+    println!(
+        "principled flatness 1: ratio {ratio:.5}, closed form {expected:.5}; flatness 0: {burley:.5}"
+    );
+    assert!(
+        (ratio / expected - 1.0).abs() < 5e-4,
+        "{ratio} against {expected}"
+    );
+    assert!((burley - 1.0).abs() < 1e-3, "Burley's lobe {burley}");
+    assert!((burley / expected - 1.0).abs() > 0.1);
+    // Mistakes are one line at their key.
+    let grey = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/conformance/scenes/textures/grey.png")
+        .display()
+        .to_string();
+    let colours = grey.replace("grey.png", "colours.png");
+    for (name, keys, key, needle) in [
+        (
+            "principled-range",
+            "albedo = { constant = 0.5 }\nsheen = 1.2\n".to_string(),
+            "sheen",
+            "sheen 1.2: must be in [0, 1]",
+        ),
+        (
+            "principled-both",
+            format!(
+                "albedo = {{ constant = 0.5 }}\nroughness = 0.3\nroughness_texture = \"{grey}\"\n"
+            ),
+            "roughness_texture",
+            "give either `roughness` or `roughness_texture`, not both",
+        ),
+        (
+            "principled-ior",
+            "albedo = { constant = 0.5 }\nior = -1\n".to_string(),
+            "ior",
+            "ior -1: must be a number > 0",
+        ),
+        (
+            "principled-textured-glass",
+            format!("albedo_texture = \"{colours}\"\nspec_trans = 1\n"),
+            "[materials.card]",
+            "transmission with a textured base colour",
+        ),
+    ] {
+        let body = format!(
+            "[materials.card]\ntype = \"principled\"\n{keys}\n[[shapes]]\ntype = \"cube\"\nmaterial = \"card\"\n"
+        );
+        error_at(name, &body, key, needle)?;
+    }
     Ok(())
 }

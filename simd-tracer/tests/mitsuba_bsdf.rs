@@ -55,7 +55,8 @@ use simd_tracer::spectra::angular::{AngularFunction, Ior};
 use spectral_core::SpectralRange;
 use std::collections::BTreeMap;
 
-type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
+mod mitsuba_tables;
+use mitsuba_tables::{TestResult, data, number, rows};
 
 /// f32 evaluation on both sides, relative (twice the measured).
 const ARITHMETIC: f64 = 1e-4;
@@ -73,34 +74,6 @@ const FLOOR: f64 = 1e-4;
 /// interpolation error of `F` from outside (1.4·10⁻⁴) over the smallest
 /// reflectance met (`F` = 0.04 at normal incidence) is 3.5·10⁻³.
 const TABLE: f64 = 4e-3;
-
-/// The data files.
-fn data(name: &str) -> TestResult<String> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name);
-    Ok(std::fs::read_to_string(path)?)
-}
-
-/// Rows of a CSV file as maps from the header's names.
-fn rows(text: &str) -> TestResult<Vec<BTreeMap<String, String>>> {
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().ok_or("empty file")?.split(',').collect();
-    Ok(lines
-        .filter(|l| !l.is_empty())
-        .map(|l| {
-            header
-                .iter()
-                .zip(l.split(','))
-                .map(|(k, v)| ((*k).to_string(), v.to_string()))
-                .collect()
-        })
-        .collect())
-}
-
-fn number(row: &BTreeMap<String, String>, key: &str) -> TestResult<f64> {
-    Ok(row.get(key).ok_or_else(|| format!("no {key}"))?.parse()?)
-}
 
 fn text<'a>(row: &'a BTreeMap<String, String>, key: &str) -> TestResult<&'a str> {
     Ok(row.get(key).ok_or_else(|| format!("no {key}"))?.as_str())

@@ -269,6 +269,49 @@ impl SceneSpectrum {
     pub fn max_value(&self) -> f32 {
         self.dense.iter().copied().fold(0.0, f32::max)
     }
+
+    /// `f` of this spectrum's values, tabulated every `step_nm` over its
+    /// range (linear between samples, like every tabulated spectrum): a
+    /// nonlinear function of a reflectance (Mitsuba's nonlinear plastic
+    /// albedo, the principled BSDF's `√ρ`) as a spectrum of its own.
+    pub fn tabulate_with(&self, step_nm: f64, f: impl Fn(f64) -> f64) -> SpectrumSource {
+        let range = self.range();
+        let steps = (range.width_nm() / step_nm).ceil() as usize;
+        let lambda_nm: Vec<f64> = (0..=steps)
+            .map(|i| (range.min_nm() + i as f64 * step_nm).min(range.max_nm()))
+            .collect();
+        let values = lambda_nm
+            .iter()
+            .map(|&l| f(f64::from(self.value(l as f32))))
+            .collect();
+        SpectrumSource::Tabulated { lambda_nm, values }
+    }
+
+    /// The luminance `Y` of the spectrum as a reflectance under CIE D65
+    /// (the white of sRGB, so that an sRGB reflectance's `Y` is its
+    /// Rec. 709 luminance up to the upsampling's error; a flat 1 gives 1):
+    /// `∫ ρ D65 ȳ / ∫ D65 ȳ` over the CMF table (zero outside this
+    /// spectrum's range).
+    pub fn luminance(&self) -> f64 {
+        /// The product of the spectrum's dense values and an illuminant.
+        struct Lit<'a>(&'a SceneSpectrum, &'a Builtin);
+        impl Spectrum for Lit<'_> {
+            fn value(&self, lambda_nm: f64) -> f64 {
+                f64::from(self.0.value(lambda_nm as f32)) * self.1.value(lambda_nm)
+            }
+        }
+        let (Ok(cmf_range), Ok(d65)) = (
+            SpectralRange::new(spectral_core::cmf::FIRST_NM, spectral_core::cmf::LAST_NM),
+            Builtin::lookup("d65"),
+        ) else {
+            return 0.0;
+        };
+        let white = spectral_core::xyz::xyz_of(&d65, &cmf_range).y;
+        if white.is_nan() || white <= 0.0 {
+            return 0.0;
+        }
+        spectral_core::xyz::xyz_of(&Lit(self, &d65), &cmf_range).y / white
+    }
 }
 
 /// The Fourier coefficients of a scene's first [`LANES`] spectra, one
@@ -318,6 +361,39 @@ impl SpectrumRegisters {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A flat reflectance has luminance equal to its value; an sRGB
+    /// reflectance's is close to its Rec. 709 luminance (the upsampling is
+    /// not exact); `tabulate_with` applies its function at every sample.
+    #[test]
+    fn luminance_and_pointwise_functions() -> Result<(), SpectralError> {
+        let range = SpectralRange::VISIBLE;
+        let half = SceneSpectrum::new(SpectrumSource::Constant(0.5), range)?;
+        assert!(
+            (half.luminance() - 0.5).abs() < 1e-3,
+            "{}",
+            half.luminance()
+        );
+        let rgb = [0.8, 0.15, 0.1];
+        let red = SceneSpectrum::new(SpectrumSource::RgbReflectance(rgb), range)?;
+        let rec709 = 0.212671 * rgb[0] + 0.715160 * rgb[1] + 0.072169 * rgb[2];
+        assert!(
+            (red.luminance() - rec709).abs() < 0.01 * rec709,
+            "{}",
+            red.luminance()
+        );
+        // Negative control: the luminance is not the mean.
+        assert!((red.luminance() - red.mean()).abs() > 0.05);
+        let root = SceneSpectrum::new(red.tabulate_with(1.0, f64::sqrt), range)?;
+        for lambda_nm in [400.0f32, 500.5, 610.0, 700.0] {
+            let expected = red.value(lambda_nm).sqrt();
+            assert!(
+                (root.value(lambda_nm) - expected).abs() < 2e-3,
+                "{lambda_nm}"
+            );
+        }
+        Ok(())
+    }
 
     #[test]
     fn dense_table_reproduces_tabulated_data() {

@@ -4,7 +4,8 @@
 //! A front end reads a material's parameters (spectra, indices of
 //! refraction, roughness, film layers) and calls the builder of its BSDF
 //! here: [`Construction::conductor_fresnel`], [`Construction::dielectric`],
-//! [`coated`], [`Construction::thin_film`], [`Construction::thin_dielectric`];
+//! [`coated`], [`Construction::thin_film`], [`Construction::thin_dielectric`],
+//! [`Construction::principled`];
 //! the angular functions are named
 //! after the material's key so that the builder's own errors are located.
 //! [`Construction::add_material`] adds the result and remembers whether it
@@ -17,11 +18,19 @@ use crate::error::CliError;
 use crate::scene_file::source::Spot;
 use simd_tracer::ids::{AngularId, MaterialId, SpectrumId, TextureId};
 use simd_tracer::scene::SceneError;
-use simd_tracer::shading::material::{Albedo, Bsdf, CoatParams, Material, diffuse_fresnel};
+use simd_tracer::shading::material::{
+    Albedo, Bsdf, CoatParams, Fraction, Material, Principled, diffuse_fresnel,
+};
 use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, REFERENCE_WAVELENGTH_NM};
 use spectral_core::fluorescence::{FluorescentLayer, Fluorophore};
 use spectral_core::table::{FilmQuantity, FilmSide};
+
+/// Step of a principled BSDF's tabulated `√ρ`, nm.
+const PRINCIPLED_SQRT_STEP_NM: f64 = 1.0;
+
+/// Mitsuba's stand-in for a principled BSDF's `eta` of 1 with transmission.
+const PRINCIPLED_ETA_WITH_TRANSMISSION: f32 = 1.001;
 
 /// A material defined under a name.
 pub(super) struct NamedMaterial {
@@ -297,6 +306,45 @@ impl Construction<'_> {
             substrate_ior: substrate.at(REFERENCE_WAVELENGTH_NM) as f32,
             thickness,
         })
+    }
+
+    /// A principled BSDF from its parameters, with the colour terms derived
+    /// here from its base colour: `√ρ` where it can transmit and `Y` where
+    /// a tint needs it (an index of 1 with transmission becomes 1.001, as
+    /// in Mitsuba). A textured base colour can carry neither (its `√ρ`
+    /// would be a texture of its own, its luminance varies per texel).
+    pub(crate) fn principled(&mut self, at: &Spot, mut p: Principled) -> Result<Bsdf, CliError> {
+        if p.transmits() && p.eta == 1.0 {
+            // Mitsuba's stand-in: an index of 1 has no refraction half vector.
+            p.eta = PRINCIPLED_ETA_WITH_TRANSMISSION;
+        }
+        let zero = Fraction::Constant(0.0);
+        let tinted = p.spec_tint != zero || (p.sheen != zero && p.sheen_tint != zero);
+        match p.base_color {
+            Albedo::Spectrum(id) => {
+                let spectrum = self.prepared(at, id)?;
+                if p.transmits() {
+                    let source =
+                        spectrum.tabulate_with(PRINCIPLED_SQRT_STEP_NM, |v| v.max(0.0).sqrt());
+                    p.base_color_sqrt = Some(self.add_spectrum(at, source)?);
+                }
+                p.base_luminance = spectrum.luminance() as f32;
+            }
+            Albedo::Texture(_) if p.transmits() => {
+                return Err(self.src.error_at(
+                    at,
+                    "transmission with a textured base colour is not supported (give a spectrum)",
+                ));
+            }
+            Albedo::Texture(_) if tinted => {
+                return Err(self.src.error_at(
+                    at,
+                    "a specular or sheen tint with a textured base colour is not supported (give a spectrum)",
+                ));
+            }
+            Albedo::Texture(_) => {}
+        }
+        Ok(Bsdf::Principled(Box::new(p)))
     }
 
     /// The mean of the spectrum `id` over the range (0 if missing).

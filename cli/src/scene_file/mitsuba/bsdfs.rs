@@ -7,6 +7,7 @@
 //! | `dielectric`, `roughdielectric` | `int_ior` (`bk7`), `ext_ior` (`air`): numbers or names (`named_ior`); `alpha`, `distribution` as above | dielectric interface of index `int/ext`, two-sided |
 //! | `thindielectric` | `int_ior`, `ext_ior` | thin slab, two-sided |
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` (0.5), `int_ior` (`polypropylene`), `ext_ior` (`air`), `nonlinear` (false); `alpha` (0.1), `distribution` (`beckmann`) | dielectric coat over a diffuse base, one-sided |
+//! | `principled` | `base_color` (0.5), `roughness` (0.5), `metallic`, `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`, `clearcoat`, `clearcoat_gloss`, `flatness` (0), `eta` or `specular` (0.5), `anisotropic` (approximated), sampling rates (`principled.rs`) | Burley's model as Mitsuba evaluates it (`simd_tracer`'s `Principled`), one-sided without transmission |
 //! | `twosided` | one or two nested BSDFs without transmission (Mitsuba refuses dielectrics and masks) | one: that BSDF on both faces; two: the first on the front face, the second on the back (`Bsdf::Faces`) |
 //! | `blendbsdf` | `weight` (required; a number or a `bitmap`), two nested BSDFs, both one-sided or both two-sided | `(1 − w) f_0 + w f_1` (`simd_tracer`'s `Blend`: one component per bounce) |
 //! | `null` | none | every ray passes (a mask of opacity 0); shadow rays stop at it, as at every surface |
@@ -177,6 +178,7 @@ impl<'e> Importer<'e, '_> {
                 (self.cx.thin_dielectric(&spot, eta as f32)?, false)
             }
             "plastic" | "roughplastic" => (self.plastic(&object, &spot)?, true),
+            "principled" => (self.principled(&object, &spot)?, true),
             "twosided" => {
                 let nested = object.objects();
                 let elements = match nested.as_slice() {
@@ -444,7 +446,12 @@ impl<'e> Importer<'e, '_> {
     }
 
     /// A property that must be a plain number (a texture is refused).
-    fn scalar(&mut self, object: &Object<'e>, name: &str, default: f64) -> Result<f64, CliError> {
+    pub(super) fn scalar(
+        &mut self,
+        object: &Object<'e>,
+        name: &str,
+        default: f64,
+    ) -> Result<f64, CliError> {
         match object.get(name) {
             None => Ok(default),
             Some(p) => match p.value {
@@ -476,7 +483,7 @@ impl<'e> Importer<'e, '_> {
     /// A fraction parameter (`mask`'s `opacity`, `blendbsdf`'s `weight`):
     /// a number (clamped to [0, 1] as Mitsuba clamps it, with a warning) or
     /// a `bitmap` texture; `default` where absent (`None`: required).
-    fn fraction(
+    pub(super) fn fraction(
         &mut self,
         object: &Object<'e>,
         name: &str,
@@ -632,7 +639,7 @@ impl<'e> Importer<'e, '_> {
 
     /// The texture that property `name` holds (nested or referenced);
     /// `None` if it is absent or not a texture.
-    fn texture_property(
+    pub(super) fn texture_property(
         &mut self,
         object: &Object<'e>,
         name: &str,

@@ -38,6 +38,7 @@ mod conductors;
 mod document;
 mod emitters;
 mod named_ior;
+mod principled;
 mod properties;
 mod sensor;
 mod shapes;

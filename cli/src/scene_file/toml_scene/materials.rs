@@ -10,7 +10,9 @@ use crate::scene_file::toml_reader::{Item, Table};
 use crate::texture_file::TextureUse;
 use simd_tracer::ids::MaterialId;
 use simd_tracer::scene::builtin::fluorescence::PEAK_ABSORPTANCE;
-use simd_tracer::shading::material::{Albedo, Bsdf, Fraction, Material, Relief, Sides};
+use simd_tracer::shading::material::{
+    Albedo, Bsdf, Fraction, Material, PRINCIPLED_FRACTIONS, Principled, Relief, Sides,
+};
 use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::SpectrumSource;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, Network};
@@ -43,6 +45,30 @@ const THIN_FILM_KEYS: &[&str] = &[
     "base",
     "thickness_texture",
     "thickness_range_nm",
+];
+
+const PRINCIPLED_KEYS: &[&str] = &[
+    "albedo",
+    "albedo_texture",
+    "ior",
+    "roughness",
+    "roughness_texture",
+    "metallic",
+    "metallic_texture",
+    "spec_trans",
+    "spec_trans_texture",
+    "spec_tint",
+    "spec_tint_texture",
+    "sheen",
+    "sheen_texture",
+    "sheen_tint",
+    "sheen_tint_texture",
+    "clearcoat",
+    "clearcoat_texture",
+    "clearcoat_gloss",
+    "clearcoat_gloss_texture",
+    "flatness",
+    "flatness_texture",
 ];
 
 const FLUORESCENT_KEYS: &[&str] = &["albedo", "fluorophore", "absorptance", "quantum_yield"];
@@ -96,7 +122,7 @@ impl Loader<'_> {
         let kind_item = table.require(
             &self.src,
             "type",
-            "lambert, conductor, dielectric, thin-dielectric, coated, thin-film, neural or fluorescent",
+            "lambert, conductor, dielectric, thin-dielectric, coated, principled, thin-film, neural or fluorescent",
         )?;
         let kind = kind_item.string(&self.src)?;
         let keys = match kind {
@@ -105,6 +131,7 @@ impl Loader<'_> {
             "dielectric" => DIELECTRIC_KEYS,
             "thin-dielectric" => THIN_DIELECTRIC_KEYS,
             "coated" => COATED_KEYS,
+            "principled" => PRINCIPLED_KEYS,
             "thin-film" => THIN_FILM_KEYS,
             "neural" => NEURAL_KEYS,
             "fluorescent" => FLUORESCENT_KEYS,
@@ -112,7 +139,7 @@ impl Loader<'_> {
                 return Err(kind_item.err(
                     &self.src,
                     format!(
-                        "unknown material type \"{other}\" (lambert, conductor, dielectric, thin-dielectric, coated, thin-film, neural or fluorescent)"
+                        "unknown material type \"{other}\" (lambert, conductor, dielectric, thin-dielectric, coated, principled, thin-film, neural or fluorescent)"
                     ),
                 ));
             }
@@ -127,6 +154,7 @@ impl Loader<'_> {
             "dielectric" => self.dielectric(&table)?,
             "thin-dielectric" => self.thin_dielectric(&table)?,
             "coated" => self.coated(&table)?,
+            "principled" => self.principled(&table)?,
             "neural" => self.neural(&table)?,
             "fluorescent" => self.fluorescent(name, &table)?,
             _ => self.thin_film(&table)?,
@@ -497,6 +525,47 @@ impl Loader<'_> {
         let item = table.require(&self.src, "ior", "a coated material needs `ior`")?;
         let ior = self.ior(&item, false)?;
         Ok(coated(albedo, ior, Microfacet::ggx(self.roughness(table)?)))
+    }
+
+    /// Mitsuba's principled BSDF (`simd_tracer`'s `Principled`): `albedo`
+    /// or `albedo_texture` (the base colour), the fractions of
+    /// `PRINCIPLED_FRACTIONS` (numbers in [0, 1] or grey textures) and
+    /// `ior` (a number > 0, default 1.5).
+    fn principled(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
+        let mut principled = Principled::new(self.albedo(table, "principled")?);
+        for (name, default) in PRINCIPLED_FRACTIONS {
+            let texture_key = format!("{name}_texture");
+            let value = match (table.get(name), table.get(&texture_key)) {
+                (None, None) => Fraction::Constant(default),
+                (Some(value), None) => {
+                    let v = value.number(&self.src)?;
+                    if !(0.0..=1.0).contains(&v) {
+                        return Err(value.err(&self.src, format!("{name} {v}: must be in [0, 1]")));
+                    }
+                    Fraction::Constant(v as f32)
+                }
+                (None, Some(texture)) => {
+                    Fraction::Texture(self.texture(&texture, TextureUse::Scalar)?)
+                }
+                (Some(_), Some(texture)) => {
+                    return Err(texture.err(
+                        &self.src,
+                        format!("give either `{name}` or `{texture_key}`, not both"),
+                    ));
+                }
+            };
+            if let Some(slot) = principled.fraction_mut(name) {
+                *slot = value;
+            }
+        }
+        if let Some(item) = table.get("ior") {
+            let eta = item.number(&self.src)?;
+            if !(eta.is_finite() && eta > 0.0) {
+                return Err(item.err(&self.src, format!("ior {eta}: must be a number > 0")));
+            }
+            principled.eta = eta as f32;
+        }
+        self.cx.principled(&table.spot(), principled)
     }
 
     fn thin_film(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {

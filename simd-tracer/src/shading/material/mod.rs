@@ -18,6 +18,7 @@
 //! | Faces | a BSDF per face, `[front, back]`: the face the viewer sees scatters, as itself seen from the front (Mitsuba's `twosided` with two BSDFs) |
 //! | Blend | `(1 − w) f_0 + w f_1` (Mitsuba's `blendbsdf`): the bounce's lobe number chooses one component for both its light sample and its BSDF sample (`blend.rs`: unbiased, with the component's own weights and MIS) |
 //! | NormalMap | a nested BSDF shaded at a normal that an image of normals (Mitsuba's `normalmap`) or the slopes of an image of heights (`bumpmap`) tilt in the frame of the shading normal and the texture's `u` direction, times Estevez et al.'s shadowing term; formulas, sides and flips in `normal_map.rs` |
+//! | Principled | Mitsuba's `principled` (Burley's Disney BSDF): diffuse with retro-reflection, sheen, a GGX specular lobe mixing dielectric Fresnel with Schlick's metallic and tinted terms, GTR1 clearcoat, rough transmission with `√ρ`; lobes chosen by Mitsuba's probabilities, the pdf the mixture's; every lobe is `a + b ρ` (or `c √ρ`), one spectrum a lane; formulas in `principled.rs` |
 //! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1; achromatic, delta, the same from both faces |
 //!
 //! **Sides.** [`Material::sides`] says which faces scatter. With
@@ -64,6 +65,8 @@ mod mask;
 pub use mask::Mask;
 mod normal_map;
 pub use normal_map::{MapFrame, NormalMap, Relief};
+mod principled;
+pub use principled::{PRINCIPLED_ETA, PRINCIPLED_FRACTIONS, Principled, SamplingRates};
 mod fluorescent;
 pub use fluorescent::{FLUORESCENT_LOBE_PROBABILITY, SceneFluorophore, tabulated_sides};
 mod packet;
@@ -195,6 +198,8 @@ pub enum Bsdf {
     Blend(Box<Blend>),
     /// A nested BSDF shaded at a normal an image tilts (`normal_map.rs`).
     NormalMap(Box<NormalMap>),
+    /// Mitsuba's principled (Disney) BSDF (`principled.rs`).
+    Principled(Box<Principled>),
 }
 
 /// A material.
@@ -361,6 +366,15 @@ impl Bsdf {
                 }
                 blend.bsdfs.iter().for_each(|b| r.append(b.references()));
             }
+            Bsdf::Principled(principled) => {
+                albedo(&principled.base_color, &mut r);
+                r.spectra.extend(principled.base_color_sqrt);
+                r.textures
+                    .extend(principled.fractions().into_iter().filter_map(|f| match f {
+                        Fraction::Texture(id) => Some(id),
+                        Fraction::Constant(_) => None,
+                    }));
+            }
         }
         r
     }
@@ -439,6 +453,7 @@ impl Bsdf {
             Self::Faces(faces) => faces.iter().any(Bsdf::transmits),
             Self::Blend(blend) => blend.bsdfs.iter().any(Bsdf::transmits),
             Self::NormalMap(map) => map.nested.transmits(),
+            Self::Principled(principled) => principled.transmits(),
             Self::ThinFilm {
                 front_transmittance,
                 ..

@@ -160,19 +160,8 @@ pub fn diffuse_fresnel_fit(eta: f32) -> f32 {
 /// like every tabulated spectrum), to be added to the scene as the
 /// material's albedo.
 pub fn nonlinear_albedo(albedo: &SceneSpectrum, fdr_inside: f32) -> SpectrumSource {
-    let range = albedo.range();
-    let steps = (range.width_nm() / NONLINEAR_ALBEDO_STEP_NM).ceil() as usize;
-    let lambda_nm: Vec<f64> = (0..=steps)
-        .map(|i| (range.min_nm() + i as f64 * NONLINEAR_ALBEDO_STEP_NM).min(range.max_nm()))
-        .collect();
-    let values = lambda_nm
-        .iter()
-        .map(|&l| {
-            let rho = f64::from(albedo.value(l as f32));
-            rho / (1.0 - rho * f64::from(fdr_inside))
-        })
-        .collect();
-    SpectrumSource::Tabulated { lambda_nm, values }
+    let fdr = f64::from(fdr_inside);
+    albedo.tabulate_with(NONLINEAR_ALBEDO_STEP_NM, |rho| rho / (1.0 - rho * fdr))
 }
 
 /// A `plastic` (`microfacet: None`) or `roughplastic` of Mitsuba 3.9.1.

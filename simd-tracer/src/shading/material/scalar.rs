@@ -38,6 +38,7 @@ impl Bsdf {
             Self::Faces(faces) => faces[usize::from(!p.front)].sample(tables, p, wo, u_lobe, u, v),
             Self::Blend(blend) => blend.sample(tables, p, wo, u_lobe, [u, v]),
             Self::NormalMap(map) => map.sample(tables, p, wo, u_lobe, [u, v]),
+            Self::Principled(principled) => principled.sample(tables, p, wo, u_lobe, [u, v]),
             Self::Lambert { albedo } => {
                 let wi = sample_cosine(p.n, u, v);
                 let cos = wi.dot(p.n);
@@ -370,6 +371,7 @@ impl Bsdf {
             Self::Faces(faces) => faces[usize::from(!p.front)].eval(tables, p, wo, wi),
             Self::Blend(blend) => blend.eval(tables, p, wo, wi),
             Self::NormalMap(map) => map.eval(tables, p, wo, wi),
+            Self::Principled(principled) => principled.eval(tables, p, wo, wi),
         }
     }
 }
