@@ -26,6 +26,9 @@ Outputs (into --out, default simd-tracer/tests/data):
   angle: `reflectance` (the sampled weight times the lobe probability, i.e.
   the specular reflectance times F) and `probability` (Mitsuba's chance of
   sampling the delta lobe);
+Anisotropic configurations (`ALPHA_V`) give `alpha_u` (along the frame's
+`s`, +x, as `Frame3f((0, 0, 1))` builds it) and `alpha_v`.
+
 * `mitsuba_principled_configs.csv` and `mitsuba_principled_eval.csv`: the
   same for the `principled` BSDF (grey `base_color` 0.5, whose luminance in
   `scalar_rgb` is 0.5, so the tints are white), `value` and `pdf` per
@@ -74,18 +77,34 @@ for distribution in ("ggx", "beckmann"):
                                 (-1, -1, "reflect_inside"), (-1, 1, "transmit_inside")):
         CONFIGS.append((f"roughdielectric_{distribution}_0.3_{what}", "roughdielectric",
                         distribution, 0.3, 0.0, 1.0, False, camera, light))
+# Anisotropic ones: `alpha` is then `alpha_u` (along the frame's s = +x) and
+# ALPHA_V[name] is `alpha_v`.
+ALPHA_V = {}
+for distribution, alpha_u, alpha_v in (("ggx", 0.1, 0.4), ("beckmann", 0.4, 0.1)):
+    name = f"roughconductor_{distribution}_{alpha_u}_{alpha_v}"
+    CONFIGS.append((name, "roughconductor", distribution, alpha_u, 0.0, 1.0, False, 1, 1))
+    ALPHA_V[name] = alpha_v
+for camera, light, what in ((1, -1, "transmit_outside"), (-1, -1, "reflect_inside")):
+    name = f"roughdielectric_ggx_0.1_0.35_{what}"
+    CONFIGS.append((name, "roughdielectric", "ggx", 0.1, 0.0, 1.0, False, camera, light))
+    ALPHA_V[name] = 0.35
 
 
 # Principled: name, parameters (besides base_color 0.5), camera side, light
 # side. The transmitting ones from all four sides.
 PRINCIPLED_PARAMETERS = ["roughness", "metallic", "spec_trans", "spec_tint", "sheen",
-                         "sheen_tint", "clearcoat", "clearcoat_gloss", "flatness", "eta"]
+                         "sheen_tint", "clearcoat", "clearcoat_gloss", "flatness", "anisotropic",
+                         "eta"]
 PRINCIPLED_CONFIGS = [
     ("principled_defaults", {}, 1, 1),
     ("principled_metal_tint", {"metallic": 0.7, "spec_tint": 0.6, "roughness": 0.3}, 1, 1),
     ("principled_sheen_clearcoat_flat", {"sheen": 0.8, "sheen_tint": 0.5, "clearcoat": 0.9,
                                          "clearcoat_gloss": 0.7, "flatness": 0.6,
                                          "roughness": 0.8}, 1, 1),
+    ("principled_anisotropic_metal", {"metallic": 1.0, "roughness": 0.5, "anisotropic": 0.8},
+     1, 1),
+    ("principled_anisotropic_glass_transmit_outside",
+     {"spec_trans": 1.0, "roughness": 0.5, "anisotropic": 0.6}, 1, -1),
 ]
 for camera, light, what in ((1, 1, "reflect_outside"), (1, -1, "transmit_outside"),
                             (-1, -1, "reflect_inside"), (-1, 1, "transmit_inside")):
@@ -122,7 +141,7 @@ def principled_table(out):
     print(f"{len(PRINCIPLED_CONFIGS)} principled configurations, {len(rows)} evaluations")
 
 
-def load(plugin, distribution, alpha, diffuse, specular, nonlinear):
+def load(plugin, distribution, alpha, diffuse, specular, nonlinear, alpha_v):
     d = {"type": plugin}
     if plugin in ("plastic", "roughplastic"):
         d.update(int_ior=IOR, ext_ior=1.0, nonlinear=nonlinear,
@@ -133,7 +152,9 @@ def load(plugin, distribution, alpha, diffuse, specular, nonlinear):
         d.update(eta=CONDUCTOR_ETA, k=CONDUCTOR_K)
     elif plugin == "roughdielectric":
         d.update(int_ior=IOR, ext_ior=1.0)
-    if distribution:
+    if distribution and alpha_v != alpha:
+        d.update(distribution=distribution, alpha_u=alpha, alpha_v=alpha_v)
+    elif distribution:
         d.update(distribution=distribution, alpha=alpha)
     return mi.load_dict(d)
 
@@ -183,13 +204,16 @@ def main():
     with open(args.out / "mitsuba_bsdf_configs.csv", "w", newline="") as f:
         w = csv.writer(f, lineterminator="\n")
         w.writerow(["name", "plugin", "distribution", "alpha", "int_ior", "ext_ior", "diffuse",
-                    "specular", "nonlinear", "eta", "k", "camera_side", "light_side"])
+                    "specular", "nonlinear", "eta", "k", "camera_side", "light_side",
+                    "alpha_v"])
         for name, plugin, distribution, alpha, diffuse, specular, nonlinear, cs, ls in CONFIGS:
             w.writerow([name, plugin, distribution, alpha, IOR, 1.0, diffuse, specular,
-                        int(nonlinear), CONDUCTOR_ETA, CONDUCTOR_K, cs, ls])
+                        int(nonlinear), CONDUCTOR_ETA, CONDUCTOR_K, cs, ls,
+                        ALPHA_V.get(name, alpha)])
     rows, deltas = [], []
     for name, plugin, distribution, alpha, diffuse, specular, nonlinear, cs, ls in CONFIGS:
-        bsdf = load(plugin, distribution, alpha, diffuse, specular, nonlinear)
+        bsdf = load(plugin, distribution, alpha, diffuse, specular, nonlinear,
+                    ALPHA_V.get(name, alpha))
         plastic = plugin in ("plastic", "roughplastic")
         for theta_camera in THETAS_DEG:
             si = interaction(direction(theta_camera, 0.0, cs))

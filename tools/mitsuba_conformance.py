@@ -110,6 +110,7 @@ SCENES = {
     "bsdf_principled": {"suite": "materials", "ref_spp": 4096, "negative": {"metallic": "0.5"}},
     "bsdf_principled_glass": {
         "suite": "materials", "ref_spp": 4096, "negative": {"eta": "1.2"}},
+    "bsdf_anisotropic": {"suite": "materials", "ref_spp": 4096, "negative": {"angle": "90"}},
     # lights
     "point_light": {"suite": "lights", "ref_spp": 4096, "negative": {"light_x": "1.4"}},
     "spot_light": {"suite": "lights", "ref_spp": 4096, "negative": {"beam": "12"}},

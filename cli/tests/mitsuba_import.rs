@@ -1189,7 +1189,8 @@ fn principled_follows_mitsuba() -> TestResult {
     )?;
     let expected = 2.0 / (1.0 - (0.08f64 * 1e-3).sqrt()) - 1.0;
     assert!((f64::from(principled_of(&built)?.eta) - expected).abs() < 1e-6);
-    // A textured roughness; anisotropy is approximated, with a warning.
+    // A textured roughness and an anisotropic lobe, which needs the
+    // surface's tangent.
     let grey = suite_texture("grey.png");
     let (built, warnings) = load_one(
         "textured.xml",
@@ -1197,12 +1198,11 @@ fn principled_follows_mitsuba() -> TestResult {
             "<texture type=\"bitmap\" name=\"roughness\"><string name=\"filename\" value=\"{grey}\"/></texture><float name=\"anisotropic\" value=\"0.5\"/>"
         ),
     )?;
-    assert!(matches!(
-        principled_of(&built)?.roughness,
-        Fraction::Texture(_)
-    ));
-    assert_eq!(warnings.len(), 1, "{warnings:?}");
-    assert!(warnings[0].contains("anisotropic"), "{warnings:?}");
+    let p = principled_of(&built)?;
+    assert!(matches!(p.roughness, Fraction::Texture(_)));
+    assert_eq!(p.anisotropic, Fraction::Constant(0.5));
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert!(built.needs_tangent());
     // Refused, one line each.
     let colours = suite_texture("colours.png");
     let textured_base = format!(
@@ -1247,6 +1247,65 @@ fn principled_follows_mitsuba() -> TestResult {
         ),
     ] {
         refused(test, &on_rectangle(&principled(&params)), 8, &[needle])?;
+    }
+    Ok(())
+}
+
+/// `alpha_u` and `alpha_v` of rough conductors and dielectrics are an
+/// anisotropic lobe oriented by the surface's tangent (no warning); a
+/// rough plastic, isotropic in Mitsuba, refuses them; one of the two
+/// alone, or a negative one, is one line.
+#[test]
+fn anisotropic_roughness_follows_mitsuba() -> TestResult {
+    use simd_tracer::shading::material::Bsdf;
+    let dir = test_dir("anisotropic")?;
+    let on_rectangle = |bsdf: &str| {
+        scene(&format!(
+            "    <shape type=\"rectangle\">{bsdf}</shape>\n    <emitter type=\"constant\"/>"
+        ))
+    };
+    for plugin in ["roughconductor", "roughdielectric"] {
+        let path = write(
+            &dir,
+            &format!("{plugin}.xml"),
+            &on_rectangle(&format!(
+                "<bsdf type=\"{plugin}\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alpha_u\" value=\"0.05\"/><float name=\"alpha_v\" value=\"0.3\"/></bsdf>"
+            )),
+        )?;
+        let loaded = load(&path, &[], false)?;
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        let built = loaded.builder.build()?;
+        let model = built
+            .materials()
+            .iter()
+            .find_map(|m| match &m.bsdf {
+                Bsdf::Conductor { microfacet, .. } | Bsdf::Dielectric { microfacet, .. } => {
+                    Some(*microfacet)
+                }
+                _ => None,
+            })
+            .ok_or("no microfacet BSDF")?;
+        assert_eq!((model.alpha, model.alpha_y), (0.05, 0.3), "{plugin}");
+        assert!(built.needs_tangent(), "{plugin}");
+    }
+    for (test, bsdf, needle) in [
+        (
+            "anisotropic-plastic",
+            "<bsdf type=\"roughplastic\"><float name=\"alpha_u\" value=\"0.1\"/><float name=\"alpha_v\" value=\"0.2\"/></bsdf>",
+            "a rough plastic is isotropic",
+        ),
+        (
+            "anisotropic-one",
+            "<bsdf type=\"roughconductor\"><float name=\"alpha_u\" value=\"0.1\"/></bsdf>",
+            "give `alpha`, or both `alpha_u` and `alpha_v`",
+        ),
+        (
+            "anisotropic-negative",
+            "<bsdf type=\"roughconductor\"><float name=\"alpha_u\" value=\"0.1\"/><float name=\"alpha_v\" value=\"-0.2\"/></bsdf>",
+            "alpha_v -0.2: must be >= 0",
+        ),
+    ] {
+        refused(test, &on_rectangle(bsdf), 8, &[needle])?;
     }
     Ok(())
 }

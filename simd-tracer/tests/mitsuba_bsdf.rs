@@ -1,7 +1,8 @@
 //! Our BSDFs against Mitsuba 3.9.1's own evaluations: `plastic` (linear,
 //! nonlinear, with a specular scale), `roughplastic`, `roughconductor`
 //! and `roughdielectric` (reflection and transmission, from both sides),
-//! GGX and Beckmann, tabulated by `tools/mitsuba_bsdf_table.py` into
+//! GGX and Beckmann, isotropic and anisotropic (`alpha_u ≠ alpha_v`, the
+//! frame's `s` along +x as Mitsuba's), tabulated by `tools/mitsuba_bsdf_table.py` into
 //! `tests/data/mitsuba_bsdf_*.csv` (grey constants, so no colour
 //! conversion is involved).
 //!
@@ -37,7 +38,8 @@
 //! across the total-internal-reflection kink is ARCHITECTURE.md's
 //! 4.7·10⁻² and the errors are printed only. Negative controls: a wrong
 //! `α`, the other distribution, a linear coat for a nonlinear one, the
-//! flat coat transmittance for the rough one, and (for GGX, whose `Λ` is
+//! flat coat transmittance for the rough one, an anisotropic lobe turned by
+//! 90°, and (for GGX, whose `Λ` is
 //! never 0 off the normal; Beckmann's fitted `Λ` is 0 below 64° at α = 0.3)
 //! height-correlated shadowing each exceed the tolerances.
 
@@ -115,9 +117,15 @@ fn fixture() -> TestResult<Fixture> {
         let name = text(&row, "name")?.to_string();
         let plugin = text(&row, "plugin")?.to_string();
         let alpha = number(&row, "alpha")? as f32;
+        let alpha_v = number(&row, "alpha_v")? as f32;
         let eta = (number(&row, "int_ior")? / number(&row, "ext_ior")?) as f32;
         let rough = match text(&row, "distribution")? {
             "" => None,
+            d if alpha_v != alpha => Some(Microfacet::mitsuba_anisotropic(
+                alpha,
+                alpha_v,
+                distribution(d)?,
+            )),
             d => Some(Microfacet::mitsuba(alpha, distribution(d)?)),
         };
         let bsdf = match plugin.as_str() {
@@ -161,6 +169,7 @@ fn fixture() -> TestResult<Fixture> {
                     let wrong_alpha = MitsubaPlastic {
                         microfacet: Some(Microfacet {
                             alpha: rough.alpha * 1.1,
+                            alpha_y: rough.alpha * 1.1,
                             ..rough
                         }),
                         ..plastic
@@ -231,7 +240,16 @@ fn fixture() -> TestResult<Fixture> {
             other => return Err(format!("plugin {other}").into()),
         };
         if let Some(model) = rough {
-            for (what, changed) in [
+            // An anisotropic lobe turned by 90° (its roughnesses swapped).
+            let turned = model.is_anisotropic().then_some((
+                "α_u and α_v swapped",
+                Microfacet {
+                    alpha: model.alpha_y,
+                    alpha_y: model.alpha,
+                    ..model
+                },
+            ));
+            for (what, changed) in turned.into_iter().chain([
                 (
                     "other distribution",
                     Microfacet {
@@ -249,7 +267,7 @@ fn fixture() -> TestResult<Fixture> {
                         ..model
                     },
                 ),
-            ] {
+            ]) {
                 if changed.shadowing != model.shadowing && model.distribution != Distribution::Ggx {
                     continue;
                 }
@@ -357,7 +375,9 @@ fn ours(f: &Fixture, bsdf: &Bsdf, p: &Point, how: Spectral) -> (f64, f64) {
         n: Vec3::Z * side,
         front: side > 0.0,
         uv: Vec2::ZERO,
-        dp_duv: [Vec3::ZERO; 2],
+        // Mitsuba's frame of the normal +z has its `s` along +x (anisotropic
+        // lobes are oriented by it; isotropic ones do not read it).
+        dp_duv: [Vec3::X, Vec3::ZERO],
         hero_nm: None,
         lobe: 0.0,
     };

@@ -3,7 +3,7 @@
 //! `tests/data/mitsuba_principled_*.csv`: every lobe (diffuse with
 //! retro-reflection and flatness, sheen, metallic and tinted Schlick terms,
 //! clearcoat, rough transmission) from outside and, with transmission,
-//! from inside, at 156 direction pairs a configuration.
+//! from inside, and anisotropic, at 156 direction pairs a configuration.
 //!
 //! The base colour is a grey 0.5 (variant `scalar_rgb`, three equal
 //! channels), so the lane spectrum's factor is known without a colour
@@ -13,7 +13,7 @@
 //! absolute floor for values near zero ([`RELATIVE`], [`FLOOR`]).
 //! Negative controls (each exceeds them): the roughness 0.05 higher, the
 //! flatness ignored, the transmission tinted by `ρ` instead of `√ρ`, the
-//! clearcoat's gloss ignored.
+//! clearcoat's gloss ignored, the anisotropy ignored.
 
 use glam::{Vec2, Vec3};
 use simd_tracer::ids::SpectrumId;
@@ -63,6 +63,7 @@ fn configs() -> TestResult<BTreeMap<String, Config>> {
             clearcoat: fraction("clearcoat")?,
             clearcoat_gloss: fraction("clearcoat_gloss")?,
             flatness: fraction("flatness")?,
+            anisotropic: fraction("anisotropic")?,
             eta: number(&row, "eta")? as f32,
             sampling_rates: SamplingRates::MITSUBA,
         };
@@ -100,7 +101,8 @@ fn evaluate(bsdf: &Principled, camera: Vec3, light: Vec3, root_factor: f64) -> (
         n: if front { Vec3::Z } else { -Vec3::Z },
         front,
         uv: Vec2::ZERO,
-        dp_duv: [Vec3::ZERO; 2],
+        // Mitsuba's frame of the normal +z has its `s` along +x.
+        dp_duv: [Vec3::X, Vec3::ZERO],
         hero_nm: None,
         lobe: 0.0,
     };
@@ -149,8 +151,8 @@ fn worst(
 fn principled_matches_mitsuba_point_by_point() -> TestResult {
     let configs = configs()?;
     let rows = rows(&data("mitsuba_principled_eval.csv")?)?;
-    assert_eq!(configs.len(), 11);
-    assert_eq!(rows.len(), 11 * 156);
+    assert_eq!(configs.len(), 13);
+    assert_eq!(rows.len(), 13 * 156);
     for (name, config) in &configs {
         let (value_err, pdf_err) = worst(&config.bsdf, config, name, &rows, GREY.sqrt())?;
         println!("{name}: worst value error {value_err:.3}, pdf {pdf_err:.3} (tolerances: 1)");
@@ -204,6 +206,14 @@ fn wrong_parameters_fail_the_comparison() -> TestResult {
             "principled_glass_transmit_outside",
             glass.bsdf.clone(),
             GREY,
+        ),
+        (
+            "principled_anisotropic_metal",
+            Principled {
+                anisotropic: Fraction::Constant(0.0),
+                ..get("principled_anisotropic_metal")?.bsdf.clone()
+            },
+            GREY.sqrt(),
         ),
     ];
     for (name, bsdf, root_factor) in controls {

@@ -87,7 +87,8 @@ impl<'a> Shading<'a> {
             }
         });
         let (normal_lanes, front) = (normal.to_lanes(), front.to_bitmask());
-        // Only normal maps read the tangent (`Bsdf::needs_tangent`).
+        // Only normal maps and anisotropic lobes read the tangent
+        // (`Bsdf::needs_tangent`).
         let tangents = |lane: usize| {
             let mapped = scene.needs_tangent() && bsdfs[lane].is_some_and(Bsdf::needs_tangent);
             if mapped {

@@ -132,9 +132,10 @@ pub struct Scene {
     /// [`Bsdf::needs_lobe`]): only then does the integrator draw it before
     /// the light sample.
     needs_lobe: bool,
-    /// Whether a material has a normal map ([`Bsdf::needs_tangent`]).
+    /// Whether a material needs tangents: a normal map or an anisotropic
+    /// lobe ([`Bsdf::needs_tangent`]).
     needs_tangent: bool,
-    /// `[∂p/∂u, ∂p/∂v]` of the triangles whose material has a normal map
+    /// `[∂p/∂u, ∂p/∂v]` of the triangles whose material needs them
     /// ([`tangent`]); no others.
     tangents: SparseAttribute<[Vec3; 2]>,
     /// Triangle vertices (non-degenerate ones only), in a vector or in the
@@ -484,14 +485,15 @@ impl Scene {
         self.instances.as_ref()?.uvs(triangle, instance)
     }
 
-    /// Whether a material has a normal map ([`Bsdf::needs_tangent`]):
-    /// only then does shading read [`Scene::hit_tangents`].
+    /// Whether a material needs tangents ([`Bsdf::needs_tangent`]: a
+    /// normal map or an anisotropic lobe): only then does shading read
+    /// [`Scene::hit_tangents`].
     pub fn needs_tangent(&self) -> bool {
         self.needs_tangent
     }
 
     /// The world-space `[∂p/∂u, ∂p/∂v]` of a hit triangle ([`tangent`]);
-    /// zero where its material has no normal map.
+    /// zero where its material needs none.
     #[inline]
     pub fn hit_tangents(&self, triangle: u32, instance: u32) -> [Vec3; 2] {
         let tangents = if instance == NO_INSTANCE {
@@ -1449,8 +1451,8 @@ impl SceneBuilder {
             .map_err(SceneError::Bvh)
     }
 
-    /// `[∂p/∂u, ∂p/∂v]` of every triangle whose material has a normal map
-    /// ([`tangent`]), none when no material has one.
+    /// `[∂p/∂u, ∂p/∂v]` of every triangle whose material needs them
+    /// ([`Bsdf::needs_tangent`], [`tangent`]), none when no material does.
     fn tangents(&self) -> SparseAttribute<[Vec3; 2]> {
         let mut tangents = SparseAttribute::default();
         let mapped: Vec<bool> = self

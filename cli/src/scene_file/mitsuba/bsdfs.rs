@@ -3,11 +3,11 @@
 //! | plugin | parameters (defaults) | built as |
 //! | --- | --- | --- |
 //! | `diffuse` | `reflectance` (0.5; spectrum or texture) | Lambert, one-sided |
-//! | `conductor`, `roughconductor` | `material` (`none`: a perfect mirror) or `eta` and `k`; `specular_reflectance` (1; a spectrum, not a texture); `alpha` (0.1) or `alpha_u`/`alpha_v`; `distribution` (`beckmann`) | conductor whose Fresnel term is multiplied by `specular_reflectance`, one-sided |
+//! | `conductor`, `roughconductor` | `material` (`none`: a perfect mirror) or `eta` and `k`; `specular_reflectance` (1; a spectrum, not a texture); `alpha` (0.1) or `alpha_u`/`alpha_v` (anisotropic, along `∂p/∂u` and across); `distribution` (`beckmann`) | conductor whose Fresnel term is multiplied by `specular_reflectance`, one-sided |
 //! | `dielectric`, `roughdielectric` | `int_ior` (`bk7`), `ext_ior` (`air`): numbers or names (`named_ior`); `alpha`, `distribution` as above | dielectric interface of index `int/ext`, two-sided |
 //! | `thindielectric` | `int_ior`, `ext_ior` | thin slab, two-sided |
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` (0.5), `int_ior` (`polypropylene`), `ext_ior` (`air`), `nonlinear` (false); `alpha` (0.1), `distribution` (`beckmann`) | dielectric coat over a diffuse base, one-sided |
-//! | `principled` | `base_color` (0.5), `roughness` (0.5), `metallic`, `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`, `clearcoat`, `clearcoat_gloss`, `flatness` (0), `eta` or `specular` (0.5), `anisotropic` (approximated), sampling rates (`principled.rs`) | Burley's model as Mitsuba evaluates it (`simd_tracer`'s `Principled`), one-sided without transmission |
+//! | `principled` | `base_color` (0.5), `roughness` (0.5), `metallic`, `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`, `clearcoat`, `clearcoat_gloss`, `flatness`, `anisotropic` (0), `eta` or `specular` (0.5), sampling rates (`principled.rs`) | Burley's model as Mitsuba evaluates it (`simd_tracer`'s `Principled`), one-sided without transmission |
 //! | `twosided` | one or two nested BSDFs without transmission (Mitsuba refuses dielectrics and masks) | one: that BSDF on both faces; two: the first on the front face, the second on the back (`Bsdf::Faces`) |
 //! | `blendbsdf` | `weight` (required; a number or a `bitmap`), two nested BSDFs, both one-sided or both two-sided | `(1 − w) f_0 + w f_1` (`simd_tracer`'s `Blend`: one component per bounce) |
 //! | `null` | none | every ray passes (a mask of opacity 0); shadow rays stop at it, as at every surface |
@@ -21,8 +21,9 @@
 //! * `specular_reflectance` and `specular_transmittance` of dielectrics
 //!   must be 1 (their default): other values are refused rather than
 //!   rendered wrongly.
-//! * Anisotropic roughness (`alpha_u ≠ alpha_v`) is approximated by the
-//!   isotropic `α = √(α_u α_v)`, with a warning.
+//! * Anisotropic roughness (`alpha_u ≠ alpha_v`, conductors and
+//!   dielectrics): `alpha_u` along the surface's `∂p/∂u`, `alpha_v` across
+//!   it, in Mitsuba's shading frame.
 //! * `sample_visible` changes only the sampling, not the image: accepted.
 //! * An unsupported BSDF is an error; `--lenient` renders it as a grey
 //!   (0.5) diffuse BSDF, two-sided, with a warning.
@@ -95,7 +96,10 @@ impl BuiltBsdf {
 /// A microfacet roughness: GGX or Beckmann `α`.
 #[derive(Debug, Clone, Copy)]
 struct Roughness {
+    /// `alpha`, or `alpha_u`.
     alpha: f32,
+    /// `alpha_v` (`alpha` where isotropic).
+    alpha_v: f32,
     distribution: Distribution,
 }
 
@@ -336,7 +340,7 @@ impl<'e> Importer<'e, '_> {
         let flip_invalid = object.boolean("flip_invalid_normals", true)?;
         let shadowing = object.boolean("use_shadowing_function", true)?;
         let nested = self.bsdf(Some(nested))?;
-        if nested.bsdf.needs_tangent() {
+        if !nested.bsdf.normal_maps().is_empty() {
             return Err(object
                 .error("a normalmap or bumpmap inside a normalmap or bumpmap is not supported"));
         }
@@ -356,6 +360,11 @@ impl<'e> Importer<'e, '_> {
     /// `ρ / (1 − ρ F_dr)` is tabulated), not a texture.
     fn plastic(&mut self, object: &Object<'e>, spot: &Spot) -> Result<Bsdf, CliError> {
         let rough = self.roughness(object)?;
+        if rough.alpha != rough.alpha_v {
+            return Err(object.error(
+                "alpha_u and alpha_v: a rough plastic is isotropic (give `alpha`, as Mitsuba's roughplastic takes)",
+            ));
+        }
         let specular_scale = self.scalar(object, "specular_reflectance", 1.0)?;
         if !(0.0..=1.0).contains(&specular_scale) {
             return Err(object.error(format!(
@@ -393,12 +402,14 @@ impl<'e> Importer<'e, '_> {
         Ok(prepared.bsdf(albedo))
     }
 
-    /// `alpha` (or `alpha_u`/`alpha_v`) and `distribution` of a rough BSDF;
-    /// smooth (α = 0) for the smooth plugins.
+    /// `alpha` (or `alpha_u`/`alpha_v`: anisotropic, along the surface's
+    /// `∂p/∂u` and across it) and `distribution` of a rough BSDF; smooth
+    /// (α = 0) for the smooth plugins.
     fn roughness(&mut self, object: &Object<'e>) -> Result<Roughness, CliError> {
         if !object.plugin.starts_with("rough") {
             return Ok(Roughness {
                 alpha: 0.0,
+                alpha_v: 0.0,
                 distribution: Distribution::Ggx,
             });
         }
@@ -411,36 +422,26 @@ impl<'e> Importer<'e, '_> {
                 )));
             }
         };
-        let alpha = match (
+        let (alpha, alpha_v) = match (
             object.get("alpha").is_some(),
             object.float_opt("alpha_u")?,
             object.float_opt("alpha_v")?,
         ) {
-            (_, None, None) => self.scalar(object, "alpha", DEFAULT_ALPHA)?,
-            (false, Some(u), Some(v)) => {
-                if u < 0.0 || v < 0.0 {
-                    return Err(object.error("alpha_u and alpha_v must be >= 0"));
-                }
-                if u != v {
-                    let spot = Self::spot(object.element, String::new());
-                    self.cx.warn(
-                        &spot,
-                        format!(
-                            "{}: anisotropic roughness (alpha_u {u}, alpha_v {v}) is approximated by the isotropic alpha {:.4}",
-                            object.describe(),
-                            (u * v).sqrt()
-                        ),
-                    );
-                }
-                (u * v).sqrt()
+            (_, None, None) => {
+                let alpha = self.scalar(object, "alpha", DEFAULT_ALPHA)?;
+                (alpha, alpha)
             }
+            (false, Some(u), Some(v)) => (u, v),
             _ => return Err(object.error("give `alpha`, or both `alpha_u` and `alpha_v`")),
         };
-        if !(0.0..=f64::from(u16::MAX)).contains(&alpha) {
-            return Err(object.error(format!("alpha {alpha}: must be >= 0")));
+        for (name, value) in [("alpha", alpha), ("alpha_v", alpha_v)] {
+            if !(0.0..=f64::from(u16::MAX)).contains(&value) {
+                return Err(object.error(format!("{name} {value}: must be >= 0")));
+            }
         }
         Ok(Roughness {
             alpha: alpha as f32,
+            alpha_v: alpha_v as f32,
             distribution,
         })
     }
@@ -678,7 +679,7 @@ impl Roughness {
     /// Mitsuba's microfacet model (separable shadowing); smooth below
     /// our mirror threshold.
     fn microfacet(self) -> Microfacet {
-        Microfacet::mitsuba(self.alpha, self.distribution)
+        Microfacet::mitsuba_anisotropic(self.alpha, self.alpha_v, self.distribution)
     }
 
     /// The rough coat of a `roughplastic`, `None` for a smooth one.

@@ -8,7 +8,7 @@
 //! | `roughness` | 0.5 | a number in [0, 1] or a grey bitmap |
 //! | `metallic`, `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`, `clearcoat`, `clearcoat_gloss`, `flatness` | 0 | the same |
 //! | `eta` or `specular` (not both) | `specular` 0.5: `η = 2/(1 − √(0.08 specular)) − 1` = 1.5 | numbers; with transmission an `eta` of 1 becomes 1.001 and a `specular` of 0 becomes 10⁻³, as in Mitsuba |
-//! | `anisotropic` | 0 | accepted; approximated by the isotropic lobe of the same `roughness` (a warning) |
+//! | `anisotropic` | 0 | the same; the specular lobes stretched along the surface's `∂p/∂u` |
 //! | `main_specular_sampling_rate`, `clearcoat_sampling_rate`, `diffuse_reflectance_sampling_rate` | 1 | numbers ≥ 0 (they change the noise, not the image) |
 //!
 //! Mitsuba does not clamp these parameters; values outside [0, 1] are
@@ -54,12 +54,6 @@ impl<'e> Importer<'e, '_> {
             if let Some(slot) = principled.fraction_mut(name) {
                 *slot = fraction(name, default)?;
             }
-        }
-        if fraction("anisotropic", 0.0)? != Fraction::Constant(0.0) {
-            self.cx.warn(
-                spot,
-                "anisotropic is approximated by the isotropic lobe of the same roughness (the geometric mean of Mitsuba's two roughnesses)",
-            );
         }
         principled.eta = self.principled_eta(object, principled.transmits())?;
         principled.sampling_rates = SamplingRates {

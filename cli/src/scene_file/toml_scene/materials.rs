@@ -69,6 +69,8 @@ const PRINCIPLED_KEYS: &[&str] = &[
     "clearcoat_gloss_texture",
     "flatness",
     "flatness_texture",
+    "anisotropic",
+    "anisotropic_texture",
 ];
 
 const FLUORESCENT_KEYS: &[&str] = &["albedo", "fluorophore", "absorptance", "quantum_yield"];

@@ -32,6 +32,22 @@ impl Frame {
         Self { t, s, n }
     }
 
+    /// Mitsuba's shading frame (`SurfaceInteraction::initialize_sh_frame`):
+    /// the first axis is `tangent` (the surface's `∂p/∂u`) made orthogonal
+    /// to `n`, the second `n ×` it; any basis where the tangent vanishes or
+    /// is parallel to `n`. What anisotropic lobes are oriented by.
+    pub(super) fn along(n: Vec3, tangent: Vec3) -> Self {
+        let s = (tangent - n * n.dot(tangent)).normalize_or_zero();
+        if s == Vec3::ZERO {
+            return Self::new(n);
+        }
+        Self {
+            t: s,
+            s: n.cross(s),
+            n,
+        }
+    }
+
     pub(super) fn to_local(self, w: Vec3) -> Vec3 {
         Vec3::new(w.dot(self.t), w.dot(self.s), w.dot(self.n))
     }

@@ -431,11 +431,16 @@ impl Bsdf {
     }
 
     /// Whether shading needs the hit's tangent ([`ShadingPoint::dp_duv`]):
-    /// a normal map anywhere in it. Asked per lane and bounce, so it walks
+    /// a normal map or an anisotropic lobe (oriented along `∂p/∂u`)
+    /// anywhere in it. Asked per lane and bounce, so it walks
     /// the nesting without collecting ([`Bsdf::normal_maps`] allocates).
     pub fn needs_tangent(&self) -> bool {
         match self {
             Self::NormalMap(_) => true,
+            Self::Conductor { microfacet, .. } | Self::Dielectric { microfacet, .. } => {
+                microfacet.is_anisotropic()
+            }
+            Self::Principled(principled) => principled.is_anisotropic(),
             Self::Mask(mask) => mask.nested.needs_tangent(),
             Self::Faces(faces) => faces.iter().any(Bsdf::needs_tangent),
             Self::Blend(blend) => blend.bsdfs.iter().any(Bsdf::needs_tangent),
@@ -476,7 +481,7 @@ pub struct ShadingPoint {
     /// Texture coordinates.
     pub uv: Vec2,
     /// The surface's `[∂p/∂u, ∂p/∂v]` in the world (not unit), where a
-    /// normal or bump map needs them ([`Bsdf::needs_tangent`]; zero
+    /// normal or bump map or an anisotropic lobe needs them ([`Bsdf::needs_tangent`]; zero
     /// elsewhere).
     pub dp_duv: [Vec3; 2],
     /// The hero wavelength of sampled transports (`None` for Fourier).

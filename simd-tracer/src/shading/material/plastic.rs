@@ -296,6 +296,7 @@ mod tests {
                 eta,
                 Microfacet {
                     alpha: 0.33,
+                    alpha_y: 0.33,
                     ..model
                 },
             );

@@ -56,10 +56,12 @@
 //! back face has no diffuse, sheen or clearcoat lobe and a specular one of
 //! `bsdf F = 0`). With transmission both faces scatter.
 //!
-//! **Not reproduced, and why** (the importer warns where it applies):
-//! `anisotropic` (the shading frame's tangent would be needed; the
-//! geometric mean of Mitsuba's `α_x α_y` is `roughness²`, so the isotropic
-//! lobe is its approximation). In Mitsuba's spectral variants the tints
+//! **Anisotropy** (`anisotropic > 0`): the main lobes' GGX has
+//! `α_x = roughness²/a` along the surface's `∂p/∂u` and `α_y = roughness² a`
+//! across it, `a = √(1 − 0.9 anisotropic)`, in Mitsuba's shading frame
+//! (`Frame::along`; `crate::shading::microfacet`, *Anisotropy*).
+//!
+//! **Not reproduced, and why**: in Mitsuba's spectral variants the tints
 //! divide `ρ` by `mean_k ȳ(λ_k) ρ(λ_k)` over the path's four sampled
 //! wavelengths, unnormalised (`luminance()` of
 //! include/mitsuba/core/spectrum.h), so a white base tints by about 1/0.5;
@@ -79,6 +81,9 @@ use std::f32::consts::{FRAC_1_PI, PI, TAU};
 
 /// Mitsuba's smallest GGX roughness of the main lobes (`calc_dist_params`).
 const MIN_ALPHA: f32 = 1e-3;
+/// Burley's anisotropy: the aspect of the two roughnesses is
+/// `√(1 − 0.9 anisotropic)` (`calc_dist_params`).
+const ANISOTROPY_ASPECT: f32 = 0.9;
 /// Clearcoat GTR1 roughness at `clearcoat_gloss` 0 and 1.
 const CLEARCOAT_ALPHA: [f32; 2] = [0.1, 0.001];
 /// The clearcoat's Schlick `R₀` (a coat of index 1.5: `(0.5/2.5)²`).
@@ -121,6 +126,9 @@ pub struct Principled {
     /// `flatness`: the diffuse lobe blended towards Hanrahan–Krueger's
     /// subsurface approximation.
     pub flatness: Fraction,
+    /// `anisotropic`: the specular lobes' roughness stretched along the
+    /// surface's `∂p/∂u` (module docs).
+    pub anisotropic: Fraction,
     /// Relative index `η` of the dielectric lobes (from `eta`, or from
     /// `specular` as `2/(1 − √(0.08 specular)) − 1`).
     pub eta: f32,
@@ -193,7 +201,7 @@ struct Choice {
 
 /// The scalar parameters by Mitsuba's names (which Blender's exporter and
 /// the TOML format use too), with Mitsuba's defaults.
-pub const PRINCIPLED_FRACTIONS: [(&str, f32); 9] = [
+pub const PRINCIPLED_FRACTIONS: [(&str, f32); 10] = [
     ("roughness", 0.5),
     ("metallic", 0.0),
     ("spec_trans", 0.0),
@@ -203,6 +211,7 @@ pub const PRINCIPLED_FRACTIONS: [(&str, f32); 9] = [
     ("clearcoat", 0.0),
     ("clearcoat_gloss", 0.0),
     ("flatness", 0.0),
+    ("anisotropic", 0.0),
 ];
 /// Mitsuba's default relative index (`specular` 0.5).
 pub const PRINCIPLED_ETA: f32 = 1.5;
@@ -225,6 +234,7 @@ impl Principled {
             clearcoat: Fraction::Constant(0.0),
             clearcoat_gloss: Fraction::Constant(0.0),
             flatness: Fraction::Constant(0.0),
+            anisotropic: Fraction::Constant(0.0),
             eta: PRINCIPLED_ETA,
             sampling_rates: SamplingRates::MITSUBA,
         };
@@ -248,8 +258,15 @@ impl Principled {
             "clearcoat" => &mut self.clearcoat,
             "clearcoat_gloss" => &mut self.clearcoat_gloss,
             "flatness" => &mut self.flatness,
+            "anisotropic" => &mut self.anisotropic,
             _ => return None,
         })
+    }
+
+    /// Whether the specular lobes can be anisotropic (oriented along the
+    /// surface's tangent).
+    pub fn is_anisotropic(&self) -> bool {
+        self.anisotropic != Fraction::Constant(0.0)
     }
 
     /// Whether the BSDF can transmit (some `spec_trans` above 0).
@@ -258,7 +275,7 @@ impl Principled {
     }
 
     /// Every scalar parameter (for the textures they refer to).
-    pub fn fractions(&self) -> [Fraction; 9] {
+    pub fn fractions(&self) -> [Fraction; 10] {
         [
             self.roughness,
             self.metallic,
@@ -269,6 +286,7 @@ impl Principled {
             self.clearcoat,
             self.clearcoat_gloss,
             self.flatness,
+            self.anisotropic,
         ]
     }
 
@@ -292,7 +310,7 @@ impl Principled {
             eta_path: if p.front { self.eta } else { 1.0 / self.eta },
             eta: self.eta,
             front: p.front,
-            main: Microfacet::mitsuba((roughness * roughness).max(MIN_ALPHA), Distribution::Ggx),
+            main: main_lobe(roughness, at(self.anisotropic)),
             rates: self.sampling_rates,
             luminance: self.base_luminance,
         }
@@ -328,9 +346,9 @@ impl Principled {
         u_lobe: f32,
         [u, v]: [f32; 2],
     ) -> Option<BsdfSample> {
-        let frame = Frame::new(p.n);
-        let wo_local = frame.to_local(wo);
         let lobes = self.lobes(tables, p);
+        let frame = lobes.frame(p);
+        let wo_local = frame.to_local(wo);
         if wo_local.z <= 0.0 || !(lobes.front || lobes.bsdf > 0.0) {
             return None;
         }
@@ -378,7 +396,8 @@ impl Principled {
         wo: Vec3,
         wi: Vec3,
     ) -> BsdfEval {
-        let frame = Frame::new(p.n);
+        let lobes = self.lobes(tables, p);
+        let frame = lobes.frame(p);
         let (wo_local, wi_local) = (frame.to_local(wo), frame.to_local(wi));
         if wo_local.z <= 0.0 {
             return BsdfEval {
@@ -387,7 +406,7 @@ impl Principled {
                 pdf: 0.0,
             };
         }
-        let (factor, pdf) = self.lobes(tables, p).eval(wo_local, wi_local);
+        let (factor, pdf) = lobes.eval(wo_local, wi_local);
         let (value, spectrum) = self.split(p, factor);
         BsdfEval {
             value,
@@ -398,6 +417,16 @@ impl Principled {
 }
 
 impl Lobes {
+    /// The local frame: along the surface's tangent for an anisotropic
+    /// main lobe (Mitsuba's shading frame), any basis otherwise.
+    fn frame(&self, p: &ShadingPoint) -> Frame {
+        if self.main.is_anisotropic() {
+            Frame::along(p.n, p.dp_duv[0])
+        } else {
+            Frame::new(p.n)
+        }
+    }
+
     /// Mitsuba's lobe probabilities for the dielectric reflectance `f`
     /// (module docs, *Sampling*), normalised.
     fn choice(&self, f: f32) -> Choice {
@@ -446,7 +475,7 @@ impl Lobes {
         let reflection_compatible = dot_o > 0.0 && dot_i > 0.0;
         let refraction_compatible = dot_o > 0.0 && dot_i < 0.0;
         let d = self.main.ndf(h);
-        let g = smith_g1(wo, h, self.main.alpha) * smith_g1(wi, h, self.main.alpha);
+        let g = self.masking(wo, h) * self.masking(wi, h);
         let mut factor = Factor::default();
         if reflect && reflection_compatible && f > 0.0 {
             let scale = d * g / (4.0 * cos_o);
@@ -497,6 +526,16 @@ impl Lobes {
             }
         }
         (factor, self.pdf(wo, wi, h, f))
+    }
+
+    /// The main lobes' Smith masking of `v` for the microfacet `m`, 0 where
+    /// `v` sees the facet's back (Mitsuba's `smith_g1`).
+    fn masking(&self, v: Vec3, m: Vec3) -> f32 {
+        if v.dot(m) * v.z <= 0.0 {
+            0.0
+        } else {
+            self.main.g1(v)
+        }
     }
 
     /// The dielectric and Schlick mix of the specular reflection's Fresnel
@@ -567,6 +606,22 @@ impl Lobes {
         }
         if pdf.is_finite() { pdf } else { 0.0 }
     }
+}
+
+/// The main lobes' GGX (Mitsuba's `calc_dist_params`): `α = roughness²`,
+/// stretched by the aspect `√(1 − 0.9 anisotropic)` to `α/aspect` along the
+/// tangent and `α aspect` across it, each at least [`MIN_ALPHA`].
+fn main_lobe(roughness: f32, anisotropic: f32) -> Microfacet {
+    let alpha = roughness * roughness;
+    if anisotropic == 0.0 {
+        return Microfacet::mitsuba(alpha.max(MIN_ALPHA), Distribution::Ggx);
+    }
+    let aspect = (1.0 - ANISOTROPY_ASPECT * anisotropic).sqrt();
+    Microfacet::mitsuba_anisotropic(
+        (alpha / aspect).max(MIN_ALPHA),
+        (alpha * aspect).max(MIN_ALPHA),
+        Distribution::Ggx,
+    )
 }
 
 /// Mitsuba's dielectric Fresnel reflectance at `cos` (negative: from the

@@ -28,7 +28,7 @@ impl Bsdf {
         u: f32,
         v: f32,
     ) -> Option<BsdfSample> {
-        let frame = Frame::new(p.n);
+        let frame = self.frame(p);
         let wo_local = frame.to_local(wo);
         if wo_local.z <= 0.0 {
             return None;
@@ -299,7 +299,7 @@ impl Bsdf {
         wo: Vec3,
         wi: Vec3,
     ) -> BsdfEval {
-        let frame = Frame::new(p.n);
+        let frame = self.frame(p);
         let (wo_local, wi_local) = (frame.to_local(wo), frame.to_local(wi));
         if wo_local.z <= 0.0 {
             return BsdfEval::ZERO;
@@ -377,6 +377,20 @@ impl Bsdf {
 }
 
 impl Bsdf {
+    /// The local frame at `p`: along the surface's `∂p/∂u` for an
+    /// anisotropic microfacet lobe (Mitsuba's shading frame), any basis
+    /// around the normal otherwise.
+    fn frame(&self, p: &ShadingPoint) -> Frame {
+        match self {
+            Self::Conductor { microfacet, .. } | Self::Dielectric { microfacet, .. }
+                if microfacet.is_anisotropic() =>
+            {
+                Frame::along(p.n, p.dp_duv[0])
+            }
+            _ => Frame::new(p.n),
+        }
+    }
+
     /// The lobes of a coated BSDF at `p` (`None` for other BSDFs).
     fn coat<'a>(&'a self, tables: &MaterialTables<'_>, p: &ShadingPoint) -> Option<CoatLobes<'a>> {
         let Self::Coated {
