@@ -702,7 +702,10 @@ mod tests {
             expected,
             "fractions() in the table's order"
         );
-        assert!(p.fraction_mut("anisotropic").is_none());
+        assert!(
+            p.fraction_mut("specular").is_none(),
+            "specular is a number, not a fraction"
+        );
     }
 
     fn point(front: bool) -> ShadingPoint {

@@ -324,10 +324,10 @@ mod tests {
         }
     }
 
-    /// ∫ pdf and ∫ m.z · pdf over the hemisphere by a (θ, φ) midpoint grid.
-    fn pdf_moments(model: &Microfacet, wo: Vec3) -> (f64, f64) {
+    /// Calls `f(m, dω)` at the cells of a 600 × 600 (θ, φ) midpoint grid
+    /// over the upper hemisphere.
+    fn hemisphere_grid(mut f: impl FnMut(Vec3, f64)) {
         let (steps_t, steps_p) = (600, 600);
-        let (mut total, mut mean_z) = (0.0f64, 0.0f64);
         for i in 0..steps_t {
             let theta = (i as f64 + 0.5) / steps_t as f64 * FRAC_PI_2;
             for j in 0..steps_p {
@@ -337,12 +337,22 @@ mod tests {
                     (theta.sin() * phi.sin()) as f32,
                     theta.cos() as f32,
                 );
-                let p = f64::from(model.visible_normal_pdf(wo, m));
-                let d_omega = theta.sin() * FRAC_PI_2 / steps_t as f64 * TAU / steps_p as f64;
-                total += p * d_omega;
-                mean_z += p * f64::from(m.z) * d_omega;
+                f(
+                    m,
+                    theta.sin() * FRAC_PI_2 / steps_t as f64 * TAU / steps_p as f64,
+                );
             }
         }
+    }
+
+    /// ∫ pdf and ∫ m.z · pdf over the hemisphere ([`hemisphere_grid`]).
+    fn pdf_moments(model: &Microfacet, wo: Vec3) -> (f64, f64) {
+        let (mut total, mut mean_z) = (0.0f64, 0.0f64);
+        hemisphere_grid(|m, d_omega| {
+            let p = f64::from(model.visible_normal_pdf(wo, m));
+            total += p * d_omega;
+            mean_z += p * f64::from(m.z) * d_omega;
+        });
         (total, mean_z)
     }
 
@@ -403,26 +413,15 @@ mod tests {
     #[test]
     fn anisotropic_surfaces_are_stretched_isotropic_ones() {
         let grid = |model: &Microfacet, wo: Vec3| {
-            // ∫ D cos θ, ∫ pdf, ∫ m_x² pdf, ∫ m_y² pdf on a (θ, φ) grid.
-            let (steps_t, steps_p) = (600, 600);
+            // ∫ D cos θ, ∫ pdf, ∫ m_x² pdf, ∫ m_y² pdf.
             let mut sums = [0.0f64; 4];
-            for i in 0..steps_t {
-                let theta = (i as f64 + 0.5) / steps_t as f64 * FRAC_PI_2;
-                for j in 0..steps_p {
-                    let phi = (j as f64 + 0.5) / steps_p as f64 * TAU;
-                    let m = Vec3::new(
-                        (theta.sin() * phi.cos()) as f32,
-                        (theta.sin() * phi.sin()) as f32,
-                        theta.cos() as f32,
-                    );
-                    let d_omega = theta.sin() * FRAC_PI_2 / steps_t as f64 * TAU / steps_p as f64;
-                    let p = f64::from(model.visible_normal_pdf(wo, m)) * d_omega;
-                    sums[0] += f64::from(model.ndf(m)) * theta.cos() * d_omega;
-                    sums[1] += p;
-                    sums[2] += p * f64::from(m.x * m.x);
-                    sums[3] += p * f64::from(m.y * m.y);
-                }
-            }
+            hemisphere_grid(|m, d_omega| {
+                let p = f64::from(model.visible_normal_pdf(wo, m)) * d_omega;
+                sums[0] += f64::from(model.ndf(m) * m.z) * d_omega;
+                sums[1] += p;
+                sums[2] += p * f64::from(m.x * m.x);
+                sums[3] += p * f64::from(m.y * m.y);
+            });
             sums
         };
         let wo = Vec3::new(0.5, 0.3, 0.6).normalize();
