@@ -345,6 +345,22 @@ mod tests {
         }
     }
 
+    /// The sampler's visible normals of `wo` over a stratified 300 × 300
+    /// grid of `(u, v)` (cell centres), each checked to be a unit vector
+    /// in the upper hemisphere.
+    fn stratified_visible_normals(model: &Microfacet, wo: Vec3) -> Vec<Vec3> {
+        let n = 300;
+        let cell = |k: usize| (k as f32 + 0.5) / n as f32;
+        let normals: Vec<Vec3> = (0..n)
+            .flat_map(|i| (0..n).map(move |j| (i, j)))
+            .map(|(i, j)| model.sample_visible_normal(wo, cell(i), cell(j)))
+            .collect();
+        for m in &normals {
+            assert!((m.length() - 1.0).abs() < 1e-4 && m.z >= 0.0, "{m}");
+        }
+        normals
+    }
+
     /// ∫ pdf and ∫ m.z · pdf over the hemisphere ([`hemisphere_grid`]).
     fn pdf_moments(model: &Microfacet, wo: Vec3) -> (f64, f64) {
         let (mut total, mut mean_z) = (0.0f64, 0.0f64);
@@ -370,21 +386,12 @@ mod tests {
                 (0.1, Vec3::new(0.0, 0.1, 1.0).normalize()),
             ] {
                 let model = Microfacet::mitsuba(alpha, distribution);
-                let n = 300;
-                let mut mean_z_sampled = 0.0f64;
-                for i in 0..n {
-                    for j in 0..n {
-                        let m = model.sample_visible_normal(
-                            wo,
-                            (i as f32 + 0.5) / n as f32,
-                            (j as f32 + 0.5) / n as f32,
-                        );
-                        assert!((m.length() - 1.0).abs() < 1e-4 && m.z >= 0.0);
-                        assert!(m.dot(wo) >= -1e-6, "{distribution:?}: back-facing {m}");
-                        mean_z_sampled += f64::from(m.z);
-                    }
+                let normals = stratified_visible_normals(&model, wo);
+                for m in &normals {
+                    assert!(m.dot(wo) >= -1e-6, "{distribution:?}: back-facing {m}");
                 }
-                mean_z_sampled /= (n * n) as f64;
+                let mean_z_sampled =
+                    normals.iter().map(|m| f64::from(m.z)).sum::<f64>() / normals.len() as f64;
                 let (total, mean_z) = pdf_moments(&model, wo);
                 assert!((total - 1.0).abs() < 2e-3, "{distribution:?} {wo}: {total}");
                 assert!(
@@ -437,22 +444,11 @@ mod tests {
                     (total - 1.0).abs() < 3e-3,
                     "{distribution:?} {ax} {ay}: ∫pdf {total}"
                 );
-                let n = 300;
-                let (mut sx, mut sy) = (0.0f64, 0.0f64);
-                for i in 0..n {
-                    for j in 0..n {
-                        let m = model.sample_visible_normal(
-                            wo,
-                            (i as f32 + 0.5) / n as f32,
-                            (j as f32 + 0.5) / n as f32,
-                        );
-                        assert!((m.length() - 1.0).abs() < 1e-4 && m.z >= 0.0);
-                        sx += f64::from(m.x * m.x);
-                        sy += f64::from(m.y * m.y);
-                    }
-                }
-                let count = (n * n) as f64;
-                let (sx, sy) = (sx / count, sy / count);
+                let normals = stratified_visible_normals(&model, wo);
+                let mean = |f: fn(Vec3) -> f32| {
+                    normals.iter().map(|&m| f64::from(f(m))).sum::<f64>() / normals.len() as f64
+                };
+                let (sx, sy) = (mean(|m| m.x * m.x), mean(|m| m.y * m.y));
                 assert!(
                     (sx - xx).abs() < 2e-3,
                     "{distribution:?} {ax} {ay}: m_x² {sx} vs {xx}"
