@@ -27,7 +27,10 @@ Outputs (into --out, default simd-tracer/tests/data):
   the specular reflectance times F) and `probability` (Mitsuba's chance of
   sampling the delta lobe);
 Anisotropic configurations (`ALPHA_V`) give `alpha_u` (along the frame's
-`s`, +x, as `Frame3f((0, 0, 1))` builds it) and `alpha_v`.
+`s`, +x, as `Frame3f((0, 0, 1))` builds it) and `alpha_v`. Tinted rough
+dielectrics (`TRANSMITTANCE`) give `specular` as their
+`specular_reflectance` and `transmittance` as their
+`specular_transmittance`.
 
 * `mitsuba_principled_configs.csv` and `mitsuba_principled_eval.csv`: the
   same for the `principled` BSDF (grey `base_color` 0.5, whose luminance in
@@ -88,6 +91,14 @@ for camera, light, what in ((1, -1, "transmit_outside"), (-1, -1, "reflect_insid
     name = f"roughdielectric_ggx_0.1_0.35_{what}"
     CONFIGS.append((name, "roughdielectric", "ggx", 0.1, 0.0, 1.0, False, camera, light))
     ALPHA_V[name] = 0.35
+# Tinted dielectrics: `specular` is then `specular_reflectance` and
+# TRANSMITTANCE[name] is `specular_transmittance`.
+TRANSMITTANCE = {}
+for camera, light, what in ((1, 1, "reflect_outside"), (1, -1, "transmit_outside"),
+                            (-1, -1, "reflect_inside"), (-1, 1, "transmit_inside")):
+    name = f"roughdielectric_ggx_0.3_tinted_{what}"
+    CONFIGS.append((name, "roughdielectric", "ggx", 0.3, 0.0, 0.6, False, camera, light))
+    TRANSMITTANCE[name] = 0.3
 
 
 # Principled: name, parameters (besides base_color 0.5), camera side, light
@@ -141,7 +152,7 @@ def principled_table(out):
     print(f"{len(PRINCIPLED_CONFIGS)} principled configurations, {len(rows)} evaluations")
 
 
-def load(plugin, distribution, alpha, diffuse, specular, nonlinear, alpha_v):
+def load(plugin, distribution, alpha, diffuse, specular, nonlinear, alpha_v, transmittance):
     d = {"type": plugin}
     if plugin in ("plastic", "roughplastic"):
         d.update(int_ior=IOR, ext_ior=1.0, nonlinear=nonlinear,
@@ -152,6 +163,9 @@ def load(plugin, distribution, alpha, diffuse, specular, nonlinear, alpha_v):
         d.update(eta=CONDUCTOR_ETA, k=CONDUCTOR_K)
     elif plugin == "roughdielectric":
         d.update(int_ior=IOR, ext_ior=1.0)
+        if specular != 1.0 or transmittance != 1.0:
+            d["specular_reflectance"] = {"type": "rgb", "value": [specular] * 3}
+            d["specular_transmittance"] = {"type": "rgb", "value": [transmittance] * 3}
     if distribution and alpha_v != alpha:
         d.update(distribution=distribution, alpha_u=alpha, alpha_v=alpha_v)
     elif distribution:
@@ -205,15 +219,15 @@ def main():
         w = csv.writer(f, lineterminator="\n")
         w.writerow(["name", "plugin", "distribution", "alpha", "int_ior", "ext_ior", "diffuse",
                     "specular", "nonlinear", "eta", "k", "camera_side", "light_side",
-                    "alpha_v"])
+                    "alpha_v", "transmittance"])
         for name, plugin, distribution, alpha, diffuse, specular, nonlinear, cs, ls in CONFIGS:
             w.writerow([name, plugin, distribution, alpha, IOR, 1.0, diffuse, specular,
                         int(nonlinear), CONDUCTOR_ETA, CONDUCTOR_K, cs, ls,
-                        ALPHA_V.get(name, alpha)])
+                        ALPHA_V.get(name, alpha), TRANSMITTANCE.get(name, 1.0)])
     rows, deltas = [], []
     for name, plugin, distribution, alpha, diffuse, specular, nonlinear, cs, ls in CONFIGS:
         bsdf = load(plugin, distribution, alpha, diffuse, specular, nonlinear,
-                    ALPHA_V.get(name, alpha))
+                    ALPHA_V.get(name, alpha), TRANSMITTANCE.get(name, 1.0))
         plastic = plugin in ("plastic", "roughplastic")
         for theta_camera in THETAS_DEG:
             si = interaction(direction(theta_camera, 0.0, cs))

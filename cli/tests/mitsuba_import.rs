@@ -985,13 +985,68 @@ fn conductor_tints_multiply_the_fresnel_term() -> TestResult {
         8,
         &["a textured specular_reflectance is not supported"],
     )?;
+    Ok(())
+}
+
+/// A dielectric's `specular_reflectance` and `specular_transmittance`
+/// become its [`SpecularTints`] (reflectances, as Mitsuba reads them; the
+/// one not given is 1), on `dielectric`, `roughdielectric` and
+/// `thindielectric`; none given, none built; a textured one is refused.
+#[test]
+fn dielectric_tints_follow_mitsuba() -> TestResult {
+    use simd_tracer::shading::material::{Bsdf, SpecularTints};
+    let dir = test_dir("dielectric-tints")?;
+    let with = |plugin: &str, params: &str| {
+        scene(&format!(
+            "    <shape type=\"rectangle\"><bsdf type=\"{plugin}\">{params}</bsdf></shape>\n    <emitter type=\"constant\"/>"
+        ))
+    };
+    // The tints' values at 550 nm, or `None` without tints.
+    let tints_of = |plugin: &str, params: &str| -> TestResult<Option<(f32, f32)>> {
+        let path = write(&dir, &format!("{plugin}.xml"), &with(plugin, params))?;
+        let built = load(&path, &[], false)?.builder.build()?;
+        let tints = built
+            .materials()
+            .iter()
+            .find_map(|m| match m.bsdf {
+                Bsdf::Dielectric { tints, .. } | Bsdf::ThinDielectric { tints, .. } => Some(tints),
+                _ => None,
+            })
+            .ok_or("no dielectric")?;
+        let value = |id: simd_tracer::ids::SpectrumId| built.spectra()[id.index()].value(550.0);
+        Ok(tints.map(
+            |SpecularTints {
+                 reflectance,
+                 transmittance,
+             }| { (value(reflectance), value(transmittance)) },
+        ))
+    };
+    for plugin in ["dielectric", "roughdielectric", "thindielectric"] {
+        assert_eq!(tints_of(plugin, "")?, None, "{plugin}");
+        assert_eq!(
+            tints_of(
+                plugin,
+                "<float name=\"specular_transmittance\" value=\"0.25\"/>"
+            )?,
+            Some((1.0, 0.25)),
+            "{plugin}"
+        );
+        assert_eq!(
+            tints_of(
+                plugin,
+                "<spectrum name=\"specular_reflectance\" value=\"0.5\"/>"
+            )?,
+            Some((0.5, 1.0)),
+            "{plugin}"
+        );
+    }
     refused(
-        "dielectric-reflectance",
+        "dielectric-tint-texture",
         &scene(
-            "    <shape type=\"rectangle\"><bsdf type=\"dielectric\"><float name=\"specular_reflectance\" value=\"0.5\"/></bsdf></shape>",
+            "    <shape type=\"rectangle\"><bsdf type=\"dielectric\"><texture type=\"checkerboard\" name=\"specular_transmittance\"/></bsdf></shape>",
         ),
         8,
-        &["values other than 1 are not supported"],
+        &["a textured specular_transmittance is not supported"],
     )?;
     Ok(())
 }

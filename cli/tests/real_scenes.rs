@@ -1297,3 +1297,101 @@ fn toml_principled_matches_its_closed_form() -> TestResult {
     }
     Ok(())
 }
+
+/// `reflectance_tint` and `transmittance_tint` on a TOML thin-dielectric
+/// pane that fills the view in front of a uniform environment: both lobes
+/// see the environment, so a pixel is `L (t (1 − R') + r R')` with `R'`
+/// the slab's reflectance at the pixel's angle; the image over the
+/// untinted pane's (which is `L` everywhere) is that bracket's mean over
+/// the film plane. The lobe is sampled, so a sample is `r L` or `t L`: the
+/// bound (3·10⁻³) is over ten standard deviations of 64 spp. The tints
+/// swapped are far outside it. A dispersive index with tints is a one-line
+/// error.
+#[test]
+fn toml_dielectric_tints_multiply_their_lobes() -> TestResult {
+    use simd_tracer::shading::material::{Bsdf, thin_dielectric_reflectance};
+    let fov_deg = 20.0f64;
+    let (reflectance, transmittance) = (0.8, 0.5);
+    let text = |tints: &str| {
+        format!(
+            r#"
+[camera]
+position = [0, 0, 3]
+target = [0, 0, 0]
+fov_deg = {fov_deg}
+
+[environment]
+spectrum = {{ constant = 1 }}
+
+[materials.pane]
+type = "thin-dielectric"
+ior = 1.5
+{tints}
+
+[[shapes]]
+type = "rectangle"
+material = "pane"
+transform = [{{ scale = 2 }}]
+"#
+        )
+    };
+    let tints = |r: f64, t: f64| {
+        format!(
+            "reflectance_tint = {{ constant = {r} }}\ntransmittance_tint = {{ constant = {t} }}"
+        )
+    };
+    let (_d, plain_path) = scene("tints-plain", &text(""))?;
+    let (_d, tinted_path) = scene("tints", &text(&tints(reflectance, transmittance)))?;
+    let (_d, swapped_path) = scene("tints-swapped", &text(&tints(transmittance, reflectance)))?;
+    let tinted = load(&tinted_path)?;
+    let Some(Bsdf::ThinDielectric {
+        tints: Some(ids), ..
+    }) = tinted
+        .materials()
+        .iter()
+        .find(|m| m.name == "pane")
+        .map(|m| &m.bsdf)
+    else {
+        return Err("the pane has no tints".into());
+    };
+    let spectra = tinted.spectra();
+    assert_eq!(
+        (
+            spectra[ids.reflectance.index()].value(550.0),
+            spectra[ids.transmittance.index()].value(550.0)
+        ),
+        (reflectance as f32, transmittance as f32)
+    );
+    let fourier = FourierTransport::<8>::new(tinted.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
+    let mean_y = |image: Vec<Xyz>| image.iter().map(|x| x.y).sum::<f64>() / image.len() as f64;
+    let plain = mean_y(render_xyz(&fourier, &load(&plain_path)?, 64, 1)?);
+    let ratio = mean_y(render_xyz(&fourier, &tinted, 64, 1)?) / plain;
+    let swapped = mean_y(render_xyz(&fourier, &load(&swapped_path)?, 64, 1)?) / plain;
+    let half = (fov_deg / 2.0).to_radians().tan();
+    let (wide, high) = (f64::from(SIZE.0), f64::from(SIZE.1));
+    let steps = 400;
+    let mut sum = 0.0;
+    for i in 0..steps {
+        for j in 0..steps {
+            let x = half * wide / high * (2.0 * (i as f64 + 0.5) / steps as f64 - 1.0);
+            let y = half * (2.0 * (j as f64 + 0.5) / steps as f64 - 1.0);
+            let cos_o = 1.0 / (1.0 + x * x + y * y).sqrt();
+            let r = f64::from(thin_dielectric_reflectance(cos_o as f32, 1.5));
+            sum += transmittance * (1.0 - r) + reflectance * r;
+        }
+    }
+    let expected = sum / (steps * steps) as f64;
+    println!("tinted pane: ratio {ratio:.5}, closed form {expected:.5}; swapped {swapped:.5}");
+    assert!(
+        (ratio / expected - 1.0).abs() < 3e-3,
+        "{ratio} against {expected}"
+    );
+    assert!((swapped / expected - 1.0).abs() > 0.1, "swapped {swapped}");
+    error_at(
+        "tints-dispersive",
+        "[materials.card]\ntype = \"dielectric\"\nior = { cauchy = [1.5, 0.004] }\ntransmittance_tint = { constant = 0.5 }\n[[shapes]]\ntype = \"cube\"\nmaterial = \"card\"\n",
+        "[materials.card]",
+        "specular tints need a constant index of refraction",
+    )?;
+    Ok(())
+}

@@ -776,8 +776,20 @@ fn thin_dielectric_and_sides_load() -> TestResult {
             .find(|m| m.name == name)
             .ok_or(format!("no {name}"))
     };
-    assert_eq!(material("pane")?.bsdf, Bsdf::ThinDielectric { eta: 1.5 });
-    assert_eq!(material("bubble")?.bsdf, Bsdf::ThinDielectric { eta: 0.75 });
+    assert_eq!(
+        material("pane")?.bsdf,
+        Bsdf::ThinDielectric {
+            eta: 1.5,
+            tints: None
+        }
+    );
+    assert_eq!(
+        material("bubble")?.bsdf,
+        Bsdf::ThinDielectric {
+            eta: 0.75,
+            tints: None
+        }
+    );
     assert_eq!(material("pane")?.sides, Sides::Front);
     assert!(!material("pane")?.front_only(), "a transmitting BSDF");
     assert!(material("matte")?.front_only());

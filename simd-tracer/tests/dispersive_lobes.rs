@@ -47,12 +47,14 @@ fn fixture() -> TestResult<(Scene, Bsdf, Bsdf, Bsdf)> {
         inside,
         ior: GLASS,
         microfacet: Microfacet::ggx(alpha),
+        tints: None,
     };
     let plain = Bsdf::Dielectric {
         outside: plain_outside,
         inside: plain_inside,
         ior: Ior::Constant(1.5),
         microfacet: Microfacet::ggx(0.0),
+        tints: None,
     };
     Ok((b.build()?, glass(0.0), glass(0.3), plain))
 }

@@ -120,6 +120,7 @@ fn glass(b: &mut SceneBuilder, roughness: f32) -> TestResult<MaterialId> {
             inside,
             ior,
             microfacet: Microfacet::ggx(roughness),
+            tints: None,
         },
     )))
 }

@@ -138,6 +138,7 @@ fn fixture() -> TestResult<Fixture> {
                 inside,
                 ior: glass,
                 microfacet: Microfacet::ggx(0.3),
+                tints: None,
             },
         ),
         (
@@ -167,6 +168,7 @@ fn fixture() -> TestResult<Fixture> {
                 inside,
                 ior: glass,
                 microfacet: Microfacet::ggx(0.0),
+                tints: None,
             },
         ),
         (
@@ -190,6 +192,7 @@ fn fixture() -> TestResult<Fixture> {
                 inside,
                 ior: glass,
                 microfacet: beckmann(0.3),
+                tints: None,
             },
         ),
         (
@@ -606,12 +609,14 @@ fn rough_dielectric_albedo_equals_the_textbook_quadrature() -> TestResult {
         inside: *inside,
         ior: Ior::Constant(1.6),
         microfacet: Microfacet::ggx(0.3),
+        tints: None,
     };
     let swapped_tables = Bsdf::Dielectric {
         outside: *inside,
         inside: *outside,
         ior: Ior::Constant(1.5),
         microfacet: Microfacet::ggx(0.3),
+        tints: None,
     };
     let draws = 100_000;
     let mut worst = [0.0f64; 3];

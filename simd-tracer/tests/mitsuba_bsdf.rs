@@ -1,6 +1,7 @@
 //! Our BSDFs against Mitsuba 3.9.1's own evaluations: `plastic` (linear,
 //! nonlinear, with a specular scale), `roughplastic`, `roughconductor`
-//! and `roughdielectric` (reflection and transmission, from both sides),
+//! and `roughdielectric` (reflection and transmission, from both sides;
+//! also with `specular_reflectance` and `specular_transmittance`),
 //! GGX and Beckmann, isotropic and anisotropic (`alpha_u ≠ alpha_v`, the
 //! frame's `s` along +x as Mitsuba's), tabulated by `tools/mitsuba_bsdf_table.py` into
 //! `tests/data/mitsuba_bsdf_*.csv` (grey constants, so no colour
@@ -39,7 +40,7 @@
 //! 4.7·10⁻² and the errors are printed only. Negative controls: a wrong
 //! `α`, the other distribution, a linear coat for a nonlinear one, the
 //! flat coat transmittance for the rough one, an anisotropic lobe turned by
-//! 90°, and (for GGX, whose `Λ` is
+//! 90°, a tinted dielectric's two tints swapped, and (for GGX, whose `Λ` is
 //! never 0 off the normal; Beckmann's fitted `Λ` is 0 below 64° at α = 0.3)
 //! height-correlated shadowing each exceed the tolerances.
 
@@ -49,7 +50,7 @@ use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::{Scene, SceneBuilder};
 use simd_tracer::shading::material::{
     Albedo, Bsdf, CoatTransmittance, LaneSpectrum, Material, MitsubaPlastic, ShadingPoint,
-    SpectralRef, nonlinear_albedo,
+    SpectralRef, SpecularTints, nonlinear_albedo,
 };
 use simd_tracer::shading::microfacet::{Distribution, Microfacet, Shadowing};
 use simd_tracer::spectra::SpectrumSource;
@@ -230,12 +231,37 @@ fn fixture() -> TestResult<Fixture> {
                         d
                     }
                 };
-                Bsdf::Dielectric {
+                let (specular, transmittance) =
+                    (number(&row, "specular")?, number(&row, "transmittance")?);
+                let tints = if specular != 1.0 || transmittance != 1.0 {
+                    let mut tint = |key: &str, v: f64| {
+                        b.add_spectrum(&format!("{name} {key}"), SpectrumSource::Constant(v))
+                    };
+                    Some(SpecularTints {
+                        reflectance: tint("reflectance", specular)?,
+                        transmittance: tint("transmittance", transmittance)?,
+                    })
+                } else {
+                    None
+                };
+                let bsdf = Bsdf::Dielectric {
                     outside,
                     inside,
                     ior: Ior::Constant(ior),
                     microfacet: rough.ok_or("a rough dielectric needs a distribution")?,
+                    tints,
+                };
+                if let Some(t) = tints {
+                    let mut swapped = bsdf.clone();
+                    if let Bsdf::Dielectric { tints, .. } = &mut swapped {
+                        *tints = Some(SpecularTints {
+                            reflectance: t.transmittance,
+                            transmittance: t.reflectance,
+                        });
+                    }
+                    controls.push(("tints swapped", name.clone(), swapped));
                 }
+                bsdf
             }
             other => return Err(format!("plugin {other}").into()),
         };

@@ -325,7 +325,13 @@ fn smooth_triangles_decide_the_side_by_the_shading_normal() -> TestResult {
 fn sides_apply_to_reflective_bsdfs_only() -> TestResult {
     let mut b = SceneBuilder::new(SpectralRange::VISIBLE);
     let grey = b.add_spectrum("grey", SpectrumSource::Constant(ALBEDO))?;
-    let mut glass = Material::new("glass", Bsdf::ThinDielectric { eta: 1.5 });
+    let mut glass = Material::new(
+        "glass",
+        Bsdf::ThinDielectric {
+            eta: 1.5,
+            tints: None,
+        },
+    );
     glass.sides = Sides::Front;
     let mut plain = Material::lambert("plain", grey);
     plain.sides = Sides::Front;
@@ -342,7 +348,13 @@ fn sides_apply_to_reflective_bsdfs_only() -> TestResult {
         lamp.two_sided = true;
         let mut front_only_lamp = lamp.clone();
         front_only_lamp.sides = Sides::Front;
-        let mut pane = Material::new("glass", Bsdf::ThinDielectric { eta: 1.5 });
+        let mut pane = Material::new(
+            "glass",
+            Bsdf::ThinDielectric {
+                eta: 1.5,
+                tints: None,
+            },
+        );
         pane.sides = Sides::Front;
         let square = |z: f32| {
             [

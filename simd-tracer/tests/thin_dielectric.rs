@@ -72,7 +72,7 @@ fn the_slab_reflects_r_prime_and_transmits_the_rest_straight_through() -> TestRe
     let draws = 20_000;
     let step = 1.0 / f64::from(draws);
     for eta in ETAS {
-        let bsdf = Bsdf::ThinDielectric { eta };
+        let bsdf = Bsdf::ThinDielectric { eta, tints: None };
         for cos_deg in [0.0f32, 30.0, 55.0, 70.0, 85.0] {
             let theta = cos_deg.to_radians();
             let wo = Vec3::new(theta.sin(), 0.0, theta.cos());
@@ -174,7 +174,10 @@ fn a_pane_in_front_of_a_lamp_passes_t_prime() -> TestResult {
         };
         b.add_quad(square(0.0, 4.0), lamp);
         if pane {
-            let pane = b.add_material(Material::new("pane", Bsdf::ThinDielectric { eta }));
+            let pane = b.add_material(Material::new(
+                "pane",
+                Bsdf::ThinDielectric { eta, tints: None },
+            ));
             b.add_quad(square(1.0, 2.0), pane);
         }
         b.set_camera(Camera::look_at(

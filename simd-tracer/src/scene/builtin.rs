@@ -536,6 +536,7 @@ fn materials(range: SpectralRange) -> Result<SceneBuilder, BuiltinError> {
             inside,
             ior: glass_ior,
             microfacet: Microfacet::ggx(0.0),
+            tints: None,
         },
     ));
     let red = b.add_spectrum(

@@ -83,6 +83,8 @@ pub enum SceneError {
     Mesh(String),
     /// A light is invalid.
     Light(String),
+    /// A material (named) combines what cannot be combined (the message).
+    Material(String, &'static str),
 }
 
 impl core::fmt::Display for SceneError {
@@ -107,6 +109,7 @@ impl core::fmt::Display for SceneError {
             Self::Bvh(message) => write!(f, "BVH: {message}"),
             Self::Mesh(message) => write!(f, "mesh: {message}"),
             Self::Light(message) => write!(f, "light: {message}"),
+            Self::Material(name, message) => write!(f, "material `{name}`: {message}"),
         }
     }
 }
@@ -1543,6 +1546,18 @@ impl SceneBuilder {
                         material.name.clone(),
                         "fluorophore",
                         fluorophore.0,
+                    ));
+                }
+                if let Bsdf::Dielectric {
+                    ior,
+                    tints: Some(_),
+                    ..
+                } = leaf
+                    && ior.is_dispersive()
+                {
+                    return Err(SceneError::Material(
+                        material.name.clone(),
+                        "specular tints need a constant index of refraction",
                     ));
                 }
             }

@@ -447,7 +447,13 @@ mod tests {
         glowing.sides = Sides::Front;
         let mut front_lambert = Material::lambert("grey", grey);
         front_lambert.sides = Sides::Front;
-        let mut glass = Material::new("glass", Bsdf::ThinDielectric { eta: GLASS_ETA });
+        let mut glass = Material::new(
+            "glass",
+            Bsdf::ThinDielectric {
+                eta: GLASS_ETA,
+                tints: None,
+            },
+        );
         glass.sides = Sides::Front;
         let materials = [
             b.add_material(one_sided),

@@ -19,7 +19,7 @@ use crate::scene_file::source::Spot;
 use simd_tracer::ids::{AngularId, MaterialId, SpectrumId, TextureId};
 use simd_tracer::scene::SceneError;
 use simd_tracer::shading::material::{
-    Albedo, Bsdf, CoatParams, Fraction, Material, Principled, diffuse_fresnel,
+    Albedo, Bsdf, CoatParams, Fraction, Material, Principled, SpecularTints, diffuse_fresnel,
 };
 use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::angular::{AngularFunction, FilmLayer, Ior, REFERENCE_WAVELENGTH_NM};
@@ -187,13 +187,21 @@ impl Construction<'_> {
     }
 
     /// A smooth or rough dielectric interface of index `ior` (inside
-    /// relative to outside), for the material at `at`.
+    /// relative to outside), its lobes multiplied by `tints` (a constant
+    /// `ior` only), for the material at `at`.
     pub(crate) fn dielectric(
         &mut self,
         at: &Spot,
         ior: Ior,
         microfacet: Microfacet,
+        tints: Option<SpecularTints>,
     ) -> Result<Bsdf, CliError> {
+        if tints.is_some() && ior.is_dispersive() {
+            return Err(self.src.error_at(
+                at,
+                "specular tints need a constant index of refraction (not a dispersive one)",
+            ));
+        }
         let name = &at.key;
         let outside = self.add_angular(
             at,
@@ -216,20 +224,27 @@ impl Construction<'_> {
             inside,
             ior,
             microfacet,
+            tints,
         })
     }
 
     /// A thin dielectric slab of relative index `eta` (slab / outside:
-    /// Mitsuba's `int_ior / ext_ior`, which may be below 1), for the
-    /// material at `at`; `eta` must be finite and above 0.
-    pub(crate) fn thin_dielectric(&self, at: &Spot, eta: f32) -> Result<Bsdf, CliError> {
+    /// Mitsuba's `int_ior / ext_ior`, which may be below 1), its lobes
+    /// multiplied by `tints`, for the material at `at`; `eta` must be
+    /// finite and above 0.
+    pub(crate) fn thin_dielectric(
+        &self,
+        at: &Spot,
+        eta: f32,
+        tints: Option<SpecularTints>,
+    ) -> Result<Bsdf, CliError> {
         if !(eta.is_finite() && eta > 0.0) {
             return Err(self.src.error_at(
                 at,
                 format!("relative index of refraction {eta} must be a finite number > 0"),
             ));
         }
-        Ok(Bsdf::ThinDielectric { eta })
+        Ok(Bsdf::ThinDielectric { eta, tints })
     }
 
     /// A fluorescent layer of `fluorophore` absorbing `peak_absorptance` at

@@ -4,8 +4,8 @@
 //! | --- | --- | --- |
 //! | `diffuse` | `reflectance` (0.5; spectrum or texture) | Lambert, one-sided |
 //! | `conductor`, `roughconductor` | `material` (`none`: a perfect mirror) or `eta` and `k`; `specular_reflectance` (1; a spectrum, not a texture); `alpha` (0.1) or `alpha_u`/`alpha_v` (anisotropic, along `∂p/∂u` and across); `distribution` (`beckmann`) | conductor whose Fresnel term is multiplied by `specular_reflectance`, one-sided |
-//! | `dielectric`, `roughdielectric` | `int_ior` (`bk7`), `ext_ior` (`air`): numbers or names (`named_ior`); `alpha`, `distribution` as above | dielectric interface of index `int/ext`, two-sided |
-//! | `thindielectric` | `int_ior`, `ext_ior` | thin slab, two-sided |
+//! | `dielectric`, `roughdielectric` | `int_ior` (`bk7`), `ext_ior` (`air`): numbers or names (`named_ior`); `specular_reflectance`, `specular_transmittance` (1; spectra, not textures); `alpha`, `distribution` as above | dielectric interface of index `int/ext` whose reflected and transmitted lobes are multiplied by the two factors (`SpecularTints`), two-sided |
+//! | `thindielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | thin slab, its lobes multiplied by the two factors, two-sided |
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` (0.5), `int_ior` (`polypropylene`), `ext_ior` (`air`), `nonlinear` (false); `alpha` (0.1), `distribution` (`beckmann`) | dielectric coat over a diffuse base, one-sided |
 //! | `principled` | `base_color` (0.5), `roughness` (0.5), `metallic`, `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`, `clearcoat`, `clearcoat_gloss`, `flatness`, `anisotropic` (0), `eta` or `specular` (0.5), sampling rates (`principled.rs`) | Burley's model as Mitsuba evaluates it (`simd_tracer`'s `Principled`), one-sided without transmission |
 //! | `twosided` | one or two nested BSDFs without transmission (Mitsuba refuses dielectrics and masks) | one: that BSDF on both faces; two: the first on the front face, the second on the back (`Bsdf::Faces`) |
@@ -19,8 +19,8 @@
 //!   face (against the shading normal) scatters nothing; `twosided` lifts
 //!   that. Dielectrics are two-sided by nature.
 //! * `specular_reflectance` and `specular_transmittance` of dielectrics
-//!   must be 1 (their default): other values are refused rather than
-//!   rendered wrongly.
+//!   are spectra (Mitsuba reads them as reflectances); a texture is refused
+//!   rather than rendered wrongly.
 //! * Anisotropic roughness (`alpha_u ≠ alpha_v`, conductors and
 //!   dielectrics): `alpha_u` along the surface's `∂p/∂u`, `alpha_v` across
 //!   it, in Mitsuba's shading frame.
@@ -40,7 +40,7 @@ use crate::scene_file::source::Spot;
 use simd_tracer::ids::SpectrumId;
 use simd_tracer::shading::material::{
     Albedo, Blend, Bsdf, Fraction, MapFrame, Mask, Material, MitsubaPlastic, NormalMap, Relief,
-    Sides,
+    Sides, SpecularTints,
 };
 use simd_tracer::shading::microfacet::{Distribution, Microfacet};
 use simd_tracer::spectra::SpectrumSource;
@@ -163,23 +163,24 @@ impl<'e> Importer<'e, '_> {
             "conductor" | "roughconductor" => {
                 let rough = self.roughness(&object)?;
                 let (n, k) = self.conductor_index(&object)?;
-                let tint = self.specular_tint(&object)?;
+                let tint = self.specular_factor(&object, "specular_reflectance")?;
                 let index = ConductorIndex { n, k, tint };
                 let fresnel = self.cx.conductor_fresnel(&spot, &spot, index)?;
                 (conductor(fresnel, rough), true)
             }
             "dielectric" | "roughdielectric" => {
                 let rough = self.roughness(&object)?;
-                self.unit_factor(&object, "specular_reflectance")?;
-                self.unit_factor(&object, "specular_transmittance")?;
+                let tints = self.specular_tints(&object)?;
                 let eta = self.relative_ior(&object, DEFAULT_DIELECTRIC_INT_IOR)?;
-                (dielectric(self, &spot, eta, rough)?, false)
+                let surface =
+                    self.cx
+                        .dielectric(&spot, Ior::Constant(eta), rough.microfacet(), tints)?;
+                (surface, false)
             }
             "thindielectric" => {
-                self.unit_factor(&object, "specular_reflectance")?;
-                self.unit_factor(&object, "specular_transmittance")?;
+                let tints = self.specular_tints(&object)?;
                 let eta = self.relative_ior(&object, DEFAULT_DIELECTRIC_INT_IOR)?;
-                (self.cx.thin_dielectric(&spot, eta as f32)?, false)
+                (self.cx.thin_dielectric(&spot, eta as f32, tints)?, false)
             }
             "plastic" | "roughplastic" => (self.plastic(&object, &spot)?, true),
             "principled" => (self.principled(&object, &spot)?, true),
@@ -511,44 +512,50 @@ impl<'e> Importer<'e, '_> {
         Ok(Fraction::Constant(clamped as f32))
     }
 
-    /// A conductor's `specular_reflectance`: a spectrum (a reflectance, as
-    /// Mitsuba reads it) multiplying its Fresnel term; `None` when absent.
-    fn specular_tint(&mut self, object: &Object<'e>) -> Result<Option<SpectrumId>, CliError> {
-        const NAME: &str = "specular_reflectance";
-        if object.get(NAME).is_none() {
+    /// A lobe's factor `name` (`specular_reflectance` or
+    /// `specular_transmittance`): a spectrum (a reflectance, as Mitsuba
+    /// reads it); `None` when absent.
+    fn specular_factor(
+        &mut self,
+        object: &Object<'e>,
+        name: &str,
+    ) -> Result<Option<SpectrumId>, CliError> {
+        if object.get(name).is_none() {
             return Ok(None);
         }
-        if self.texture_property(object, NAME)?.is_some() {
-            return Err(
-                object.error("a textured specular_reflectance is not supported (give a spectrum)")
-            );
+        if self.texture_property(object, name)?.is_some() {
+            return Err(object.error(format!(
+                "a textured {name} is not supported (give a spectrum)"
+            )));
         }
         let id = self.spectrum_id(
             object,
-            NAME,
+            name,
             SpectrumUse::Reflectance,
             SpectrumSource::Constant(1.0),
         )?;
         Ok(Some(id))
     }
 
-    /// Refuses a `specular_reflectance`/`…transmittance` other than 1.
-    fn unit_factor(&mut self, object: &Object<'e>, name: &str) -> Result<(), CliError> {
-        let Some(p) = object.get(name) else {
-            return Ok(());
-        };
-        let unit = match p.value {
-            Value::Float(v) => v == 1.0,
-            Value::Integer(v) => v == 1,
-            Value::Rgb(rgb) => rgb == [1.0; 3],
-            Value::SpectrumText(text) => text.trim() == "1" || text.trim() == "1.0",
-            _ => false,
-        };
-        if unit {
-            Ok(())
-        } else {
-            Err(p.error("values other than 1 are not supported"))
+    /// A dielectric's `specular_reflectance` and `specular_transmittance`;
+    /// `None` when both are absent (then both are 1).
+    fn specular_tints(&mut self, object: &Object<'e>) -> Result<Option<SpecularTints>, CliError> {
+        let reflectance = self.specular_factor(object, "specular_reflectance")?;
+        let transmittance = self.specular_factor(object, "specular_transmittance")?;
+        if reflectance.is_none() && transmittance.is_none() {
+            return Ok(None);
         }
+        let mut or_one = |id: Option<SpectrumId>| match id {
+            Some(id) => Ok(id),
+            None => {
+                let spot = Self::spot(object.element, object.describe());
+                self.cx.add_spectrum(&spot, SpectrumSource::Constant(1.0))
+            }
+        };
+        Ok(Some(SpecularTints {
+            reflectance: or_one(reflectance)?,
+            transmittance: or_one(transmittance)?,
+        }))
     }
 
     /// An index of refraction property: a number or a Mitsuba name.
@@ -706,15 +713,4 @@ fn conductor(fresnel: simd_tracer::ids::AngularId, rough: Roughness) -> Bsdf {
         fresnel,
         microfacet: rough.microfacet(),
     }
-}
-
-fn dielectric(
-    importer: &mut Importer<'_, '_>,
-    spot: &Spot,
-    eta: f64,
-    rough: Roughness,
-) -> Result<Bsdf, CliError> {
-    importer
-        .cx
-        .dielectric(spot, Ior::Constant(eta), rough.microfacet())
 }

@@ -12,6 +12,7 @@ use simd_tracer::ids::MaterialId;
 use simd_tracer::scene::builtin::fluorescence::PEAK_ABSORPTANCE;
 use simd_tracer::shading::material::{
     Albedo, Bsdf, Fraction, Material, PRINCIPLED_FRACTIONS, Principled, Relief, Sides,
+    SpecularTints,
 };
 use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::SpectrumSource;
@@ -36,8 +37,8 @@ const COMMON_KEYS: &[&str] = &[
 /// The keys of each material type, besides [`COMMON_KEYS`].
 const LAMBERT_KEYS: &[&str] = &["albedo", "albedo_texture"];
 const CONDUCTOR_KEYS: &[&str] = &["metal", "n", "k", "n_const", "k_const", "roughness", "tint"];
-const DIELECTRIC_KEYS: &[&str] = &["ior", "roughness"];
-const THIN_DIELECTRIC_KEYS: &[&str] = &["ior"];
+const DIELECTRIC_KEYS: &[&str] = &["ior", "roughness", "reflectance_tint", "transmittance_tint"];
+const THIN_DIELECTRIC_KEYS: &[&str] = &["ior", "reflectance_tint", "transmittance_tint"];
 const COATED_KEYS: &[&str] = &["albedo", "albedo_texture", "ior", "roughness"];
 const THIN_FILM_KEYS: &[&str] = &[
     "layers",
@@ -266,7 +267,34 @@ impl Loader<'_> {
             ));
         };
         let eta = item.number(&self.src)?;
-        self.cx.thin_dielectric(&item.spot(), eta as f32)
+        let tints = self.specular_tints(table)?;
+        self.cx.thin_dielectric(&item.spot(), eta as f32, tints)
+    }
+
+    /// A dielectric's `reflectance_tint` and `transmittance_tint` (spectrum
+    /// references, each 1 when absent); `None` when both are absent.
+    fn specular_tints(&mut self, table: &Table<'_, '_>) -> Result<Option<SpecularTints>, CliError> {
+        let (reflectance, transmittance) = (
+            table.get("reflectance_tint"),
+            table.get("transmittance_tint"),
+        );
+        if reflectance.is_none() && transmittance.is_none() {
+            return Ok(None);
+        }
+        let mut tint = |item: Option<Item<'_, '_>>| match item {
+            Some(item) => {
+                let id = self.spectrum_ref(&item, 1.0)?;
+                self.cx.warn_reflectance_above_one(&item.spot(), id);
+                Ok(id)
+            }
+            None => self
+                .cx
+                .add_spectrum(&table.spot(), SpectrumSource::Constant(1.0)),
+        };
+        Ok(Some(SpecularTints {
+            reflectance: tint(reflectance)?,
+            transmittance: tint(transmittance)?,
+        }))
     }
 
     /// A fluorescent layer over a Lambertian base: `albedo` (a spectrum),
@@ -518,8 +546,9 @@ impl Loader<'_> {
         let item = table.require(&self.src, "ior", "a dielectric needs `ior`")?;
         let ior = self.ior(&item, true)?;
         let roughness = self.roughness(table)?;
+        let tints = self.specular_tints(table)?;
         self.cx
-            .dielectric(&table.spot(), ior, Microfacet::ggx(roughness))
+            .dielectric(&table.spot(), ior, Microfacet::ggx(roughness), tints)
     }
 
     fn coated(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {

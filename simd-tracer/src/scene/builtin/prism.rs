@@ -143,6 +143,7 @@ pub fn add_sf11_glass(b: &mut SceneBuilder) -> Result<MaterialId, SceneError> {
             inside,
             ior: SF11,
             microfacet: Microfacet::ggx(0.0),
+            tints: None,
         },
     )))
 }

@@ -4,10 +4,11 @@
 //! reflectance of a thin dielectric slab (two parallel interfaces).
 
 use super::MaterialTables;
-use super::lane_spectrum::LaneSpectrum;
-use super::{BsdfEval, BsdfSample, angular_mean, angular_ref};
+use super::lane_spectrum::{LaneSpectrum, SpectralRef};
+use super::{BsdfEval, BsdfSample, SpecularTints, angular_mean, angular_ref};
 use crate::ids::AngularId;
 use crate::shading::microfacet::{self, Microfacet};
+use crate::spectra::angular::REFERENCE_WAVELENGTH_NM;
 use glam::Vec3;
 use spectral_core::optics::fresnel_dielectric;
 
@@ -45,20 +46,79 @@ pub(super) fn reflect_probability(
     }
 }
 
-/// A smooth interface: its reflectance table `r`, its transmittance table
-/// `t` (a film's; `None` for a bare dielectric, whose transmittance is
-/// `1 − R`), the relative index `eta` across it, whether the refraction
-/// follows a dispersed hero wavelength, and the film thickness (0 for none).
+/// An interface seen from one side: its reflectance table `r`, its
+/// transmittance table `t` (a film's; `None` for a bare dielectric, whose
+/// transmittance is `1 − R`), the relative index `eta` across it, whether
+/// the refraction follows a dispersed hero wavelength, the film thickness
+/// (0 for none) and a bare dielectric's [`SpecularTints`].
 #[derive(Debug, Clone, Copy)]
-pub(super) struct SmoothInterface {
+pub(super) struct Interface {
     pub(super) r: AngularId,
     pub(super) t: Option<AngularId>,
     pub(super) eta: f32,
     pub(super) dispersed: bool,
     pub(super) thickness: f32,
+    pub(super) tints: Option<SpecularTints>,
 }
 
-/// Reflection or refraction by `u_lobe` at a [`SmoothInterface`] with
+impl Interface {
+    /// A bare dielectric's side: reflectance table `r`, relative index
+    /// `eta`, optional tints.
+    pub(super) fn dielectric(
+        r: AngularId,
+        eta: f32,
+        dispersed: bool,
+        tints: Option<SpecularTints>,
+    ) -> Self {
+        Self {
+            r,
+            t: None,
+            eta,
+            dispersed,
+            thickness: 0.0,
+            tints,
+        }
+    }
+
+    /// The spectra of the reflected and the transmitted lobe at a (micro)
+    /// surface seen at `cos θ = cos`: `R` and `T` (or `1 − R`) from the
+    /// tables, or with tints `F s_r` and `(1 − F) s_t`, `F` the exact
+    /// Fresnel reflectance of the constant index (the same at every
+    /// wavelength, [`SpecularTints`]; `r`'s exact function); at total
+    /// internal reflection `F = 1` and the transmitted lobe is 0.
+    pub(super) fn lobes(
+        &self,
+        tables: &MaterialTables<'_>,
+        cos: f32,
+    ) -> (LaneSpectrum, LaneSpectrum) {
+        let reflectance = angular_ref(self.r, cos, self.thickness);
+        match (self.tints, self.t) {
+            (Some(tints), _) => {
+                // The table's exact function in f64 (its index in f64: near
+                // total reflection `1 − F` is sensitive to the index's last
+                // bits); the index is constant, so any wavelength does.
+                let f = tables.angular.get(self.r.index()).map_or(0.0, |a| {
+                    a.function()
+                        .eval(f64::from(cos), REFERENCE_WAVELENGTH_NM, None)
+                });
+                (
+                    LaneSpectrum::scaled(f as f32, SpectralRef::Scene(tints.reflectance)),
+                    LaneSpectrum::scaled((1.0 - f) as f32, SpectralRef::Scene(tints.transmittance)),
+                )
+            }
+            (None, Some(t)) => (
+                LaneSpectrum::of(reflectance),
+                LaneSpectrum::of(angular_ref(t, cos, self.thickness)),
+            ),
+            (None, None) => (
+                LaneSpectrum::of(reflectance),
+                LaneSpectrum::complement(reflectance),
+            ),
+        }
+    }
+}
+
+/// Reflection or refraction by `u_lobe` at a smooth [`Interface`] with
 /// normal `n`, seen from `wo` (`cos_o = n · wo`).
 pub(super) fn sample_smooth_interface(
     tables: &MaterialTables<'_>,
@@ -66,33 +126,31 @@ pub(super) fn sample_smooth_interface(
     wo: Vec3,
     cos_o: f32,
     u_lobe: f32,
-    interface: &SmoothInterface,
+    interface: &Interface,
 ) -> Option<BsdfSample> {
-    let SmoothInterface {
+    let Interface {
         r,
         t,
         eta,
         dispersed,
         thickness,
+        ..
     } = *interface;
     let p_reflect = reflect_probability(tables, r, t, cos_o, thickness);
-    let reflectance = angular_ref(r, cos_o, thickness);
+    let (reflected, transmitted) = interface.lobes(tables, cos_o);
     if u_lobe < p_reflect {
         return Some(BsdfSample {
             wi: microfacet::reflect(wo, n),
             pdf: 0.0,
             weight: 1.0 / p_reflect,
-            spectrum: LaneSpectrum::of(reflectance),
+            spectrum: reflected,
             terminate_secondary: false,
             fluorophore: None,
         });
     }
     // `u_lobe < 1`, so the transmitted lobe's probability is above 0.
     let p_transmit = 1.0 - p_reflect;
-    let spectrum = match t {
-        Some(t) => LaneSpectrum::of(angular_ref(t, cos_o, thickness)),
-        None => LaneSpectrum::complement(reflectance),
-    };
+    let spectrum = transmitted;
     Some(match microfacet::refract(wo, n, eta) {
         Some(wi) => BsdfSample {
             wi,
@@ -108,6 +166,8 @@ pub(super) fn sample_smooth_interface(
         // whatever `R` the table holds there (a dispersive glass reflects
         // some wavelengths totally while `c_0(R) < 1`). Whether this
         // happens depends on the hero's index, so the secondaries end.
+        // With tints the index is constant and the transmitted lobe's
+        // `1 − F` is exactly 0 here.
         None => BsdfSample {
             wi: microfacet::reflect(wo, n),
             pdf: 0.0,
@@ -127,9 +187,9 @@ pub(super) fn eval_rough_dielectric(
     wo: Vec3,
     wi: Vec3,
     model: &Microfacet,
-    table: AngularId,
-    eta: f32,
+    interface: &Interface,
 ) -> BsdfEval {
+    let eta = interface.eta;
     let reflection = wi.z > 0.0;
     let etap = if reflection { 1.0 } else { eta };
     let mut m = wi * etap + wo;
@@ -144,22 +204,22 @@ pub(super) fn eval_rough_dielectric(
     if cos_om <= 0.0 || cos_im * wi.z <= 0.0 {
         return BsdfEval::ZERO;
     }
-    let p_reflect = reflect_probability(tables, table, None, cos_om, 0.0);
-    let fresnel = angular_ref(table, cos_om, 0.0);
+    let p_reflect = reflect_probability(tables, interface.r, None, cos_om, 0.0);
+    let (reflected, transmitted) = interface.lobes(tables, cos_om);
     let d = model.ndf(m);
     let g = model.g2(wo, wi);
     let pdf_m = model.visible_normal_pdf(wo, m);
     if reflection {
         BsdfEval {
             value: d * g / (4.0 * wo.z),
-            spectrum: LaneSpectrum::of(fresnel),
+            spectrum: reflected,
             pdf: p_reflect * pdf_m / (4.0 * cos_om),
         }
     } else {
         let denominator = (cos_im + cos_om / eta).powi(2);
         BsdfEval {
             value: d * g * cos_im.abs() * cos_om / (wo.z * denominator * eta * eta),
-            spectrum: LaneSpectrum::complement(fresnel),
+            spectrum: transmitted,
             pdf: (1.0 - p_reflect) * pdf_m * cos_im.abs() / denominator,
         }
     }

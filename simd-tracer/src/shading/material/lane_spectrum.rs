@@ -70,6 +70,15 @@ impl LaneSpectrum {
         }
     }
 
+    /// `scale · X`.
+    pub fn scaled(scale: f32, x: SpectralRef) -> Self {
+        Self {
+            constant: 0.0,
+            scale,
+            of: Some(x),
+        }
+    }
+
     /// `1 − X`.
     pub fn complement(x: SpectralRef) -> Self {
         Self {

@@ -11,7 +11,7 @@
 //! | --- | --- |
 //! | Lambert | `f = ρ/π`, cosine sampling (Shirley–Chiu), weight `ρ` |
 //! | Conductor | GGX or Beckmann (see [`crate::shading::microfacet`]) with visible-normal sampling, `f = D G2 F/(4 cos θo cos θi)`, weight `F G2/G1`; `α < 10⁻³` is a mirror (delta); `F` from an angular spectrum (Fourier table / exact) |
-//! | Dielectric | smooth (delta) or microfacet (Walter et al. 2007) reflection and transmission; the lobe is chosen with the mean Fresnel `c_0` of the table (Fourier mode, and sampled mode without dispersion) and the throughput carries the spectral `F` or `1 − F`; transmitted radiance is scaled by `1/η²`; with a dispersive IOR and a hero wavelength, refraction follows the hero's IOR and terminates the secondary wavelengths; where the chosen refraction does not exist (total internal reflection at that IOR) the refracted share `1 − F` is reflected instead, so each wavelength keeps `F + (1 − F) = 1` |
+//! | Dielectric | smooth (delta) or microfacet (Walter et al. 2007) reflection and transmission; the lobe is chosen with the mean Fresnel `c_0` of the table (Fourier mode, and sampled mode without dispersion) and the throughput carries the spectral `F` or `1 − F`; transmitted radiance is scaled by `1/η²`; with a dispersive IOR and a hero wavelength, refraction follows the hero's IOR and terminates the secondary wavelengths; where the chosen refraction does not exist (total internal reflection at that IOR) the refracted share `1 − F` is reflected instead, so each wavelength keeps `F + (1 − F) = 1`; optional [`SpecularTints`] multiply the lobes (`s_r F`, `s_t (1 − F)`, a constant IOR only) |
 //! | Coated | a smooth or rough dielectric coat of constant IOR over a Lambertian base (Mitsuba's plastic and roughplastic): specular `s F(θo)` plus diffuse `ρ T_i T_o/(π η² (1 − F_dr,int))` with the coat's transmittances `T` (flat `1 − F`, or tabulated for a rough coat) and optionally Mitsuba's nonlinear internal scattering; for the smooth coat and `ρ = 1` energy is conserved exactly (the coat's Fresnel is achromatic, so it rides in the scalar part); formulas in `coated.rs` |
 //! | ThinFilm | smooth film stack: reflection with the stack's spectral `R(θ)`, transmission (transparent base) with `T(θ)` into the substrate, lobe chosen by `c_0(R)/(c_0(R) + c_0(T))`; thickness optionally from a scalar texture |
 //! | Mask | a nested BSDF where the opacity `α` says, a hole elsewhere (Mitsuba 3.9.1's `mask`, src/bsdfs/mask.cpp): `f = α f_nested + (1 − α) δ(wi + wo)/|cos θi|`; the hole is sampled with probability `1 − α` (straight on, weight 1, delta), the nested BSDF with `α` (its weight, pdf `α p`); formulas, sides and shadow rays in `mask.rs` |
@@ -19,7 +19,7 @@
 //! | Blend | `(1 − w) f_0 + w f_1` (Mitsuba's `blendbsdf`): the bounce's lobe number chooses one component for both its light sample and its BSDF sample (`blend.rs`: unbiased, with the component's own weights and MIS) |
 //! | NormalMap | a nested BSDF shaded at a normal that an image of normals (Mitsuba's `normalmap`) or the slopes of an image of heights (`bumpmap`) tilt in the frame of the shading normal and the texture's `u` direction, times Estevez et al.'s shadowing term; formulas, sides and flips in `normal_map.rs` |
 //! | Principled | Mitsuba's `principled` (Burley's Disney BSDF): diffuse with retro-reflection, sheen, a GGX specular lobe mixing dielectric Fresnel with Schlick's metallic and tinted terms, GTR1 clearcoat, rough transmission with `√ρ`; lobes chosen by Mitsuba's probabilities, the pdf the mixture's; every lobe is `a + b ρ` (or `c √ρ`), one spectrum a lane; formulas in `principled.rs` |
-//! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1; achromatic, delta, the same from both faces |
+//! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1 (times the lobe's [`SpecularTints`] factor where given); achromatic, delta, the same from both faces |
 //!
 //! **Sides.** [`Material::sides`] says which faces scatter. With
 //! [`Sides::Both`] (TOML and built-in scenes) the normal is turned towards
@@ -119,6 +119,26 @@ impl Albedo {
     }
 }
 
+/// Spectral factors on a dielectric's two lobes: its reflection is
+/// multiplied by `reflectance(λ)`, its transmission by `transmittance(λ)`
+/// (Mitsuba 3.9.1's `specular_reflectance` and `specular_transmittance` of
+/// `dielectric`, `roughdielectric` and `thindielectric`: factors on the
+/// lobes' values that leave the lobe choice and the pdfs alone; a
+/// coloured glass is a `transmittance` below 1).
+///
+/// Why only with a constant index: the Fresnel term `F` is then the same
+/// at every wavelength, so a lobe's spectrum `s(λ) F` is the scalar `F`
+/// times the scene spectrum `s`, one [`LaneSpectrum`] a lane like every
+/// other lobe. A dispersive index would need `s(λ) F(λ)` tabulated per
+/// angle (scene validation refuses the pair; Mitsuba has no dispersion).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpecularTints {
+    /// Factor on the reflected lobe (values in [0, 1]).
+    pub reflectance: SpectrumId,
+    /// Factor on the transmitted lobe (values in [0, 1]).
+    pub transmittance: SpectrumId,
+}
+
 /// The BSDF of a material.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Bsdf {
@@ -144,6 +164,9 @@ pub enum Bsdf {
         ior: Ior,
         /// Roughness (smooth: a delta interface).
         microfacet: Microfacet,
+        /// Factors on the reflected and transmitted lobes (`None`: 1;
+        /// only with a constant index, [`SpecularTints`]).
+        tints: Option<SpecularTints>,
     },
     /// A dielectric coat over a Lambertian base.
     Coated {
@@ -162,6 +185,8 @@ pub enum Bsdf {
     ThinDielectric {
         /// `n_slab / n_outside` (constant; above 0).
         eta: f32,
+        /// Factors on the reflected and transmitted lobes (`None`: 1).
+        tints: Option<SpecularTints>,
     },
     /// A fluorescent layer over a Lambertian base (`fluorescent.rs`).
     Fluorescent {
@@ -327,14 +352,25 @@ impl Bsdf {
             Albedo::Spectrum(id) => r.spectra.push(*id),
             Albedo::Texture(id) => r.textures.push(*id),
         };
+        let tint_spectra = |tints: &Option<SpecularTints>, r: &mut References| {
+            if let Some(t) = tints {
+                r.spectra.extend([t.reflectance, t.transmittance]);
+            }
+        };
         match self {
             Bsdf::Lambert { albedo: a } | Bsdf::Coated { albedo: a, .. } => albedo(a, &mut r),
             Bsdf::Conductor { fresnel, .. } => r.angular.push(*fresnel),
-            Bsdf::ThinDielectric { .. } => {}
+            Bsdf::ThinDielectric { tints, .. } => tint_spectra(tints, &mut r),
             Bsdf::Fluorescent { elastic, .. } => r.spectra.push(*elastic),
             Bsdf::Dielectric {
-                outside, inside, ..
-            } => r.angular.extend([*outside, *inside]),
+                outside,
+                inside,
+                tints,
+                ..
+            } => {
+                r.angular.extend([*outside, *inside]);
+                tint_spectra(tints, &mut r);
+            }
             Bsdf::ThinFilm {
                 front_reflectance,
                 front_transmittance,
@@ -696,7 +732,10 @@ mod tests {
             fdr_inside: 0.6,
             params: CoatParams::default(),
         };
-        let thin = Bsdf::ThinDielectric { eta: 1.5 };
+        let thin = Bsdf::ThinDielectric {
+            eta: 1.5,
+            tints: None,
+        };
         let rough_plastic = MitsubaPlastic {
             eta: 1.5,
             microfacet: Some(Microfacet::mitsuba(

@@ -5,7 +5,7 @@ use super::MaterialTables;
 use super::coated::{CoatLobes, CoatSpec};
 use super::frame::{Frame, sample_cosine};
 use super::interface::{
-    SmoothInterface, eval_rough_dielectric, reflect_probability, sample_smooth_interface,
+    Interface, eval_rough_dielectric, reflect_probability, sample_smooth_interface,
     thin_dielectric_reflectance,
 };
 use super::lane_spectrum::LaneSpectrum;
@@ -118,21 +118,15 @@ impl Bsdf {
                 inside,
                 ior,
                 microfacet: model,
+                tints,
             } => {
                 let (ior_value, dispersed) = direction_ior(ior, p.hero_nm);
-                let (table, eta) = if p.front {
-                    (*outside, ior_value)
+                let interface = if p.front {
+                    Interface::dielectric(*outside, ior_value, dispersed, *tints)
                 } else {
-                    (*inside, 1.0 / ior_value)
+                    Interface::dielectric(*inside, 1.0 / ior_value, dispersed, *tints)
                 };
                 if model.is_smooth() {
-                    let interface = SmoothInterface {
-                        r: table,
-                        t: None,
-                        eta,
-                        dispersed,
-                        thickness: 0.0,
-                    };
                     return sample_smooth_interface(
                         tables, p.n, wo, wo_local.z, u_lobe, &interface,
                     );
@@ -142,8 +136,8 @@ impl Bsdf {
                 if cos_om <= 0.0 {
                     return None;
                 }
-                let p_reflect = reflect_probability(tables, table, None, cos_om, 0.0);
-                let fresnel = angular_ref(table, cos_om, 0.0);
+                let p_reflect = reflect_probability(tables, interface.r, None, cos_om, 0.0);
+                let (reflected, transmitted) = interface.lobes(tables, cos_om);
                 let pdf_m = model.visible_normal_pdf(wo_local, m);
                 if u_lobe < p_reflect {
                     let wi_local = microfacet::reflect(wo_local, m);
@@ -154,11 +148,12 @@ impl Bsdf {
                         wi: frame.to_world(wi_local),
                         pdf: p_reflect * pdf_m / (4.0 * cos_om),
                         weight: model.g2(wo_local, wi_local) / model.g1(wo_local) / p_reflect,
-                        spectrum: LaneSpectrum::of(fresnel),
+                        spectrum: reflected,
                         terminate_secondary: false,
                         fluorophore: None,
                     })
                 } else {
+                    let eta = interface.eta;
                     let wi_local = microfacet::refract(wo_local, m, eta)?;
                     if wi_local.z >= 0.0 {
                         return None;
@@ -171,7 +166,7 @@ impl Bsdf {
                         pdf: p_transmit * pdf_m * cos_im.abs() / denominator,
                         weight: model.g2(wo_local, wi_local)
                             / (model.g1(wo_local) * eta * eta * p_transmit),
-                        spectrum: LaneSpectrum::complement(fresnel),
+                        spectrum: transmitted,
                         terminate_secondary: dispersed,
                         fluorophore: None,
                     })
@@ -180,21 +175,29 @@ impl Bsdf {
             Self::Coated { .. } => self
                 .coat(tables, p)
                 .and_then(|coat| coat.sample(frame, wo_local, u_lobe, u, v)),
-            Self::ThinDielectric { eta } => {
+            Self::ThinDielectric { eta, tints } => {
                 // Lobe by `R'`: each weight `R'/R'` or `(1 − R')/(1 − R')`
                 // is exactly 1 (`u_lobe < R'` keeps the chosen lobe's
-                // probability above 0).
+                // probability above 0), times the lobe's tint.
                 let reflectance = thin_dielectric_reflectance(wo_local.z, *eta);
-                let wi = if u_lobe < reflectance {
+                let reflect = u_lobe < reflectance;
+                let wi = if reflect {
                     microfacet::reflect(wo, p.n)
                 } else {
                     -wo
                 };
+                let spectrum = tints.map_or(LaneSpectrum::ONE, |t| {
+                    LaneSpectrum::scene(if reflect {
+                        t.reflectance
+                    } else {
+                        t.transmittance
+                    })
+                });
                 Some(BsdfSample {
                     wi,
                     pdf: 0.0,
                     weight: 1.0,
-                    spectrum: LaneSpectrum::ONE,
+                    spectrum,
                     terminate_secondary: false,
                     fluorophore: None,
                 })
@@ -215,12 +218,13 @@ impl Bsdf {
                 };
                 match tr {
                     Some(_) => {
-                        let interface = SmoothInterface {
+                        let interface = Interface {
                             r,
                             t: tr,
                             eta,
                             dispersed: false,
                             thickness: t,
+                            tints: None,
                         };
                         sample_smooth_interface(tables, p.n, wo, wo_local.z, u_lobe, &interface)
                     }
@@ -275,6 +279,7 @@ impl Bsdf {
             inside,
             ior,
             microfacet: model,
+            ..
         } = self
         else {
             return false;
@@ -351,17 +356,18 @@ impl Bsdf {
                 inside,
                 ior,
                 microfacet: model,
+                tints,
             } => {
                 if model.is_smooth() || wi_local.z == 0.0 {
                     return BsdfEval::ZERO;
                 }
                 let (ior_value, _) = direction_ior(ior, p.hero_nm);
-                let (table, eta) = if p.front {
-                    (*outside, ior_value)
+                let interface = if p.front {
+                    Interface::dielectric(*outside, ior_value, false, *tints)
                 } else {
-                    (*inside, 1.0 / ior_value)
+                    Interface::dielectric(*inside, 1.0 / ior_value, false, *tints)
                 };
-                eval_rough_dielectric(tables, wo_local, wi_local, model, table, eta)
+                eval_rough_dielectric(tables, wo_local, wi_local, model, &interface)
             }
             Self::Coated { .. } => self
                 .coat(tables, p)
