@@ -113,6 +113,7 @@ SCENES = {
     "bsdf_anisotropic": {"suite": "materials", "ref_spp": 4096, "negative": {"angle": "90"}},
     "bsdf_tinted_dielectric": {
         "suite": "materials", "ref_spp": 4096, "negative": {"trans": "0.2, 0.5, 0.9"}},
+    "bsdf_roughness_map": {"suite": "materials", "ref_spp": 4096, "negative": {"raw": "false"}},
     # lights
     "point_light": {"suite": "lights", "ref_spp": 4096, "negative": {"light_x": "1.4"}},
     "spot_light": {"suite": "lights", "ref_spp": 4096, "negative": {"beam": "12"}},

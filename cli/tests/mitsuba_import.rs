@@ -1364,3 +1364,103 @@ fn anisotropic_roughness_follows_mitsuba() -> TestResult {
     }
     Ok(())
 }
+
+/// A textured `alpha` (or `alpha_u`/`alpha_v`) of `roughconductor` and
+/// `roughdielectric` becomes a [`RoughnessMap`] around the BSDF, reading
+/// the bitmap as a fraction; a number beside a textured `alpha_u` is the
+/// constant `α_v`. `roughplastic` takes numbers only (as Mitsuba's), a
+/// number outside [0, 1] beside a texture and `alpha` with `alpha_u` are
+/// refused, each on one line.
+#[test]
+fn roughness_maps_follow_mitsuba() -> TestResult {
+    use simd_tracer::shading::material::{Bsdf, Fraction, RoughnessMap};
+    let dir = test_dir("roughness-maps")?;
+    let grey = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/conformance/scenes/textures/grey.png")
+        .display()
+        .to_string();
+    let bitmap = |name: &str| {
+        format!(
+            "<texture type=\"bitmap\" name=\"{name}\"><string name=\"filename\" value=\"{grey}\"/><boolean name=\"raw\" value=\"true\"/></texture>"
+        )
+    };
+    let with = |plugin: &str, params: &str| {
+        scene(&format!(
+            "    <shape type=\"rectangle\"><bsdf type=\"{plugin}\">{params}</bsdf></shape>\n    <emitter type=\"constant\"/>"
+        ))
+    };
+    let map_of = |plugin: &str, params: &str| -> TestResult<RoughnessMap> {
+        let path = write(&dir, &format!("{plugin}.xml"), &with(plugin, params))?;
+        let loaded = load(&path, &[], false)?;
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        let built = loaded.builder.build()?;
+        built
+            .materials()
+            .iter()
+            .find_map(|m| match &m.bsdf {
+                Bsdf::RoughnessMap(map) => Some((**map).clone()),
+                _ => None,
+            })
+            .ok_or_else(|| format!("{plugin}: no roughness map").into())
+    };
+    for plugin in ["roughconductor", "roughdielectric"] {
+        let map = map_of(plugin, &bitmap("alpha"))?;
+        assert!(matches!(map.alpha_u, Fraction::Texture(_)), "{plugin}");
+        assert_eq!(map.alpha_u, map.alpha_v, "{plugin}");
+        let nested_fits = matches!(
+            (plugin, &map.nested),
+            ("roughconductor", Bsdf::Conductor { .. })
+                | ("roughdielectric", Bsdf::Dielectric { .. })
+        );
+        assert!(nested_fits, "{plugin}: {:?}", map.nested);
+        let anisotropic = map_of(
+            plugin,
+            &format!(
+                "{}<float name=\"alpha_v\" value=\"0.05\"/>",
+                bitmap("alpha_u")
+            ),
+        )?;
+        assert!(matches!(anisotropic.alpha_u, Fraction::Texture(_)));
+        assert_eq!(anisotropic.alpha_v, Fraction::Constant(0.05));
+        assert!(anisotropic.is_anisotropic());
+    }
+    // Without textures there is no map.
+    let path = write(
+        &dir,
+        "plain.xml",
+        &with("roughconductor", "<float name=\"alpha\" value=\"0.2\"/>"),
+    )?;
+    let built = load(&path, &[], false)?.builder.build()?;
+    assert!(
+        built
+            .materials()
+            .iter()
+            .all(|m| !matches!(m.bsdf, Bsdf::RoughnessMap(_)))
+    );
+    for (name, plugin, params, needle) in [
+        (
+            "roughplastic-map",
+            "roughplastic",
+            bitmap("alpha"),
+            "a textured alpha is not supported on a rough plastic",
+        ),
+        (
+            "alpha-and-alpha-u",
+            "roughconductor",
+            format!("{}<float name=\"alpha_u\" value=\"0.1\"/>", bitmap("alpha")),
+            "give `alpha`, or both `alpha_u` and `alpha_v`",
+        ),
+        (
+            "alpha-v-range",
+            "roughconductor",
+            format!(
+                "{}<float name=\"alpha_v\" value=\"1.5\"/>",
+                bitmap("alpha_u")
+            ),
+            "alpha_v 1.5: must be in [0, 1] beside a textured roughness",
+        ),
+    ] {
+        refused(name, &with(plugin, &params), 8, &[needle])?;
+    }
+    Ok(())
+}

@@ -3,8 +3,8 @@
 //! | plugin | parameters (defaults) | built as |
 //! | --- | --- | --- |
 //! | `diffuse` | `reflectance` (0.5; spectrum or texture) | Lambert, one-sided |
-//! | `conductor`, `roughconductor` | `material` (`none`: a perfect mirror) or `eta` and `k`; `specular_reflectance` (1; a spectrum, not a texture); `alpha` (0.1) or `alpha_u`/`alpha_v` (anisotropic, along `∂p/∂u` and across); `distribution` (`beckmann`) | conductor whose Fresnel term is multiplied by `specular_reflectance`, one-sided |
-//! | `dielectric`, `roughdielectric` | `int_ior` (`bk7`), `ext_ior` (`air`): numbers or names (`named_ior`); `specular_reflectance`, `specular_transmittance` (1; spectra, not textures); `alpha`, `distribution` as above | dielectric interface of index `int/ext` whose reflected and transmitted lobes are multiplied by the two factors (`SpecularTints`), two-sided |
+//! | `conductor`, `roughconductor` | `material` (`none`: a perfect mirror) or `eta` and `k`; `specular_reflectance` (1; a spectrum, not a texture); `alpha` (0.1) or `alpha_u`/`alpha_v` (anisotropic, along `∂p/∂u` and across), each a number or a grey `bitmap`; `distribution` (`beckmann`) | conductor whose Fresnel term is multiplied by `specular_reflectance`, one-sided; with a textured roughness nested in a `RoughnessMap` |
+//! | `dielectric`, `roughdielectric` | `int_ior` (`bk7`), `ext_ior` (`air`): numbers or names (`named_ior`); `specular_reflectance`, `specular_transmittance` (1; spectra, not textures); `alpha` (numbers or bitmaps), `distribution` as above | dielectric interface of index `int/ext` whose reflected and transmitted lobes are multiplied by the two factors (`SpecularTints`), two-sided; with a textured roughness nested in a `RoughnessMap` |
 //! | `thindielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | thin slab, its lobes multiplied by the two factors, two-sided |
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` (0.5), `int_ior` (`polypropylene`), `ext_ior` (`air`), `nonlinear` (false); `alpha` (0.1), `distribution` (`beckmann`) | dielectric coat over a diffuse base, one-sided |
 //! | `principled` | `base_color` (0.5), `roughness` (0.5), `metallic`, `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`, `clearcoat`, `clearcoat_gloss`, `flatness`, `anisotropic` (0), `eta` or `specular` (0.5), sampling rates (`principled.rs`) | Burley's model as Mitsuba evaluates it (`simd_tracer`'s `Principled`), one-sided without transmission |
@@ -40,7 +40,7 @@ use crate::scene_file::source::Spot;
 use simd_tracer::ids::SpectrumId;
 use simd_tracer::shading::material::{
     Albedo, Blend, Bsdf, Fraction, MapFrame, Mask, Material, MitsubaPlastic, NormalMap, Relief,
-    Sides, SpecularTints,
+    RoughnessMap, Sides, SpecularTints,
 };
 use simd_tracer::shading::microfacet::{Distribution, Microfacet};
 use simd_tracer::spectra::SpectrumSource;
@@ -101,6 +101,9 @@ struct Roughness {
     /// `alpha_v` (`alpha` where isotropic).
     alpha_v: f32,
     distribution: Distribution,
+    /// `α_u` and `α_v` where a texture gives either (then `alpha` and
+    /// `alpha_v` are placeholders the textures replace at each hit).
+    maps: Option<(Fraction, Fraction)>,
 }
 
 impl<'e> Importer<'e, '_> {
@@ -166,7 +169,7 @@ impl<'e> Importer<'e, '_> {
                 let tint = self.specular_factor(&object, "specular_reflectance")?;
                 let index = ConductorIndex { n, k, tint };
                 let fresnel = self.cx.conductor_fresnel(&spot, &spot, index)?;
-                (conductor(fresnel, rough), true)
+                (rough.mapped(conductor(fresnel, rough)), true)
             }
             "dielectric" | "roughdielectric" => {
                 let rough = self.roughness(&object)?;
@@ -175,7 +178,7 @@ impl<'e> Importer<'e, '_> {
                 let surface =
                     self.cx
                         .dielectric(&spot, Ior::Constant(eta), rough.microfacet(), tints)?;
-                (surface, false)
+                (rough.mapped(surface), false)
             }
             "thindielectric" => {
                 let tints = self.specular_tints(&object)?;
@@ -412,6 +415,7 @@ impl<'e> Importer<'e, '_> {
                 alpha: 0.0,
                 alpha_v: 0.0,
                 distribution: Distribution::Ggx,
+                maps: None,
             });
         }
         let distribution = match object.string("distribution")?.unwrap_or("beckmann") {
@@ -423,6 +427,14 @@ impl<'e> Importer<'e, '_> {
                 )));
             }
         };
+        if let Some(maps) = self.roughness_maps(object)? {
+            return Ok(Roughness {
+                alpha: DEFAULT_ALPHA as f32,
+                alpha_v: DEFAULT_ALPHA as f32,
+                distribution,
+                maps: Some(maps),
+            });
+        }
         let (alpha, alpha_v) = match (
             object.get("alpha").is_some(),
             object.float_opt("alpha_u")?,
@@ -444,7 +456,50 @@ impl<'e> Importer<'e, '_> {
             alpha: alpha as f32,
             alpha_v: alpha_v as f32,
             distribution,
+            maps: None,
         })
+    }
+
+    /// `α_u` and `α_v` of a rough BSDF where a texture gives `alpha`,
+    /// `alpha_u` or `alpha_v` (a grey `bitmap`, read as a fraction; the
+    /// other of `alpha_u`/`alpha_v` may be a number in [0, 1]); `None`
+    /// without textures. Mitsuba's `roughplastic` takes numbers only.
+    fn roughness_maps(
+        &mut self,
+        object: &Object<'e>,
+    ) -> Result<Option<(Fraction, Fraction)>, CliError> {
+        const NAMES: [&str; 3] = ["alpha", "alpha_u", "alpha_v"];
+        let mut textured = false;
+        for name in NAMES {
+            textured |= self.texture_property(object, name)?.is_some();
+        }
+        if !textured {
+            return Ok(None);
+        }
+        if object.plugin == "roughplastic" {
+            return Err(object.error(
+                "a textured alpha is not supported on a rough plastic (Mitsuba's roughplastic takes a number)",
+            ));
+        }
+        let mut alpha = |name: &str| -> Result<Fraction, CliError> {
+            if self.texture_property(object, name)?.is_none() {
+                let value = self.scalar(object, name, DEFAULT_ALPHA)?;
+                if !(0.0..=1.0).contains(&value) {
+                    return Err(object.error(format!(
+                        "{name} {value}: must be in [0, 1] beside a textured roughness"
+                    )));
+                }
+            }
+            self.fraction(object, name, None)
+        };
+        match NAMES.map(|name| object.get(name).is_some()) {
+            [true, false, false] => {
+                let map = alpha("alpha")?;
+                Ok(Some((map, map)))
+            }
+            [false, true, true] => Ok(Some((alpha("alpha_u")?, alpha("alpha_v")?))),
+            _ => Err(object.error("give `alpha`, or both `alpha_u` and `alpha_v`")),
+        }
     }
 
     /// A property that must be a plain number (a texture is refused).
@@ -687,6 +742,20 @@ impl Roughness {
     /// our mirror threshold.
     fn microfacet(self) -> Microfacet {
         Microfacet::mitsuba_anisotropic(self.alpha, self.alpha_v, self.distribution)
+    }
+
+    /// `bsdf` (built with [`Roughness::microfacet`]) with its roughness
+    /// from the textures where they give it (`simd_tracer`'s
+    /// `RoughnessMap`).
+    fn mapped(self, bsdf: Bsdf) -> Bsdf {
+        match self.maps {
+            Some((alpha_u, alpha_v)) => Bsdf::RoughnessMap(Box::new(RoughnessMap {
+                alpha_u,
+                alpha_v,
+                nested: bsdf,
+            })),
+            None => bsdf,
+        }
     }
 
     /// The rough coat of a `roughplastic`, `None` for a smooth one.

@@ -146,7 +146,7 @@ impl<'e> Importer<'e, '_> {
     }
 
     /// A scalar texture of fractions (`mask`'s `opacity`, `blendbsdf`'s
-    /// `weight`; built once per element): a `bitmap`, read as Mitsuba's `eval_1` reads it in its
+    /// `weight`, a rough BSDF's `alpha`; built once per element): a `bitmap`, read as Mitsuba's `eval_1` reads it in its
     /// spectral variants: a grey image's values (sRGB-decoded unless
     /// `raw`), or the luminance of a colour image with `raw` (without
     /// `raw` Mitsuba refuses a colour image here, and so do we).
@@ -170,7 +170,7 @@ impl<'e> Importer<'e, '_> {
         let object = Object::new(e)?;
         let to_uv = object.transform("to_uv")?;
         let what = match usage {
-            ScalarUse::Fraction => "an opacity or weight",
+            ScalarUse::Fraction => "an opacity, weight or roughness",
             ScalarUse::Heights => "a bump map",
         };
         if object.plugin != "bitmap" {

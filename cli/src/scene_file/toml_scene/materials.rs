@@ -11,8 +11,8 @@ use crate::texture_file::TextureUse;
 use simd_tracer::ids::MaterialId;
 use simd_tracer::scene::builtin::fluorescence::PEAK_ABSORPTANCE;
 use simd_tracer::shading::material::{
-    Albedo, Bsdf, Fraction, Material, PRINCIPLED_FRACTIONS, Principled, Relief, Sides,
-    SpecularTints,
+    Albedo, Bsdf, Fraction, Material, PRINCIPLED_FRACTIONS, Principled, Relief, RoughnessMap,
+    Sides, SpecularTints,
 };
 use simd_tracer::shading::microfacet::Microfacet;
 use simd_tracer::spectra::SpectrumSource;
@@ -36,8 +36,23 @@ const COMMON_KEYS: &[&str] = &[
 ];
 /// The keys of each material type, besides [`COMMON_KEYS`].
 const LAMBERT_KEYS: &[&str] = &["albedo", "albedo_texture"];
-const CONDUCTOR_KEYS: &[&str] = &["metal", "n", "k", "n_const", "k_const", "roughness", "tint"];
-const DIELECTRIC_KEYS: &[&str] = &["ior", "roughness", "reflectance_tint", "transmittance_tint"];
+const CONDUCTOR_KEYS: &[&str] = &[
+    "metal",
+    "n",
+    "k",
+    "n_const",
+    "k_const",
+    "roughness",
+    "roughness_texture",
+    "tint",
+];
+const DIELECTRIC_KEYS: &[&str] = &[
+    "ior",
+    "roughness",
+    "roughness_texture",
+    "reflectance_tint",
+    "transmittance_tint",
+];
 const THIN_DIELECTRIC_KEYS: &[&str] = &["ior", "reflectance_tint", "transmittance_tint"];
 const COATED_KEYS: &[&str] = &["albedo", "albedo_texture", "ior", "roughness"];
 const THIN_FILM_KEYS: &[&str] = &[
@@ -536,10 +551,32 @@ impl Loader<'_> {
         };
         let index = ConductorIndex { n, k, tint };
         let fresnel = self.cx.conductor_fresnel(&table.spot(), &origin, index)?;
-        Ok(Bsdf::Conductor {
+        let conductor = Bsdf::Conductor {
             fresnel,
             microfacet: Microfacet::ggx(self.roughness(table)?),
-        })
+        };
+        self.roughness_mapped(table, conductor)
+    }
+
+    /// `bsdf` with its GGX `α` from `roughness_texture` (a grey image of
+    /// `α` in [0, 1], `RoughnessMap`) where the table gives one; a
+    /// `roughness` beside it is an error.
+    fn roughness_mapped(&mut self, table: &Table<'_, '_>, bsdf: Bsdf) -> Result<Bsdf, CliError> {
+        match (table.get("roughness"), table.get("roughness_texture")) {
+            (_, None) => Ok(bsdf),
+            (None, Some(texture)) => {
+                let alpha = Fraction::Texture(self.texture(&texture, TextureUse::Scalar)?);
+                Ok(Bsdf::RoughnessMap(Box::new(RoughnessMap {
+                    alpha_u: alpha,
+                    alpha_v: alpha,
+                    nested: bsdf,
+                })))
+            }
+            (Some(_), Some(texture)) => Err(texture.err(
+                &self.src,
+                "give either `roughness` or `roughness_texture`, not both",
+            )),
+        }
     }
 
     fn dielectric(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {
@@ -547,8 +584,10 @@ impl Loader<'_> {
         let ior = self.ior(&item, true)?;
         let roughness = self.roughness(table)?;
         let tints = self.specular_tints(table)?;
-        self.cx
-            .dielectric(&table.spot(), ior, Microfacet::ggx(roughness), tints)
+        let dielectric =
+            self.cx
+                .dielectric(&table.spot(), ior, Microfacet::ggx(roughness), tints)?;
+        self.roughness_mapped(table, dielectric)
     }
 
     fn coated(&mut self, table: &Table<'_, '_>) -> Result<Bsdf, CliError> {

@@ -18,6 +18,7 @@
 //! | Faces | a BSDF per face, `[front, back]`: the face the viewer sees scatters, as itself seen from the front (Mitsuba's `twosided` with two BSDFs) |
 //! | Blend | `(1 − w) f_0 + w f_1` (Mitsuba's `blendbsdf`): the bounce's lobe number chooses one component for both its light sample and its BSDF sample (`blend.rs`: unbiased, with the component's own weights and MIS) |
 //! | NormalMap | a nested BSDF shaded at a normal that an image of normals (Mitsuba's `normalmap`) or the slopes of an image of heights (`bumpmap`) tilt in the frame of the shading normal and the texture's `u` direction, times Estevez et al.'s shadowing term; formulas, sides and flips in `normal_map.rs` |
+//! | RoughnessMap | a rough conductor or dielectric whose `α` (or `α_u`, `α_v`) scalar textures give at the hit (Mitsuba's textured `alpha` of `roughconductor` and `roughdielectric`): the nested BSDF at that roughness, its sampling, evaluation and pdf unchanged (`roughness_map.rs`) |
 //! | Principled | Mitsuba's `principled` (Burley's Disney BSDF): diffuse with retro-reflection, sheen, a GGX specular lobe mixing dielectric Fresnel with Schlick's metallic and tinted terms, GTR1 clearcoat, rough transmission with `√ρ`; lobes chosen by Mitsuba's probabilities, the pdf the mixture's; every lobe is `a + b ρ` (or `c √ρ`), one spectrum a lane; formulas in `principled.rs` |
 //! | ThinDielectric | a thin slab of constant relative index `η` (Mitsuba 3.9.1's `thindielectric`, src/bsdfs/thindielectric.cpp): the slab's reflectance sums the bounces inside it, `R' = R + T²R Σ R^{2k} = R + T²R/(1 − R²) = 2R/(1 + R)` (`T = 1 − R`, `R` the Fresnel reflectance at the incident `|cos θ|`); transmission `1 − R'` leaves straight through (`wi = −wo`: the two refractions cancel); the lobe is chosen with probability `R'`, so both weights are 1 (times the lobe's [`SpecularTints`] factor where given); achromatic, delta, the same from both faces |
 //!
@@ -65,6 +66,8 @@ mod mask;
 pub use mask::Mask;
 mod normal_map;
 pub use normal_map::{MapFrame, NormalMap, Relief};
+mod roughness_map;
+pub use roughness_map::RoughnessMap;
 mod principled;
 pub use principled::{PRINCIPLED_ETA, PRINCIPLED_FRACTIONS, Principled, SamplingRates};
 mod fluorescent;
@@ -225,6 +228,9 @@ pub enum Bsdf {
     NormalMap(Box<NormalMap>),
     /// Mitsuba's principled (Disney) BSDF (`principled.rs`).
     Principled(Box<Principled>),
+    /// A rough conductor or dielectric whose roughness textures give
+    /// (`roughness_map.rs`).
+    RoughnessMap(Box<RoughnessMap>),
 }
 
 /// A material.
@@ -396,6 +402,14 @@ impl Bsdf {
                 r = map.nested.references();
                 r.textures.push(map.relief.texture());
             }
+            Bsdf::RoughnessMap(map) => {
+                r = map.nested.references();
+                for alpha in [map.alpha_u, map.alpha_v] {
+                    if let Fraction::Texture(id) = alpha {
+                        r.textures.push(id);
+                    }
+                }
+            }
             Bsdf::Blend(blend) => {
                 if let Fraction::Texture(id) = blend.weight {
                     r.textures.push(id);
@@ -415,13 +429,16 @@ impl Bsdf {
         r
     }
 
-    /// The BSDFs that scatter, under any masks, faces, blends and normal
-    /// maps: the BSDF itself unless it is a [`Bsdf::Mask`],
-    /// [`Bsdf::Faces`], [`Bsdf::Blend`] or [`Bsdf::NormalMap`].
+    /// The BSDFs that scatter, under any masks, faces, blends, normal and
+    /// roughness maps: the BSDF itself unless it is a [`Bsdf::Mask`],
+    /// [`Bsdf::Faces`], [`Bsdf::Blend`], [`Bsdf::NormalMap`] or
+    /// [`Bsdf::RoughnessMap`] (whose leaf is its nested BSDF at a constant
+    /// roughness).
     pub fn leaves(&self) -> Vec<&Bsdf> {
         match self {
             Self::Mask(mask) => mask.nested.leaves(),
             Self::NormalMap(map) => map.nested.leaves(),
+            Self::RoughnessMap(map) => map.nested.leaves(),
             Self::Faces(faces) => faces.iter().flat_map(Bsdf::leaves).collect(),
             Self::Blend(blend) => blend.bsdfs.iter().flat_map(Bsdf::leaves).collect(),
             other => vec![other],
@@ -446,6 +463,7 @@ impl Bsdf {
             Self::Blend(_) => true,
             Self::Mask(mask) => mask.nested.needs_lobe(),
             Self::NormalMap(map) => map.nested.needs_lobe(),
+            Self::RoughnessMap(map) => map.nested.needs_lobe(),
             Self::Faces(faces) => faces.iter().any(Bsdf::needs_lobe),
             _ => false,
         }
@@ -477,6 +495,7 @@ impl Bsdf {
                 microfacet.is_anisotropic()
             }
             Self::Principled(principled) => principled.is_anisotropic(),
+            Self::RoughnessMap(map) => map.is_anisotropic(),
             Self::Mask(mask) => mask.nested.needs_tangent(),
             Self::Faces(faces) => faces.iter().any(Bsdf::needs_tangent),
             Self::Blend(blend) => blend.bsdfs.iter().any(Bsdf::needs_tangent),
@@ -494,6 +513,7 @@ impl Bsdf {
             Self::Faces(faces) => faces.iter().any(Bsdf::transmits),
             Self::Blend(blend) => blend.bsdfs.iter().any(Bsdf::transmits),
             Self::NormalMap(map) => map.nested.transmits(),
+            Self::RoughnessMap(map) => map.nested.transmits(),
             Self::Principled(principled) => principled.transmits(),
             Self::ThinFilm {
                 front_transmittance,

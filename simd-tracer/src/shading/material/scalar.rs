@@ -38,6 +38,7 @@ impl Bsdf {
             Self::Faces(faces) => faces[usize::from(!p.front)].sample(tables, p, wo, u_lobe, u, v),
             Self::Blend(blend) => blend.sample(tables, p, wo, u_lobe, [u, v]),
             Self::NormalMap(map) => map.sample(tables, p, wo, u_lobe, [u, v]),
+            Self::RoughnessMap(map) => map.sample(tables, p, wo, u_lobe, [u, v]),
             Self::Principled(principled) => principled.sample(tables, p, wo, u_lobe, [u, v]),
             Self::Lambert { albedo } => {
                 let wi = sample_cosine(p.n, u, v);
@@ -272,6 +273,9 @@ impl Bsdf {
             Self::NormalMap(map) => {
                 return map.direction_depends_on_wavelength(tables, p, wo, u_lobe);
             }
+            Self::RoughnessMap(map) => {
+                return map.direction_depends_on_wavelength(tables, p, wo, u_lobe);
+            }
             _ => {}
         }
         let Self::Dielectric {
@@ -377,6 +381,7 @@ impl Bsdf {
             Self::Faces(faces) => faces[usize::from(!p.front)].eval(tables, p, wo, wi),
             Self::Blend(blend) => blend.eval(tables, p, wo, wi),
             Self::NormalMap(map) => map.eval(tables, p, wo, wi),
+            Self::RoughnessMap(map) => map.eval(tables, p, wo, wi),
             Self::Principled(principled) => principled.eval(tables, p, wo, wi),
         }
     }
