@@ -693,7 +693,7 @@ fn masks_follow_mitsuba() -> TestResult {
         "mask-colour",
         &masked(&colour_bitmap(""), diffuse),
         8,
-        &["a colour image as an opacity or weight needs raw=true"],
+        &["a colour image as an opacity, weight or roughness needs raw=true"],
     )?;
     mask_of(
         &masked(
@@ -718,7 +718,7 @@ fn masks_follow_mitsuba() -> TestResult {
         "mask-checkerboard",
         &masked("<texture type=\"checkerboard\" name=\"opacity\"/>", diffuse),
         8,
-        &["is not supported as an opacity or weight (bitmap)"],
+        &["is not supported as an opacity, weight or roughness (bitmap)"],
     )?;
     refused(
         "mask-nan",
