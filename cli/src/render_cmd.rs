@@ -23,7 +23,9 @@ use crate::sensor_file::{ObserverChoice, load_sensor_csv};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
-use simd_tracer::film::filter::{Filter, GAUSSIAN_SIGMA_PX, TENT_RADIUS_PX};
+use simd_tracer::film::filter::{
+    CATMULL_ROM_B_C, Filter, GAUSSIAN_SIGMA_PX, LANCZOS_LOBES, MITCHELL_B_C, TENT_RADIUS_PX,
+};
 use simd_tracer::film::{AlphaMode, Buffer, FilmMode};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{
@@ -159,6 +161,15 @@ pub enum FilterKind {
     Tent,
     /// Gaussian, σ = 0.5 px, radius 2 px (Mitsuba's default).
     Gaussian,
+    /// Mitchell–Netravali cubic, B = C = 1/3, radius 2 px (Mitsuba's
+    /// `mitchell`; negative lobes: splatting film only).
+    Mitchell,
+    /// Catmull–Rom cubic, radius 2 px (Mitsuba's `catmullrom`; splatting
+    /// film only).
+    CatmullRom,
+    /// Lanczos sinc of 3 lobes, radius 3 px (Mitsuba's `lanczos`;
+    /// splatting film only).
+    Lanczos,
 }
 
 /// How samples reach pixels.
@@ -525,6 +536,17 @@ pub fn settings_from(
                 radius_px: TENT_RADIUS_PX,
             },
             (Some(FilterKind::Gaussian), _) | (None, None) => Filter::gaussian(),
+            (Some(FilterKind::Mitchell), _) => Filter::Cubic {
+                b: MITCHELL_B_C[0],
+                c: MITCHELL_B_C[1],
+            },
+            (Some(FilterKind::CatmullRom), _) => Filter::Cubic {
+                b: CATMULL_ROM_B_C[0],
+                c: CATMULL_ROM_B_C[1],
+            },
+            (Some(FilterKind::Lanczos), _) => Filter::Lanczos {
+                lobes: LANCZOS_LOBES,
+            },
             (None, Some(choice)) => filter_of(choice)?,
         },
         threads: args.threads,
@@ -540,6 +562,15 @@ pub fn settings_from(
             .map(SamplerKind::from)
             .or(defaults.render.sampler)
             .unwrap_or(default_sampler(args.transport_kind())),
+    })
+    .and_then(|settings| {
+        if settings.film == FilmMode::Sample && settings.filter.has_negative_lobes() {
+            Err(CliError::input(
+                "the filter has negative lobes, which cannot be drawn as sample offsets: render it with --film splat (the default but with control variates)",
+            ))
+        } else {
+            Ok(settings)
+        }
     })
 }
 
@@ -582,6 +613,8 @@ pub fn filter_of(choice: FilterChoice) -> Result<Filter, CliError> {
             Ok(Filter::gaussian())
         }
         FilterChoice::Gaussian { stddev_px } => Filter::gaussian_with_stddev(stddev_px),
+        FilterChoice::Cubic { b, c } => Filter::cubic(b, c),
+        FilterChoice::Lanczos { lobes } => Filter::lanczos(lobes),
     }
     .map_err(|e| CliError::input(format!("the scene's filter: {e}")))
 }
@@ -1663,12 +1696,15 @@ fn frame_identity(
     }
 }
 
-/// A filter's kind and size (its radius: the Gaussian's is 4σ).
+/// A filter's kind and size (its radius: the Gaussian's is 4σ; a cubic's
+/// parameters too).
 fn filter_name(filter: &Filter) -> String {
     let kind = match filter {
-        Filter::Box => "box",
-        Filter::Tent { .. } => "tent",
-        Filter::Gaussian(_) => "gaussian",
+        Filter::Box => "box".to_string(),
+        Filter::Tent { .. } => "tent".to_string(),
+        Filter::Gaussian(_) => "gaussian".to_string(),
+        Filter::Cubic { b, c } => format!("cubic B {b} C {c}"),
+        Filter::Lanczos { .. } => "lanczos".to_string(),
     };
     format!("{kind}, radius {} px", filter.radius_px())
 }

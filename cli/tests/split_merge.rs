@@ -550,3 +550,33 @@ fn splatted_crops_merge_bit_for_bit() -> TestResult {
     refused(&cv, "--film splat");
     Ok(())
 }
+
+/// The filters with negative lobes (`--filter mitchell`, `catmull-rom`,
+/// `lanczos`) render with the splatting film, the default, and are refused
+/// with the sampling film in one line (their values are no density to
+/// draw offsets from).
+#[test]
+fn negative_lobed_filters_splat_only() -> TestResult {
+    let dir = test_dir("negative-lobes")?;
+    for filter in ["mitchell", "catmull-rom", "lanczos"] {
+        let render = |film: Option<&str>| -> TestResult<std::process::Output> {
+            let mut command = fspec();
+            command.current_dir(&dir).args([
+                "render", "--quiet", "--width", "8", "--height", "8", "--spp", "1", "--filter",
+                filter, "--out", "out.exr",
+            ]);
+            if let Some(film) = film {
+                command.args(["--film", film]);
+            }
+            Ok(command.output()?)
+        };
+        let splat = render(None)?;
+        assert!(
+            splat.status.success(),
+            "{filter}: {}",
+            String::from_utf8_lossy(&splat.stderr)
+        );
+        refused(&render(Some("sample"))?, "negative lobes");
+    }
+    Ok(())
+}

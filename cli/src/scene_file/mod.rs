@@ -275,6 +275,18 @@ pub enum FilterChoice {
         /// Standard deviation, px.
         stddev_px: f32,
     },
+    /// A Mitchell–Netravali cubic of parameters `B` and `C`.
+    Cubic {
+        /// `B`.
+        b: f32,
+        /// `C`.
+        c: f32,
+    },
+    /// A Lanczos sinc of this many lobes.
+    Lanczos {
+        /// Lobes (the radius, px).
+        lobes: u32,
+    },
 }
 
 /// A rectangle of the film, pixels from its top-left corner.

@@ -1,6 +1,7 @@
 //! Pixel reconstruction filters, applied by filter importance sampling,
-//! with Mitsuba 3.9.1's three filters (src/rfilters/box.cpp, tent.cpp,
-//! gaussian.cpp) and their parameters:
+//! with Mitsuba 3.9.1's filters (src/rfilters/box.cpp, tent.cpp,
+//! gaussian.cpp, mitchell.cpp, catmullrom.cpp, lanczos.cpp) and their
+//! parameters:
 //!
 //! * Box: the sample offset is uniform in the pixel, `[−0.5, 0.5)²`.
 //!   Mitsuba's box has a fixed radius of 0.5 px and no parameter (a
@@ -13,6 +14,19 @@
 //!   `r = 4σ`, `f(x) = max(0, exp(−x²/(2σ²)) − exp(−r²/(2σ²)))`, separable
 //!   in x and y. (Mitsuba evaluates a Remez polynomial fit of the same
 //!   shifted exponential; the exponential is its target.)
+//! * Cubic (Mitchell and Netravali 1988; Mitsuba's `mitchell`, `B` and `C`
+//!   default 1/3, and `catmullrom`, `B = 0`, `C = 1/2`), radius 2 px:
+//!   `f(x) = ((12 − 9B − 6C)|x|³ + (−18 + 12B + 6C)|x|² + (6 − 2B))/6`
+//!   for `|x| < 1`, `((−B − 6C)|x|³ + (6B + 30C)|x|² + (−12B − 48C)|x| +
+//!   8B + 24C)/6` for `1 ≤ |x| < 2`, 0 beyond; `B, C ∈ [0, 1]`.
+//! * Lanczos (`lobes` `a`, default 3; radius `a` px):
+//!   `f(x) = sin(πx) sin(πx/a) / (πx · πx/a)` for `|x| ≤ a`, 1 at 0.
+//!
+//! The cubic (but for `C = 0`) and the Lanczos filters have negative
+//! lobes ([`Filter::has_negative_lobes`]): a density cannot be drawn from
+//! them, so they are applied by splatting only (the render refuses them
+//! with the sampling film), and a pixel's weight sum may then be negative
+//! (Mitsuba divides by it all the same).
 //!
 //! Instead of splatting every sample into all pixels under the filter
 //! footprint (Mitsuba), each sample's offset is drawn from the filter itself
@@ -73,13 +87,27 @@ pub const MAX_FILTER_RADIUS_PX: f32 = 64.0;
 /// The widest splat margin, px: [`Filter::splat_margin_px`] of a filter of
 /// radius [`MAX_FILTER_RADIUS_PX`], `⌈64 + 1/2⌉ − 1` (tested).
 pub const MAX_SPLAT_MARGIN_PX: u32 = 64;
-/// The largest weight one pass may splat into a pixel: every 1-D filter
-/// value is at most 1 (box 1, tent `1 − |x|/r`, Gaussian `1 − e^(−r²/2σ²)`),
-/// so `f(dx) f(dy) ≤ 1`, and a pass puts one sample in each of the at most
+/// The largest weight (in magnitude) one pass may splat into a pixel:
+/// every 1-D filter value is at most 1 in magnitude (box 1, tent
+/// `1 − |x|/r`, Gaussian `1 − e^(−r²/2σ²)`, cubic `1 − B/3` at 0 and less
+/// elsewhere for `B, C ∈ [0, 1]`, Lanczos `|sinc · sinc| ≤ 1`), so
+/// `|f(dx) f(dy)| ≤ 1`, and a pass puts one sample in each of the at most
 /// `(2M + 1)²` pixels that reach it, `M` at most [`MAX_SPLAT_MARGIN_PX`].
 /// The bound the film states' weight sums are checked against.
 pub const MAX_SPLAT_WEIGHT_PER_PASS: f64 =
     ((2 * MAX_SPLAT_MARGIN_PX + 1) * (2 * MAX_SPLAT_MARGIN_PX + 1)) as f64;
+/// Radius of the cubic filters, px (Mitsuba's `m_radius = 2`).
+pub const CUBIC_RADIUS_PX: f32 = 2.0;
+/// Mitchell and Netravali's recommended `B` and `C` (Mitsuba's
+/// `mitchell` defaults).
+pub const MITCHELL_B_C: [f32; 2] = [1.0 / 3.0, 1.0 / 3.0];
+/// The Catmull–Rom spline as a cubic filter (Mitsuba's `catmullrom`).
+pub const CATMULL_ROM_B_C: [f32; 2] = [0.0, 0.5];
+/// Mitsuba's default number of Lanczos lobes.
+pub const LANCZOS_LOBES: u32 = 3;
+/// Below this `|x|` the Lanczos filter is 1 (Mitsuba's `dr::Epsilon`,
+/// `2⁻²⁴`: the quotient's `0/0` avoided).
+const LANCZOS_ORIGIN_PX: f32 = 1.0 / 16_777_216.0;
 /// Cells of the tabulated inverse CDF: the Gaussian's offsets at the CDF
 /// values `k / INVERSE_CELLS`, interpolated linearly in between.
 const INVERSE_CELLS: usize = 1024;
@@ -100,6 +128,21 @@ pub enum Filter {
     },
     /// Truncated Gaussian (σ, r = 4σ), sampled by its inverse CDF.
     Gaussian(GaussianSampler),
+    /// Mitchell–Netravali cubic of parameters `B`, `C` (module docs),
+    /// radius [`CUBIC_RADIUS_PX`]; splatted only. Build it with
+    /// [`Filter::cubic`], which checks `B` and `C`.
+    Cubic {
+        /// `B`, in `[0, 1]`.
+        b: f32,
+        /// `C`, in `[0, 1]`.
+        c: f32,
+    },
+    /// Lanczos windowed sinc of `lobes` lobes (module docs), radius
+    /// `lobes` px; splatted only. Build it with [`Filter::lanczos`].
+    Lanczos {
+        /// Lobes, 1 to [`MAX_FILTER_RADIUS_PX`].
+        lobes: u32,
+    },
 }
 
 /// A filter parameter out of range.
@@ -146,12 +189,49 @@ impl Filter {
         })
     }
 
-    /// Whether the filter's parameters are in range (a [`Filter::Tent`]
-    /// written as a literal may not be).
+    /// Mitsuba's cubic filter of parameters `b` and `c`, each in
+    /// `[0, 1]` (Mitchell and Netravali's square of parameters, where every
+    /// value is at most 1 in magnitude; [`MITCHELL_B_C`],
+    /// [`CATMULL_ROM_B_C`]).
+    pub fn cubic(b: f32, c: f32) -> Result<Self, FilterError> {
+        for (name, value) in [("B", b), ("C", c)] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(FilterError(format!(
+                    "cubic filter {name} {value}: must be in [0, 1]"
+                )));
+            }
+        }
+        Ok(Self::Cubic { b, c })
+    }
+
+    /// Mitsuba's Lanczos filter of `lobes` lobes (1 to
+    /// [`MAX_FILTER_RADIUS_PX`]).
+    pub fn lanczos(lobes: u32) -> Result<Self, FilterError> {
+        checked_radius("lobes", lobes as f32)?;
+        if lobes == 0 {
+            return Err(FilterError("Lanczos filter of 0 lobes".into()));
+        }
+        Ok(Self::Lanczos { lobes })
+    }
+
+    /// Whether the filter's parameters are in range (a filter written as a
+    /// literal may not be).
     pub fn validate(&self) -> Result<(), FilterError> {
         match self {
             Self::Tent { radius_px } => checked_radius("radius", *radius_px).map(|_| ()),
+            Self::Cubic { b, c } => Self::cubic(*b, *c).map(|_| ()),
+            Self::Lanczos { lobes } => Self::lanczos(*lobes).map(|_| ()),
             Self::Box | Self::Gaussian(_) => Ok(()),
+        }
+    }
+
+    /// Whether the filter takes negative values somewhere: then it is
+    /// splatted only (module docs).
+    pub fn has_negative_lobes(&self) -> bool {
+        match self {
+            Self::Cubic { c, .. } => *c > 0.0,
+            Self::Lanczos { .. } => true,
+            Self::Box | Self::Tent { .. } | Self::Gaussian(_) => false,
         }
     }
 
@@ -161,6 +241,8 @@ impl Filter {
             Self::Box => 0.5,
             Self::Tent { radius_px } => *radius_px,
             Self::Gaussian(g) => g.radius_px,
+            Self::Cubic { .. } => CUBIC_RADIUS_PX,
+            Self::Lanczos { lobes } => *lobes as f32,
         }
     }
 
@@ -185,6 +267,8 @@ impl Filter {
             }
             Self::Tent { radius_px } => (1.0 - x.abs() / radius_px).max(0.0),
             Self::Gaussian(g) => g.weight(x),
+            Self::Cubic { b, c } => cubic_weight(x, *b, *c),
+            Self::Lanczos { lobes } => lanczos_weight(x, *lobes as f32),
         }
     }
 
@@ -207,13 +291,24 @@ impl Filter {
                 value.is_nan().select(f32x8::ZERO, value)
             }
             Self::Gaussian(g) => g.weight_x8(x),
+            Self::Cubic { b, c } => cubic_weight_x8(x, *b, *c),
+            // Lane by lane: `sin` has no 8-wide form here, and the filter
+            // is rare (its splat's weights are one row and one column a
+            // sample).
+            Self::Lanczos { lobes } => {
+                let lanes = x.to_array().map(|x| lanczos_weight(x, *lobes as f32));
+                f32x8::new(lanes)
+            }
         }
     }
 
-    /// An offset from the pixel centre, px, for uniform `(u, v)`.
+    /// An offset from the pixel centre, px, for uniform `(u, v)`. Filters
+    /// with negative lobes have no density to draw from: they give the
+    /// box's offsets, which the splat film uses for every filter (the
+    /// render refuses them with the sampling film).
     pub fn sample_offset(&self, u: f32, v: f32) -> (f32, f32) {
         match self {
-            Self::Box => (u - 0.5, v - 0.5),
+            Self::Box | Self::Cubic { .. } | Self::Lanczos { .. } => (u - 0.5, v - 0.5),
             Self::Tent { radius_px } => (tent_sample(u, *radius_px), tent_sample(v, *radius_px)),
             Self::Gaussian(g) => (g.sample(u), g.sample(v)),
         }
@@ -222,7 +317,7 @@ impl Filter {
     /// [`Filter::sample_offset`] for 8 lanes at once.
     pub fn sample_offset_x8(&self, u: f32x8, v: f32x8) -> (f32x8, f32x8) {
         match self {
-            Self::Box => {
+            Self::Box | Self::Cubic { .. } | Self::Lanczos { .. } => {
                 let half = f32x8::splat(0.5);
                 (u - half, v - half)
             }
@@ -232,6 +327,64 @@ impl Filter {
             }
             Self::Gaussian(g) => (g.sample_x8(u), g.sample_x8(v)),
         }
+    }
+}
+
+/// The cubic filter's coefficients `[a3, a2, a0]` (`|x| < 1`) and
+/// `[b3, b2, b1, b0]` (`1 ≤ |x| < 2`), each over 6 (module docs).
+fn cubic_coefficients(b: f32, c: f32) -> ([f32; 3], [f32; 4]) {
+    let sixth = 1.0 / 6.0;
+    (
+        [
+            (12.0 - 9.0 * b - 6.0 * c) * sixth,
+            (-18.0 + 12.0 * b + 6.0 * c) * sixth,
+            (6.0 - 2.0 * b) * sixth,
+        ],
+        [
+            (-b - 6.0 * c) * sixth,
+            (6.0 * b + 30.0 * c) * sixth,
+            (-12.0 * b - 48.0 * c) * sixth,
+            (8.0 * b + 24.0 * c) * sixth,
+        ],
+    )
+}
+
+/// The cubic filter at `x` (module docs); NaN gives 0.
+fn cubic_weight(x: f32, b: f32, c: f32) -> f32 {
+    let ([a3, a2, a0], [b3, b2, b1, b0]) = cubic_coefficients(b, c);
+    let x = x.abs();
+    if x < 1.0 {
+        (a3 * x + a2) * x * x + a0
+    } else if x < CUBIC_RADIUS_PX {
+        ((b3 * x + b2) * x + b1) * x + b0
+    } else {
+        0.0
+    }
+}
+
+/// [`cubic_weight`] for 8 lanes, with the same operations (NaN lanes fail
+/// both comparisons and give 0).
+fn cubic_weight_x8(x: f32x8, b: f32, c: f32) -> f32x8 {
+    let ([a3, a2, a0], [b3, b2, b1, b0]) = cubic_coefficients(b, c);
+    let splat = f32x8::splat;
+    let x = x.abs();
+    let inner = (splat(a3) * x + splat(a2)) * x * x + splat(a0);
+    let outer = ((splat(b3) * x + splat(b2)) * x + splat(b1)) * x + splat(b0);
+    let value = x.simd_lt(f32x8::ONE).select(inner, outer);
+    x.simd_lt(splat(CUBIC_RADIUS_PX)).select(value, f32x8::ZERO)
+}
+
+/// The Lanczos filter of `lobes` lobes at `x` (module docs); NaN gives 0.
+fn lanczos_weight(x: f32, lobes: f32) -> f32 {
+    let x = x.abs();
+    if x < LANCZOS_ORIGIN_PX {
+        1.0
+    } else if x <= lobes {
+        let x1 = core::f32::consts::PI * x;
+        let x2 = x1 / lobes;
+        (x1.sin() * x2.sin()) / (x1 * x2)
+    } else {
+        0.0
     }
 }
 
@@ -731,6 +884,116 @@ mod tests {
             Filter::tent(MAX_FILTER_RADIUS_PX)?.splat_margin_px(),
             MAX_SPLAT_MARGIN_PX
         );
+        Ok(())
+    }
+
+    /// Mitsuba 3.9.1's cubic and Lanczos filters in `f64`, written from its
+    /// plugins (src/rfilters/mitchell.cpp, lanczos.cpp) as they read: the
+    /// oracle of [`Filter::weight`].
+    fn mitsuba_cubic(x: f64, b: f64, c: f64) -> f64 {
+        let x = x.abs();
+        let (x2, x3) = (x * x, x * x * x);
+        let value = if x < 1.0 {
+            (12.0 - 9.0 * b - 6.0 * c) * x3 + (-18.0 + 12.0 * b + 6.0 * c) * x2 + (6.0 - 2.0 * b)
+        } else {
+            (-b - 6.0 * c) * x3
+                + (6.0 * b + 30.0 * c) * x2
+                + (-12.0 * b - 48.0 * c) * x
+                + (8.0 * b + 24.0 * c)
+        };
+        if x < 2.0 { value / 6.0 } else { 0.0 }
+    }
+
+    fn mitsuba_lanczos(x: f64, lobes: f64) -> f64 {
+        let x = x.abs();
+        let x1 = std::f64::consts::PI * x;
+        let x2 = x1 / lobes;
+        if x < f64::from(LANCZOS_ORIGIN_PX) {
+            1.0
+        } else if x > lobes {
+            0.0
+        } else {
+            x1.sin() * x2.sin() / (x1 * x2)
+        }
+    }
+
+    /// The cubic and Lanczos filters: their values against Mitsuba's forms
+    /// in `f64` (within 2·10⁻⁶), the 8-wide weights equal to the scalar
+    /// ones bit for bit (NaN lanes 0), a Mitchell filter's integral 1 and
+    /// the Lanczos filter's zeros at the whole pixels; both have negative
+    /// lobes (but the cubic with `C = 0`), and their parameters are checked.
+    /// A wrong `B` is far from Mitsuba's values (the negative control).
+    #[test]
+    fn cubic_and_lanczos_filters_follow_mitsuba() -> Result<(), FilterError> {
+        let [mb, mc] = MITCHELL_B_C;
+        let [cb, cc] = CATMULL_ROM_B_C;
+        let filters = [
+            (Filter::cubic(mb, mc)?, 2.0),
+            (Filter::cubic(cb, cc)?, 2.0),
+            (Filter::cubic(0.8, 0.1)?, 2.0),
+            (Filter::lanczos(LANCZOS_LOBES)?, 3.0),
+            (Filter::lanczos(2)?, 2.0),
+        ];
+        for (filter, radius) in &filters {
+            assert_eq!(filter.radius_px(), *radius);
+            assert!(filter.has_negative_lobes(), "{filter:?}");
+            let exact = |x: f64| match filter {
+                Filter::Cubic { b, c } => mitsuba_cubic(x, f64::from(*b), f64::from(*c)),
+                Filter::Lanczos { lobes } => mitsuba_lanczos(x, f64::from(*lobes)),
+                _ => f64::NAN,
+            };
+            for i in -500..=500 {
+                let x = i as f32 * radius / 400.0;
+                let error = (f64::from(filter.weight(x)) - exact(f64::from(x))).abs();
+                assert!(error < 2e-6, "{filter:?} at {x}: {error}");
+            }
+            for start in -100..=100 {
+                let x: [f32; 8] =
+                    core::array::from_fn(|lane| (start * 8 + lane as i32) as f32 * radius / 700.0);
+                let wide = filter.weight_x8(f32x8::new(x)).to_array();
+                for lane in 0..8 {
+                    assert_eq!(wide[lane].to_bits(), filter.weight(x[lane]).to_bits());
+                }
+            }
+            let nan = filter.weight_x8(f32x8::splat(f32::NAN)).to_array();
+            assert!(nan.iter().all(|&w| w == 0.0) && filter.weight(f32::NAN) == 0.0);
+            // Every value at most 1 in magnitude (MAX_SPLAT_WEIGHT_PER_PASS).
+            assert!((-4000..=4000).all(|i| filter.weight(i as f32 / 1000.0).abs() <= 1.0));
+        }
+        // Mitchell–Netravali filters integrate to 1 for every B and C.
+        for (b, c) in [(mb, mc), (cb, cc), (0.8, 0.1), (0.0, 0.0)] {
+            let steps = 40_000;
+            let h = 4.0 / f64::from(steps);
+            let integral: f64 = (0..steps)
+                .map(|i| {
+                    mitsuba_cubic(-2.0 + (f64::from(i) + 0.5) * h, f64::from(b), f64::from(c)) * h
+                })
+                .sum();
+            assert!((integral - 1.0).abs() < 1e-6, "B {b} C {c}: {integral}");
+        }
+        // Lanczos is 1 at 0 and 0 at every other whole pixel.
+        let lanczos = Filter::lanczos(LANCZOS_LOBES)?;
+        assert_eq!(lanczos.weight(0.0), 1.0);
+        for k in 1..=3 {
+            assert!(lanczos.weight(k as f32).abs() < 1e-6, "{k}");
+        }
+        assert!(!Filter::cubic(1.0, 0.0)?.has_negative_lobes());
+        for (b, c) in [(-0.1, 0.3), (0.3, 1.5), (f32::NAN, 0.3)] {
+            assert!(Filter::cubic(b, c).is_err(), "B {b} C {c}");
+            assert!(Filter::Cubic { b, c }.validate().is_err());
+        }
+        assert!(Filter::lanczos(0).is_err() && Filter::lanczos(65).is_err());
+        assert!(Filter::Lanczos { lobes: 0 }.validate().is_err());
+        // Negative control: B 0.5 instead of 1/3.
+        let wrong = Filter::cubic(0.5, mc)?;
+        let off = (0..=200)
+            .map(|i| {
+                let x = f64::from(i) / 100.0;
+                (f64::from(wrong.weight(x as f32)) - mitsuba_cubic(x, f64::from(mb), f64::from(mc)))
+                    .abs()
+            })
+            .fold(0.0, f64::max);
+        assert!(off > 1e-2, "{off}");
         Ok(())
     }
 

@@ -67,14 +67,14 @@ pub enum FilmMode {
 
 impl FilmMode {
     /// Whether `weight` can be a pixel's weight sum after `passes` passes:
-    /// finite and `≥ 0`, at most one per pass and a whole number when
-    /// sampling (the sample count), at most
-    /// [`filter::MAX_SPLAT_WEIGHT_PER_PASS`] per pass when splatting.
+    /// finite, `≥ 0`, at most one per pass and a whole number when
+    /// sampling (the sample count); at most
+    /// [`filter::MAX_SPLAT_WEIGHT_PER_PASS`] per pass in magnitude when
+    /// splatting (a filter with negative lobes can make a sum negative).
     pub fn is_weight_sum(self, weight: f64, passes: f64) -> bool {
-        let in_range = |most: f64| (0.0..=most).contains(&weight);
         match self {
-            Self::Sample => in_range(passes) && weight.fract() == 0.0,
-            Self::Splat => in_range(passes * filter::MAX_SPLAT_WEIGHT_PER_PASS),
+            Self::Sample => (0.0..=passes).contains(&weight) && weight.fract() == 0.0,
+            Self::Splat => weight.abs() <= passes * filter::MAX_SPLAT_WEIGHT_PER_PASS,
         }
     }
 

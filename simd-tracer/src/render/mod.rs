@@ -303,6 +303,9 @@ pub enum RenderError {
     Threads(String),
     /// A filter parameter is out of range.
     Filter(FilterError),
+    /// A filter with negative lobes on the sampling film, which draws
+    /// offsets from the filter as a density.
+    SampledNegativeLobes,
     /// The transport's film cannot render a range of passes apart or keep
     /// its state (control variates weight each pass by all earlier ones).
     NotSplittable,
@@ -329,6 +332,10 @@ impl core::fmt::Display for RenderError {
             Self::EmptyImage => write!(f, "width, height and samples per pixel must be at least 1"),
             Self::Threads(e) => write!(f, "cannot start worker threads: {e}"),
             Self::Filter(e) => write!(f, "{e}"),
+            Self::SampledNegativeLobes => write!(
+                f,
+                "the filter has negative lobes, which cannot be drawn as sample offsets: render it with the splatting film (--film splat, the default but with control variates)"
+            ),
             Self::NotSplittable => write!(
                 f,
                 "control variates weight each pass by every earlier pass: this transport cannot render a range of passes apart, continue a render or keep its film"
@@ -1296,6 +1303,9 @@ pub fn render_observed<T: Transport>(
         return Err(RenderError::EmptyImage);
     }
     settings.filter.validate().map_err(RenderError::Filter)?;
+    if settings.film == FilmMode::Sample && settings.filter.has_negative_lobes() {
+        return Err(RenderError::SampledNegativeLobes);
+    }
     let window = settings
         .film_window()
         .validate(settings.width, settings.height)?;

@@ -38,7 +38,10 @@
 //!   `gaussian`); `pixel_format`, `component_format`, `sample_border` and
 //!   `banner` do not change the rendered radiance and are accepted.
 //! * `rfilter`: `box`, `tent` (`radius`, default 1 px), `gaussian`
-//!   (`stddev`, default 0.5 px, truncated at 4 σ).
+//!   (`stddev`, default 0.5 px, truncated at 4 σ), `mitchell` (`B`, `C`,
+//!   default 1/3 each, in [0, 1]), `catmullrom`, `lanczos` (`lobes`,
+//!   default 3); the last three have negative lobes and need the
+//!   splatting film (the default).
 //! * `sampler`: `independent`, `stratified`, `multijitter`, `orthogonal`
 //!   and `ldsampler` (`sample_count`, default 4; `seed`, default 0). The
 //!   count is rounded as each of Mitsuba's samplers rounds it
@@ -63,6 +66,9 @@ use super::properties::Object;
 use crate::error::CliError;
 use crate::scene_file::{CropWindow, FilterChoice, MAX_IMAGE_EDGE};
 use glam::Vec3;
+use simd_tracer::film::filter::{
+    CATMULL_ROM_B_C, LANCZOS_LOBES, MAX_FILTER_RADIUS_PX, MITCHELL_B_C,
+};
 use simd_tracer::scene::camera::{Camera, CameraAxes, Projection};
 
 /// Mitsuba's film defaults, px (`src/films/hdrfilm.cpp`).
@@ -418,6 +424,34 @@ impl<'e> Importer<'e, '_> {
             "gaussian" => FilterChoice::Gaussian {
                 stddev_px: positive("stddev", DEFAULT_GAUSSIAN_STDDEV_PX)?,
             },
+            "mitchell" => {
+                let [b, c] = MITCHELL_B_C.map(f64::from);
+                let parameter = |name: &str, default: f64| -> Result<f32, CliError> {
+                    let v = object.float(name, default)?;
+                    if !(0.0..=1.0).contains(&v) {
+                        return Err(object.error(format!("{name} {v}: must be in [0, 1]")));
+                    }
+                    Ok(v as f32)
+                };
+                FilterChoice::Cubic {
+                    b: parameter("B", b)?,
+                    c: parameter("C", c)?,
+                }
+            }
+            "catmullrom" => FilterChoice::Cubic {
+                b: CATMULL_ROM_B_C[0],
+                c: CATMULL_ROM_B_C[1],
+            },
+            "lanczos" => {
+                let lobes = object.integer("lobes", i64::from(LANCZOS_LOBES))?;
+                let most = MAX_FILTER_RADIUS_PX as i64;
+                if !(1..=most).contains(&lobes) {
+                    return Err(object.error(format!("lobes {lobes}: must be 1 … {most}")));
+                }
+                FilterChoice::Lanczos {
+                    lobes: lobes as u32,
+                }
+            }
             _ => {
                 self.unsupported(e, "a Gaussian filter is used")?;
                 return Ok(FilterChoice::Gaussian {
