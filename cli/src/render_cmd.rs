@@ -23,9 +23,7 @@ use crate::sensor_file::{ObserverChoice, load_sensor_csv};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
-use simd_tracer::film::filter::{
-    CATMULL_ROM_B_C, Filter, GAUSSIAN_SIGMA_PX, LANCZOS_LOBES, MITCHELL_B_C, TENT_RADIUS_PX,
-};
+use simd_tracer::film::filter::{Filter, GAUSSIAN_SIGMA_PX};
 use simd_tracer::film::{AlphaMode, Buffer, FilmMode};
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{
@@ -170,6 +168,21 @@ pub enum FilterKind {
     /// Lanczos sinc of 3 lobes, radius 3 px (Mitsuba's `lanczos`;
     /// splatting film only).
     Lanczos,
+}
+
+impl From<FilterKind> for FilterChoice {
+    /// The filter of the flag's name (`FilterChoice::named`, Mitsuba's
+    /// defaults).
+    fn from(kind: FilterKind) -> Self {
+        let name = kind
+            .to_possible_value()
+            .map(|value| value.get_name().to_string());
+        name.as_deref()
+            .and_then(FilterChoice::named)
+            .unwrap_or(FilterChoice::Gaussian {
+                stddev_px: GAUSSIAN_SIGMA_PX,
+            })
+    }
 }
 
 /// How samples reach pixels.
@@ -531,23 +544,9 @@ pub fn settings_from(
         },
         seed: args.seed.or(defaults.render.seed).unwrap_or(0),
         filter: match (args.filter, defaults.render.filter) {
-            (Some(FilterKind::Box), _) => Filter::Box,
-            (Some(FilterKind::Tent), _) => Filter::Tent {
-                radius_px: TENT_RADIUS_PX,
-            },
-            (Some(FilterKind::Gaussian), _) | (None, None) => Filter::gaussian(),
-            (Some(FilterKind::Mitchell), _) => Filter::Cubic {
-                b: MITCHELL_B_C[0],
-                c: MITCHELL_B_C[1],
-            },
-            (Some(FilterKind::CatmullRom), _) => Filter::Cubic {
-                b: CATMULL_ROM_B_C[0],
-                c: CATMULL_ROM_B_C[1],
-            },
-            (Some(FilterKind::Lanczos), _) => Filter::Lanczos {
-                lobes: LANCZOS_LOBES,
-            },
+            (Some(kind), _) => filter_of(FilterChoice::from(kind))?,
             (None, Some(choice)) => filter_of(choice)?,
+            (None, None) => Filter::gaussian(),
         },
         threads: args.threads,
         time_limit,

@@ -189,6 +189,47 @@ fn render_defaults_are_read() -> TestResult {
         message.contains("film `blur`: use sample or splat"),
         "{message}"
     );
+    // The filter, by each of its names (the same as `--filter`'s), and a
+    // name that is none.
+    use clap::ValueEnum;
+    use fspec_cli::render_cmd::FilterKind;
+    use fspec_cli::scene_file::{FILTER_NAMES, FilterChoice};
+    for name in FILTER_NAMES {
+        let text = format!("{BASE}\n[render]\nfilter = \"{name}\"\n");
+        let loaded = load_scene_file(&write(&dir, &format!("{name}.toml"), &text)?)?;
+        assert_eq!(loaded.render.filter, FilterChoice::named(name), "{name}");
+        assert!(loaded.render.filter.is_some(), "{name}");
+    }
+    let flags: Vec<String> = FilterKind::value_variants()
+        .iter()
+        .filter_map(|kind| kind.to_possible_value().map(|v| v.get_name().to_string()))
+        .collect();
+    assert_eq!(
+        flags, FILTER_NAMES,
+        "--filter and [render] filter name the same filters"
+    );
+    for kind in FilterKind::value_variants() {
+        let name = kind.to_possible_value().map(|v| v.get_name().to_string());
+        assert_eq!(
+            Some(FilterChoice::from(*kind)),
+            name.as_deref().and_then(FilterChoice::named)
+        );
+    }
+    assert_eq!(
+        FilterChoice::named("mitchell"),
+        Some(FilterChoice::Cubic {
+            b: 1.0 / 3.0,
+            c: 1.0 / 3.0
+        })
+    );
+    let (_, message) = scene_error(
+        "filter-name",
+        &format!("{BASE}\n[render]\nfilter = \"sinc\"\n"),
+    )?;
+    assert!(
+        message.contains("filter `sinc`: use box, tent, gaussian, mitchell, catmull-rom, lanczos"),
+        "{message}"
+    );
     Ok(())
 }
 

@@ -289,6 +289,44 @@ pub enum FilterChoice {
     },
 }
 
+/// The filters a TOML scene's `[render] filter` and `fspec render
+/// --filter` may name, each with Mitsuba's default parameters.
+pub const FILTER_NAMES: [&str; 6] = [
+    "box",
+    "tent",
+    "gaussian",
+    "mitchell",
+    "catmull-rom",
+    "lanczos",
+];
+
+impl FilterChoice {
+    /// The filter of one of [`FILTER_NAMES`] with Mitsuba's defaults (tent
+    /// radius 1 px, Gaussian σ 0.5 px, Mitchell `B = C = 1/3`, Catmull–Rom
+    /// `B = 0`, `C = 1/2`, Lanczos 3 lobes); `None` for another name.
+    pub fn named(name: &str) -> Option<Self> {
+        use simd_tracer::film::filter::{
+            CATMULL_ROM_B_C, GAUSSIAN_SIGMA_PX, LANCZOS_LOBES, MITCHELL_B_C, TENT_RADIUS_PX,
+        };
+        let cubic = |[b, c]: [f32; 2]| Self::Cubic { b, c };
+        match name {
+            "box" => Some(Self::Box),
+            "tent" => Some(Self::Tent {
+                radius_px: TENT_RADIUS_PX,
+            }),
+            "gaussian" => Some(Self::Gaussian {
+                stddev_px: GAUSSIAN_SIGMA_PX,
+            }),
+            "mitchell" => Some(cubic(MITCHELL_B_C)),
+            "catmull-rom" => Some(cubic(CATMULL_ROM_B_C)),
+            "lanczos" => Some(Self::Lanczos {
+                lobes: LANCZOS_LOBES,
+            }),
+            _ => None,
+        }
+    }
+}
+
 /// A rectangle of the film, pixels from its top-left corner.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CropWindow {

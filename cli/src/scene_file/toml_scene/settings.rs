@@ -7,7 +7,9 @@ use crate::coeffs::MAX_COEFFS;
 use crate::error::CliError;
 use crate::scene_file::construction::MapSettings;
 use crate::scene_file::toml_reader::Item;
-use crate::scene_file::{MAX_IMAGE_EDGE, RenderDefaults, SAMPLING_NAMES, TRANSPORT_NAMES};
+use crate::scene_file::{
+    FILTER_NAMES, FilterChoice, MAX_IMAGE_EDGE, RenderDefaults, SAMPLING_NAMES, TRANSPORT_NAMES,
+};
 use crate::sensor_file::{ObserverChoice, load_sensor_csv};
 use glam::{Mat3, Vec3};
 use simd_tracer::film::FilmMode;
@@ -30,6 +32,7 @@ impl Loader<'_> {
                 "seed",
                 "hide_emitters",
                 "film",
+                "filter",
                 "transport",
                 "sampling",
                 "coeffs",
@@ -93,6 +96,18 @@ impl Loader<'_> {
                     let name = i.string(src)?;
                     FilmMode::from_name(name)
                         .ok_or_else(|| i.err(src, format!("film `{name}`: use sample or splat")))
+                })
+                .transpose()?,
+            filter: table
+                .get("filter")
+                .map(|i| {
+                    let name = i.string(src)?;
+                    FilterChoice::named(name).ok_or_else(|| {
+                        i.err(
+                            src,
+                            format!("filter `{name}`: use {}", FILTER_NAMES.join(", ")),
+                        )
+                    })
                 })
                 .transpose()?,
             transport: named("transport", &TRANSPORT_NAMES)?,
