@@ -433,15 +433,19 @@ fn ours(path: &Path, seed: u64) -> TestResult<Image> {
 
 /// Our render with `N` Fourier coefficients.
 fn ours_with<const N: usize>(path: &Path, seed: u64) -> TestResult<Image> {
+    ours_at::<N>(path, seed, SPP)
+}
+
+/// Our render with `N` Fourier coefficients and `spp` samples.
+fn ours_at<const N: usize>(path: &Path, seed: u64, spp: u32) -> TestResult<Image> {
     let loaded = load_scene_file(path)?;
     let scene = loaded.builder.build()?;
     let transport = FourierTransport::<N>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-    let result = render(
-        &transport,
-        &scene,
-        &settings(&loaded.render, seed)?,
-        &mut |_| true,
-    )?;
+    let settings = RenderSettings {
+        spp,
+        ..settings(&loaded.render, seed)?
+    };
+    let result = render(&transport, &scene, &settings, &mut |_| true)?;
     Ok(Image {
         width: result.width as usize,
         height: result.height as usize,
@@ -891,29 +895,14 @@ fn edge_profile(image: &Image) -> Vec<f64> {
 #[test]
 fn negative_lobed_filters_ring_as_mitsubas() -> TestResult {
     let render_profile = |path: &Path| -> TestResult<Vec<f64>> {
-        let loaded = load_scene_file(path)?;
-        let scene = loaded.builder.build()?;
-        let transport =
-            FourierTransport::<12>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-        let settings = RenderSettings {
-            spp: PROFILE_SPP,
-            ..settings(&loaded.render, SEED)?
-        };
-        assert_eq!(settings.film, FilmMode::Splat, "{}", path.display());
-        let result = render(&transport, &scene, &settings, &mut |_| true)?;
-        let image = Image {
-            width: result.width as usize,
-            height: result.height as usize,
-            rgb: result
-                .xyz
-                .iter()
-                .map(|xyz| {
-                    let LinearSrgb { r, g, b } = xyz.to_linear_srgb();
-                    [r, g, b]
-                })
-                .collect(),
-        };
-        Ok(edge_profile(&image))
+        let defaults = load_scene_file(path)?.render;
+        assert_eq!(
+            settings(&defaults, SEED)?.film,
+            FilmMode::Splat,
+            "{}",
+            path.display()
+        );
+        Ok(edge_profile(&ours_at::<12>(path, SEED, PROFILE_SPP)?))
     };
     let largest = |a: &[f64], b: &[f64]| {
         a.iter()

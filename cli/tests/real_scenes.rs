@@ -978,6 +978,25 @@ fn write_png(path: &Path, size: (u32, u32), color: png::ColorType, data: &[u8]) 
     Ok(())
 }
 
+/// The mean over the film plane of a pinhole camera of vertical field of
+/// view `fov_deg` (the film's smaller side, [`SIZE`]) of `f(cos θ)`, `θ`
+/// the angle of a pixel's ray to the view axis (a 400 × 400 midpoint rule):
+/// the closed forms of a flat surface that fills the view head-on.
+fn film_plane_mean(fov_deg: f64, f: impl Fn(f64) -> f64) -> f64 {
+    let half = (fov_deg / 2.0).to_radians().tan();
+    let (wide, high) = (f64::from(SIZE.0), f64::from(SIZE.1));
+    let steps = 400;
+    let mut sum = 0.0;
+    for i in 0..steps {
+        for j in 0..steps {
+            let x = half * wide / high * (2.0 * (i as f64 + 0.5) / steps as f64 - 1.0);
+            let y = half * (2.0 * (j as f64 + 0.5) / steps as f64 - 1.0);
+            sum += f(1.0 / (1.0 + x * x + y * y).sqrt());
+        }
+    }
+    sum / (steps * steps) as f64
+}
+
 /// A scene of a 4 × 4 floor of the material `material` (its lines of
 /// `[materials.floor]`) seen from 3 units above with a field of view of
 /// `fov_deg`, under a directional light `light_deg` off the zenith
@@ -1230,23 +1249,12 @@ fn toml_principled_matches_its_closed_form() -> TestResult {
     let lambert = mean_y(render_xyz(&fourier, &load(&lambert_path)?, 4, 1)?);
     let ratio = mean_y(render_xyz(&fourier, &flat, 4, 1)?) / lambert;
     let burley = mean_y(render_xyz(&fourier, &load(&burley_path)?, 4, 1)?) / lambert;
-    // The closed form over the film plane: the smaller side spans the
-    // field of view.
+    // The closed form over the film plane.
     let w = |cos: f64| (1.0 - cos).clamp(0.0, 1.0).powi(5);
-    let half = (fov_deg / 2.0).to_radians().tan();
-    let (wide, high) = (f64::from(SIZE.0), f64::from(SIZE.1));
-    let steps = 400;
-    let mut sum = 0.0;
-    for i in 0..steps {
-        for j in 0..steps {
-            let x = half * wide / high * (2.0 * (i as f64 + 0.5) / steps as f64 - 1.0);
-            let y = half * (2.0 * (j as f64 + 0.5) / steps as f64 - 1.0);
-            let cos_o = 1.0 / (1.0 + x * x + y * y).sqrt();
-            let fss = (1.0 - w(cos_o)) * (1.0 - w(cos_l));
-            sum += 1.25 * (fss * (1.0 / (cos_o + cos_l) - 0.5) + 0.5);
-        }
-    }
-    let expected = sum / (steps * steps) as f64;
+    let expected = film_plane_mean(fov_deg, |cos_o| {
+        let fss = (1.0 - w(cos_o)) * (1.0 - w(cos_l));
+        1.25 * (fss * (1.0 / (cos_o + cos_l) - 0.5) + 0.5)
+    });
     println!(
         "principled flatness 1: ratio {ratio:.5}, closed form {expected:.5}; flatness 0: {burley:.5}"
     );
@@ -1367,20 +1375,10 @@ transform = [{{ scale = 2 }}]
     let plain = mean_y(render_xyz(&fourier, &load(&plain_path)?, 64, 1)?);
     let ratio = mean_y(render_xyz(&fourier, &tinted, 64, 1)?) / plain;
     let swapped = mean_y(render_xyz(&fourier, &load(&swapped_path)?, 64, 1)?) / plain;
-    let half = (fov_deg / 2.0).to_radians().tan();
-    let (wide, high) = (f64::from(SIZE.0), f64::from(SIZE.1));
-    let steps = 400;
-    let mut sum = 0.0;
-    for i in 0..steps {
-        for j in 0..steps {
-            let x = half * wide / high * (2.0 * (i as f64 + 0.5) / steps as f64 - 1.0);
-            let y = half * (2.0 * (j as f64 + 0.5) / steps as f64 - 1.0);
-            let cos_o = 1.0 / (1.0 + x * x + y * y).sqrt();
-            let r = f64::from(thin_dielectric_reflectance(cos_o as f32, 1.5));
-            sum += transmittance * (1.0 - r) + reflectance * r;
-        }
-    }
-    let expected = sum / (steps * steps) as f64;
+    let expected = film_plane_mean(fov_deg, |cos_o| {
+        let r = f64::from(thin_dielectric_reflectance(cos_o as f32, 1.5));
+        transmittance * (1.0 - r) + reflectance * r
+    });
     println!("tinted pane: ratio {ratio:.5}, closed form {expected:.5}; swapped {swapped:.5}");
     assert!(
         (ratio / expected - 1.0).abs() < 3e-3,
