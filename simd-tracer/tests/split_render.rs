@@ -547,3 +547,30 @@ fn control_variates_refuse_to_splat() -> TestResult {
     assert!(matches!(result, Err(RenderError::CannotSplat)));
     Ok(())
 }
+
+/// Filters with negative lobes are refused by the sampling film (no
+/// density to draw offsets from) and render with the splatting one.
+#[test]
+fn negative_lobed_filters_refuse_the_sampling_film() -> TestResult {
+    let scene = scene("cornell")?;
+    let transport = FourierTransport::<8>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
+    for filter in [Filter::cubic(1.0 / 3.0, 1.0 / 3.0)?, Filter::lanczos(3)?] {
+        let with = |film| RenderSettings {
+            filter: filter.clone(),
+            ..settings(1, None, film)
+        };
+        let sampled = render(&transport, &scene, &with(FilmMode::Sample), &mut |_| true);
+        assert!(
+            matches!(sampled, Err(RenderError::SampledNegativeLobes)),
+            "{filter:?}"
+        );
+        assert!(render(&transport, &scene, &with(FilmMode::Splat), &mut |_| true).is_ok());
+    }
+    // A filter without negative lobes samples.
+    let tent = RenderSettings {
+        filter: Filter::tent(1.0)?,
+        ..settings(1, None, FilmMode::Sample)
+    };
+    assert!(render(&transport, &scene, &tent, &mut |_| true).is_ok());
+    Ok(())
+}
