@@ -10,6 +10,7 @@ use simd_tracer::film::filter::Filter;
 use simd_tracer::integrator::IntegratorSettings;
 use simd_tracer::render::{RenderSettings, render};
 use simd_tracer::scene::Scene;
+use simd_tracer::shading::material::Material;
 use simd_tracer::transport::{FourierTransport, SampledTransport, Transport};
 use spectral_core::color::Xyz;
 use spectral_core::delta_e::delta_e2000;
@@ -139,6 +140,20 @@ fn ply_meshes_under_an_environment_map_agree_in_fourier_and_sampled() -> TestRes
         "a 10 % brighter map passes: {wrong} vs noise {noise}"
     );
     Ok(())
+}
+
+/// The material named `name` in `scene`.
+fn material<'a>(scene: &'a Scene, name: &str) -> TestResult<&'a Material> {
+    scene
+        .materials()
+        .iter()
+        .find(|m| m.name == name)
+        .ok_or_else(|| format!("no material `{name}`").into())
+}
+
+/// The mean luminance `Y` of an image.
+fn mean_y(image: &[Xyz]) -> f64 {
+    image.iter().map(|x| x.y).sum::<f64>() / image.len() as f64
 }
 
 /// A scene file in a fresh directory with the scenes' assets reachable:
@@ -875,11 +890,7 @@ transform = [{{ translate = [0, 0, 1] }}]
     };
     let (_dir, masked_path) = scene("card-masked", &text("opacity = 0.3"))?;
     let masked = load(&masked_path)?;
-    let card = masked
-        .materials()
-        .iter()
-        .find(|m| m.name == "card")
-        .ok_or("no card")?;
+    let card = material(&masked, "card")?;
     assert_eq!(card.sides, Sides::Both);
     let Bsdf::Mask(mask) = &card.bsdf else {
         return Err("the card is not masked".into());
@@ -890,9 +901,8 @@ transform = [{{ translate = [0, 0, 1] }}]
     let open = load(&open_path)?;
     let fourier = FourierTransport::<8>::new(masked.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
     let spp = 64;
-    let mean_y = |image: Vec<Xyz>| image.iter().map(|x| x.y).sum::<f64>() / image.len() as f64;
-    let fraction = mean_y(render_xyz(&fourier, &masked, spp, 1)?)
-        / mean_y(render_xyz(&fourier, &open, spp, 1)?);
+    let fraction = mean_y(&render_xyz(&fourier, &masked, spp, 1)?)
+        / mean_y(&render_xyz(&fourier, &open, spp, 1)?);
     let samples = f64::from(SIZE.0 * SIZE.1 * spp);
     let sigma = (0.7 * 0.3 / samples).sqrt();
     println!("card of opacity 0.3: passes {fraction:.5} ± {sigma:.5}");
@@ -910,11 +920,7 @@ transform = [{{ translate = [0, 0, 1] }}]
         )),
     )?;
     let textured = load(&path)?;
-    let card = textured
-        .materials()
-        .iter()
-        .find(|m| m.name == "card")
-        .ok_or("no card")?;
+    let card = material(&textured, "card")?;
     let Bsdf::Mask(mask) = &card.bsdf else {
         return Err("the card is not masked".into());
     };
@@ -1064,20 +1070,15 @@ fn toml_normal_and_bump_textures_tilt_the_shading_normal() -> TestResult {
         &text(&format!("normal_texture = \"{}\"", png.display())),
     )?;
     let mapped = load(&mapped_path)?;
-    let floor = mapped
-        .materials()
-        .iter()
-        .find(|m| m.name == "floor")
-        .ok_or("no floor")?;
+    let floor = material(&mapped, "floor")?;
     let Bsdf::NormalMap(map) = &floor.bsdf else {
         return Err("the floor has no normal map".into());
     };
     assert_eq!(map.frame, MapFrame::Surface);
     assert!(map.flip_invalid && map.shadowing && !map.nested_front_only);
     let fourier = FourierTransport::<8>::new(mapped.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-    let mean_y = |image: Vec<Xyz>| image.iter().map(|x| x.y).sum::<f64>() / image.len() as f64;
-    let ratio = mean_y(render_xyz(&fourier, &mapped, 4, 1)?)
-        / mean_y(render_xyz(&fourier, &load(&flat_path)?, 4, 1)?);
+    let ratio = mean_y(&render_xyz(&fourier, &mapped, 4, 1)?)
+        / mean_y(&render_xyz(&fourier, &load(&flat_path)?, 4, 1)?);
     let n = texel.map(|b| 2.0 * f64::from(b) / 255.0 - 1.0);
     let length = n.iter().map(|c| c * c).sum::<f64>().sqrt();
     let [nx, _, nz] = n.map(|c| c / length);
@@ -1108,8 +1109,8 @@ fn toml_normal_and_bump_textures_tilt_the_shading_normal() -> TestResult {
         )),
     )?;
     let bumped = load(&bumped_path)?;
-    let ratio = mean_y(render_xyz(&fourier, &bumped, 4, 1)?)
-        / mean_y(render_xyz(&fourier, &load(&flat_path)?, 4, 1)?);
+    let ratio = mean_y(&render_xyz(&fourier, &bumped, 4, 1)?)
+        / mean_y(&render_xyz(&fourier, &load(&flat_path)?, 4, 1)?);
     let tilt = 0.4f64.atan();
     let alpha_sq = (tilt.tan().powi(2) / 8.0).min(1.0);
     let g = 2.0 / (1.0 + (1.0 + alpha_sq * (sin_l / cos_l).powi(2)).sqrt());
@@ -1232,12 +1233,7 @@ fn toml_principled_matches_its_closed_form() -> TestResult {
     let (_d, burley_path) = scene("principled-burley", &text(principled))?;
     let (_d, lambert_path) = scene("principled-lambert", &text("type = \"lambert\""))?;
     let flat = load(&flat_path)?;
-    let Some(Bsdf::Principled(p)) = flat
-        .materials()
-        .iter()
-        .find(|m| m.name == "floor")
-        .map(|m| &m.bsdf)
-    else {
+    let Bsdf::Principled(p) = &material(&flat, "floor")?.bsdf else {
         return Err("the floor is not principled".into());
     };
     assert_eq!(
@@ -1245,10 +1241,9 @@ fn toml_principled_matches_its_closed_form() -> TestResult {
         (1.0, Fraction::Constant(1.0), Fraction::Constant(0.0))
     );
     let fourier = FourierTransport::<8>::new(flat.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-    let mean_y = |image: Vec<Xyz>| image.iter().map(|x| x.y).sum::<f64>() / image.len() as f64;
-    let lambert = mean_y(render_xyz(&fourier, &load(&lambert_path)?, 4, 1)?);
-    let ratio = mean_y(render_xyz(&fourier, &flat, 4, 1)?) / lambert;
-    let burley = mean_y(render_xyz(&fourier, &load(&burley_path)?, 4, 1)?) / lambert;
+    let lambert = mean_y(&render_xyz(&fourier, &load(&lambert_path)?, 4, 1)?);
+    let ratio = mean_y(&render_xyz(&fourier, &flat, 4, 1)?) / lambert;
+    let burley = mean_y(&render_xyz(&fourier, &load(&burley_path)?, 4, 1)?) / lambert;
     // The closed form over the film plane.
     let w = |cos: f64| (1.0 - cos).clamp(0.0, 1.0).powi(5);
     let expected = film_plane_mean(fov_deg, |cos_o| {
@@ -1352,13 +1347,9 @@ transform = [{{ scale = 2 }}]
     let (_d, tinted_path) = scene("tints", &text(&tints(reflectance, transmittance)))?;
     let (_d, swapped_path) = scene("tints-swapped", &text(&tints(transmittance, reflectance)))?;
     let tinted = load(&tinted_path)?;
-    let Some(Bsdf::ThinDielectric {
+    let Bsdf::ThinDielectric {
         tints: Some(ids), ..
-    }) = tinted
-        .materials()
-        .iter()
-        .find(|m| m.name == "pane")
-        .map(|m| &m.bsdf)
+    } = &material(&tinted, "pane")?.bsdf
     else {
         return Err("the pane has no tints".into());
     };
@@ -1371,10 +1362,9 @@ transform = [{{ scale = 2 }}]
         (reflectance as f32, transmittance as f32)
     );
     let fourier = FourierTransport::<8>::new(tinted.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
-    let mean_y = |image: Vec<Xyz>| image.iter().map(|x| x.y).sum::<f64>() / image.len() as f64;
-    let plain = mean_y(render_xyz(&fourier, &load(&plain_path)?, 64, 1)?);
-    let ratio = mean_y(render_xyz(&fourier, &tinted, 64, 1)?) / plain;
-    let swapped = mean_y(render_xyz(&fourier, &load(&swapped_path)?, 64, 1)?) / plain;
+    let plain = mean_y(&render_xyz(&fourier, &load(&plain_path)?, 64, 1)?);
+    let ratio = mean_y(&render_xyz(&fourier, &tinted, 64, 1)?) / plain;
+    let swapped = mean_y(&render_xyz(&fourier, &load(&swapped_path)?, 64, 1)?) / plain;
     let expected = film_plane_mean(fov_deg, |cos_o| {
         let r = f64::from(thin_dielectric_reflectance(cos_o as f32, 1.5));
         transmittance * (1.0 - r) + reflectance * r
@@ -1411,14 +1401,14 @@ fn toml_roughness_texture_is_the_roughness_at_each_hit() -> TestResult {
             FourierTransport::<8>::new(scene.range(), Buffer::Spectral, XyzRoute::Zeroth)?;
         render_xyz(&fourier, scene, 4, 7)
     };
-    for (name, material) in [
+    for (name, keys_of_kind) in [
         (
             "conductor",
             "type = \"conductor\"\nn_const = 0.2\nk_const = 3",
         ),
         ("dielectric", "type = \"dielectric\"\nior = 1.5"),
     ] {
-        let text = |keys: &str| floor_under_the_sun(&format!("{material}\n{keys}"), 30.0, 35.0);
+        let text = |keys: &str| floor_under_the_sun(&format!("{keys_of_kind}\n{keys}"), 30.0, 35.0);
         let (_d, mapped_path) = scene(
             &format!("roughness-map-{name}"),
             // Nearest: one tap of weight 1, so the texel is read exactly
@@ -1429,12 +1419,7 @@ fn toml_roughness_texture_is_the_roughness_at_each_hit() -> TestResult {
             )),
         )?;
         let mapped = load(&mapped_path)?;
-        let Some(Bsdf::RoughnessMap(map)) = mapped
-            .materials()
-            .iter()
-            .find(|m| m.name == "floor")
-            .map(|m| &m.bsdf)
-        else {
+        let Bsdf::RoughnessMap(map) = &material(&mapped, "floor")?.bsdf else {
             return Err(format!("{name}: no roughness map").into());
         };
         let Fraction::Texture(id) = map.alpha_u else {

@@ -20,6 +20,7 @@
 use super::{Bsdf, BsdfEval, BsdfSample, Fraction, MaterialTables, ShadingPoint};
 use crate::shading::microfacet::Microfacet;
 use glam::Vec3;
+use std::borrow::Cow;
 
 /// A conductor or dielectric with textured roughness (module docs).
 #[derive(Debug, Clone, PartialEq)]
@@ -40,8 +41,10 @@ impl RoughnessMap {
         self.alpha_u != self.alpha_v || self.nested.needs_tangent()
     }
 
-    /// The nested BSDF with the roughness at `p`.
-    fn at(&self, tables: &MaterialTables<'_>, p: &ShadingPoint) -> Bsdf {
+    /// The nested BSDF with the roughness at `p` (a nested BSDF without a
+    /// microfacet roughness as it is, borrowed: no copy of a boxed BSDF per
+    /// shading call).
+    fn at(&self, tables: &MaterialTables<'_>, p: &ShadingPoint) -> Cow<'_, Bsdf> {
         let (alpha_u, alpha_v) = (self.alpha_u.at(tables, p.uv), self.alpha_v.at(tables, p.uv));
         let rough = |m: &Microfacet| Microfacet {
             alpha: alpha_u,
@@ -52,24 +55,24 @@ impl RoughnessMap {
             Bsdf::Conductor {
                 fresnel,
                 microfacet,
-            } => Bsdf::Conductor {
+            } => Cow::Owned(Bsdf::Conductor {
                 fresnel: *fresnel,
                 microfacet: rough(microfacet),
-            },
+            }),
             Bsdf::Dielectric {
                 outside,
                 inside,
                 ior,
                 microfacet,
                 tints,
-            } => Bsdf::Dielectric {
+            } => Cow::Owned(Bsdf::Dielectric {
                 outside: *outside,
                 inside: *inside,
                 ior: *ior,
                 microfacet: rough(microfacet),
                 tints: *tints,
-            },
-            other => other.clone(),
+            }),
+            other => Cow::Borrowed(other),
         }
     }
 

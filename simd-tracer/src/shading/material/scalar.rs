@@ -10,10 +10,12 @@ use super::interface::{
 };
 use super::lane_spectrum::LaneSpectrum;
 use super::{
-    Bsdf, BsdfEval, BsdfSample, FLUORESCENT_LOBE_PROBABILITY, ShadingPoint, angular_ref,
-    direction_ior,
+    Bsdf, BsdfEval, BsdfSample, FLUORESCENT_LOBE_PROBABILITY, ShadingPoint, SpecularTints,
+    angular_ref, direction_ior,
 };
+use crate::ids::AngularId;
 use crate::shading::microfacet;
+use crate::spectra::angular::Ior;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -121,12 +123,7 @@ impl Bsdf {
                 microfacet: model,
                 tints,
             } => {
-                let (ior_value, dispersed) = direction_ior(ior, p.hero_nm);
-                let interface = if p.front {
-                    Interface::dielectric(*outside, ior_value, dispersed, *tints)
-                } else {
-                    Interface::dielectric(*inside, 1.0 / ior_value, dispersed, *tints)
-                };
+                let interface = dielectric_seen_from(p, [*outside, *inside], ior, *tints);
                 if model.is_smooth() {
                     return sample_smooth_interface(
                         tables, p.n, wo, wo_local.z, u_lobe, &interface,
@@ -168,7 +165,7 @@ impl Bsdf {
                         weight: model.g2(wo_local, wi_local)
                             / (model.g1(wo_local) * eta * eta * p_transmit),
                         spectrum: transmitted,
-                        terminate_secondary: dispersed,
+                        terminate_secondary: interface.dispersed,
                         fluorophore: None,
                     })
                 }
@@ -365,12 +362,7 @@ impl Bsdf {
                 if model.is_smooth() || wi_local.z == 0.0 {
                     return BsdfEval::ZERO;
                 }
-                let (ior_value, _) = direction_ior(ior, p.hero_nm);
-                let interface = if p.front {
-                    Interface::dielectric(*outside, ior_value, false, *tints)
-                } else {
-                    Interface::dielectric(*inside, 1.0 / ior_value, false, *tints)
-                };
+                let interface = dielectric_seen_from(p, [*outside, *inside], ior, *tints);
                 eval_rough_dielectric(tables, wo_local, wi_local, model, &interface)
             }
             Self::Coated { .. } => self
@@ -384,6 +376,24 @@ impl Bsdf {
             Self::RoughnessMap(map) => map.eval(tables, p, wo, wi),
             Self::Principled(principled) => principled.eval(tables, p, wo, wi),
         }
+    }
+}
+
+/// The interface a dielectric of tables `[outside, inside]` shows from
+/// `p`'s side: the outside's table and `η`, or the inside's and `1/η`, `η`
+/// the index for directions ([`direction_ior`]: the hero wavelength's when
+/// it disperses).
+fn dielectric_seen_from(
+    p: &ShadingPoint,
+    [outside, inside]: [AngularId; 2],
+    ior: &Ior,
+    tints: Option<SpecularTints>,
+) -> Interface {
+    let (ior_value, dispersed) = direction_ior(ior, p.hero_nm);
+    if p.front {
+        Interface::dielectric(outside, ior_value, dispersed, tints)
+    } else {
+        Interface::dielectric(inside, 1.0 / ior_value, dispersed, tints)
     }
 }
 
