@@ -715,10 +715,15 @@ fn masks_follow_mitsuba() -> TestResult {
         &["needs one nested BSDF"],
     )?;
     refused(
-        "mask-checkerboard",
-        &masked("<texture type=\"checkerboard\" name=\"opacity\"/>", diffuse),
+        "mask-mesh-attribute",
+        &masked(
+            "<texture type=\"mesh_attribute\" name=\"opacity\"><string name=\"name\" value=\"vertex_color\"/></texture>",
+            diffuse,
+        ),
         8,
-        &["is not supported as an opacity, weight or roughness (bitmap)"],
+        &[
+            "is not supported as an opacity, weight or roughness (bitmap, checkerboard, rawconstant)",
+        ],
     )?;
     refused(
         "mask-nan",
@@ -842,7 +847,7 @@ fn normal_maps_follow_mitsuba() -> TestResult {
             "<bsdf type=\"normalmap\"><texture type=\"checkerboard\" name=\"normalmap\"/>{diffuse}</bsdf>"
         )),
         8,
-        &["is not supported as a normal map (bitmap)"],
+        &["is not supported as a normal map (bitmap, rawconstant)"],
     )?;
     Ok(())
 }
@@ -1462,5 +1467,167 @@ fn roughness_maps_follow_mitsuba() -> TestResult {
     ] {
         refused(name, &with(plugin, &params), 8, &[needle])?;
     }
+    Ok(())
+}
+
+/// A `checkerboard` read as a fraction (here a roughness) follows
+/// Mitsuba's `eval_1`, which puts `color0` where exactly one coordinate's
+/// fractional part is above ½, the opposite of its `eval` for colours:
+/// looked up at points of each kind, the roughness texture reads `color1`
+/// where a reflectance checkerboard of the same colours reads `color0`
+/// (the negative control of the orientation), and it repeats.
+#[test]
+fn checkerboard_fractions_follow_mitsubas_eval_1() -> TestResult {
+    let dir = test_dir("checkerboard-fractions")?;
+    let checker = |name: &str| {
+        format!(
+            "<texture type=\"checkerboard\" name=\"{name}\"><float name=\"color0\" value=\"0.05\"/><float name=\"color1\" value=\"0.3\"/><transform name=\"to_uv\"><scale x=\"2\" y=\"2\"/></transform></texture>"
+        )
+    };
+    let body = format!(
+        "    <shape type=\"rectangle\"><bsdf type=\"roughconductor\">{}</bsdf></shape>\n    <shape type=\"sphere\"><bsdf type=\"diffuse\">{}</bsdf></shape>\n    <emitter type=\"constant\"/>",
+        checker("alpha"),
+        checker("reflectance")
+    );
+    let path = write(&dir, "checker.xml", &scene(&body))?;
+    let loaded = load(&path, &[], false)?;
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let built = loaded.builder.build()?;
+    let [fraction, albedo] = [0, 1].map(|k| &built.textures()[k]);
+    // Mitsuba's (u, v), the point's `to_uv` image (scale 2), eval_1's value.
+    for (u, v, expected) in [
+        (0.1, 0.1, 0.3),   // (0.2, 0.2): neither above ½
+        (0.35, 0.1, 0.05), // (0.7, 0.2): one
+        (0.1, 0.35, 0.05), // (0.2, 0.7): the other
+        (0.35, 0.35, 0.3), // (0.7, 0.7): both
+        (0.6, 0.1, 0.3),   // (1.2, 0.2): repeated
+    ] {
+        let got = fraction.scalar_at(u, v);
+        assert!((got - expected).abs() < 1e-6, "({u}, {v}): {got}");
+        // The reflectance checkerboard reads the other colour there.
+        let colour = albedo.value_at(u, v, 550.0);
+        let other = if expected == 0.3 { 0.05 } else { 0.3 };
+        assert!((colour - other).abs() < 0.01, "({u}, {v}): {colour}");
+    }
+    // `rawconstant`: the value as it is, a fraction or a normal map's vector.
+    let raw = scene(
+        "    <shape type=\"rectangle\"><bsdf type=\"normalmap\"><texture name=\"normalmap\" type=\"rawconstant\"><vector name=\"value\" value=\"0.5, 0.25, 1\"/></texture><bsdf type=\"roughconductor\"><texture name=\"alpha\" type=\"rawconstant\"><float name=\"value\" value=\"0.2\"/></texture></bsdf></bsdf></shape>\n    <emitter type=\"constant\"/>",
+    );
+    let path = write(&dir, "raw.xml", &raw)?;
+    let built = load(&path, &[], false)?.builder.build()?;
+    let values: Vec<_> = built
+        .textures()
+        .iter()
+        .map(|t| (t.scalar_at(0.3, 0.7), t.vector_at(0.3, 0.7)))
+        .collect();
+    let near = |a: f32, b: f32| (a - b).abs() < 1e-6;
+    assert!(
+        values.iter().any(|&(s, v)| near(s, 0.2) && v.is_none()),
+        "{values:?}"
+    );
+    assert!(
+        values
+            .iter()
+            .any(|(_, v)| v
+                .is_some_and(|v| v.iter().zip([0.5, 0.25, 1.0]).all(|(&a, b)| near(a, b)))),
+        "{values:?}"
+    );
+    refused(
+        "rawconstant-vector-alpha",
+        &scene(
+            "    <shape type=\"rectangle\"><bsdf type=\"roughconductor\"><texture name=\"alpha\" type=\"rawconstant\"><vector name=\"value\" value=\"1, 2, 3\"/></texture></bsdf></shape>",
+        ),
+        8,
+        &["expected a float"],
+    )?;
+    refused(
+        "checkerboard-bump",
+        &scene(
+            "    <shape type=\"rectangle\"><bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf></shape>",
+        ),
+        8,
+        &["is not supported as a bump map (bitmap, rawconstant)"],
+    )?;
+    Ok(())
+}
+
+/// Mitsuba's own test and documentation scenes wrap their integrator in
+/// `moment` or `aov`, reference a scene-level sampler from the sensor and
+/// give a plastic's `specular_reflectance` as a grey `<rgb>`: each loads as
+/// the integrator, sampler and number it names, with a warning for the
+/// channels that are not written; a coloured `<rgb>` and a wrapper without
+/// a nested integrator are refused.
+#[test]
+fn wrapped_integrators_and_referenced_samplers_load() -> TestResult {
+    let dir = test_dir("wrapped-integrators")?;
+    let file = |integrator: &str, extra: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+    {integrator}
+    <sampler type="independent" id="my_sampler"><integer name="sample_count" value="7"/></sampler>
+    <sensor type="perspective">
+        <ref id="my_sampler"/>
+        <film type="hdrfilm" id="film"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+    </sensor>
+    <shape type="rectangle"><bsdf type="roughplastic"><rgb name="specular_reflectance" value="{extra}"/></bsdf></shape>
+    <emitter type="constant"/>
+</scene>
+"#
+        )
+    };
+    for (name, integrator, warning) in [
+        (
+            "moment",
+            "<integrator type=\"moment\"><integrator type=\"path\"><integer name=\"max_depth\" value=\"3\"/></integrator></integrator>",
+            Some("the second-moment channels are not written"),
+        ),
+        (
+            "aov",
+            "<integrator type=\"aov\"><string name=\"aovs\" value=\"dd.y:depth\"/><integrator type=\"path\" name=\"image\"><integer name=\"max_depth\" value=\"3\"/></integrator></integrator>",
+            Some("the AOV channels are not written"),
+        ),
+        (
+            "ptracer",
+            "<integrator type=\"ptracer\"><integer name=\"max_depth\" value=\"3\"/></integrator>",
+            Some("integrator \"ptracer\" renders as \"path\""),
+        ),
+        (
+            "path",
+            "<integrator type=\"path\"><integer name=\"max_depth\" value=\"3\"/></integrator>",
+            None,
+        ),
+    ] {
+        let path = write(&dir, &format!("{name}.xml"), &file(integrator, "0.5"))?;
+        let loaded = load(&path, &[], false)?;
+        let render = &loaded.render;
+        assert_eq!(render.max_depth, Some(3), "{name}");
+        assert_eq!(render.spp, Some(7), "{name}: the referenced sampler");
+        assert_eq!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| warning.is_some_and(|n| w.contains(n))),
+            warning.is_some(),
+            "{name}: {:?}",
+            loaded.warnings
+        );
+        assert_eq!(
+            loaded.warnings.len(),
+            usize::from(warning.is_some()),
+            "{name}"
+        );
+    }
+    refused(
+        "coloured-specular",
+        &file("<integrator type=\"path\"/>", "0.5, 0.4, 0.3"),
+        8,
+        &["must be a number or a grey <rgb> here"],
+    )?;
+    refused(
+        "empty-moment",
+        &file("<integrator type=\"moment\"/>", "1"),
+        2,
+        &["needs exactly one nested <integrator> to render (it has 0)"],
+    )?;
     Ok(())
 }

@@ -64,7 +64,16 @@ pub fn refracted_cos(cos_i: f64, eta: f64) -> Option<f64> {
 
 /// Unpolarised Fresnel reflectance of a conductor with relative complex
 /// index `eta = (n + ik)/n_outside`.
+///
+/// `eta = 0` (a tabulated index read outside its samples, which Mitsuba's
+/// irregular spectra make zero) gives 1: the limit of the formula as
+/// `|η| → 0` at every angle (`η cos θ_t → i sin θ_i`, so `|r_⊥| → 1`, and
+/// `|cos θ_t| → ∞`, so `r_∥ → −1`), and Mitsuba's value at every angle but
+/// normal incidence, where its formula is `0/0`.
 pub fn fresnel_conductor(cos_i: f64, eta: Complex) -> f64 {
+    if eta == Complex::ZERO {
+        return 1.0;
+    }
     let cos_i = cos_i.clamp(0.0, 1.0);
     let sin2_i = 1.0 - cos_i * cos_i;
     let sin2_t = Complex::real(sin2_i) / (eta * eta);
@@ -291,6 +300,19 @@ mod tests {
         let closed_form = ((n - 1.0) * (n - 1.0) + k * k) / ((n + 1.0) * (n + 1.0) + k * k);
         assert!((r - closed_form).abs() < 1e-12);
         assert!((r - 0.8509).abs() < 5e-5, "{r}");
+    }
+
+    #[test]
+    fn a_vanishing_index_reflects_everything() {
+        for cos_i in [0.0, 0.1, 0.5, 0.9, 1.0] {
+            assert_eq!(fresnel_conductor(cos_i, Complex::ZERO), 1.0);
+            // The formula approaches 1 as the index shrinks (but at normal
+            // incidence, where it is ((1 − n)² + k²)/((1 + n)² + k²) → 1).
+            let tiny = fresnel_conductor(cos_i, Complex::new(1e-7, 1e-7));
+            assert!((tiny - 1.0).abs() < 1e-5, "cos {cos_i}: {tiny}");
+        }
+        // A negative control: a small but finite index reflects less.
+        assert!(fresnel_conductor(1.0, Complex::new(0.2, 0.0)) < 0.5);
     }
 
     #[test]

@@ -502,7 +502,8 @@ impl<'e> Importer<'e, '_> {
         }
     }
 
-    /// A property that must be a plain number (a texture is refused).
+    /// A property that must be a plain number or a grey `<rgb>` (a texture
+    /// or a colour is refused).
     pub(super) fn scalar(
         &mut self,
         object: &Object<'e>,
@@ -517,6 +518,12 @@ impl<'e> Importer<'e, '_> {
                 Value::SpectrumText(text) if !text.contains(':') => {
                     super::properties::parse_number(p.element, text)
                 }
+                // A grey `<rgb>` is that number: Mitsuba's upsampling of a
+                // grey is flat.
+                Value::Rgb([r, g, b]) if r == g && g == b => Ok(r),
+                Value::Rgb(_) => Err(p.error(
+                    "must be a number or a grey <rgb> here (coloured values are not supported)",
+                )),
                 _ => Err(p.error("must be a number here (textured values are not supported)")),
             },
         }

@@ -146,7 +146,7 @@ fn load(input: Input<'_>, options: &MitsubaOptions) -> Result<LoadedScene, CliEr
     for warning in read.warnings {
         importer.cx.push_warning(warning);
     }
-    importer.collect_ids(&root)?;
+    importer.collect_ids(&root, false)?;
     importer.scene(&root)?;
     importer.finish(&root)
 }
@@ -220,9 +220,17 @@ impl<'e> Importer<'e, '_> {
         Spot::in_file(key, e.place.file.clone(), e.place.line)
     }
 
+    /// A warning at element `e`.
+    fn warn_at(&mut self, e: &Element, message: impl std::fmt::Display) {
+        let spot = Self::spot(e, String::new());
+        self.cx.warn(&spot, message);
+    }
+
     /// Collects every object with an `id` (duplicates are errors, as in
     /// Mitsuba).
-    fn collect_ids(&mut self, e: &'e Element) -> Result<(), CliError> {
+    /// An object nested in another is used where it stands, so only the
+    /// scene's own children can be unused.
+    fn collect_ids(&mut self, e: &'e Element, nested: bool) -> Result<(), CliError> {
         for child in &e.children {
             if child.tag != "ref"
                 && let Some(id) = child.attr("id")
@@ -233,8 +241,11 @@ impl<'e> Importer<'e, '_> {
                         first.place.line
                     )));
                 }
+                if nested {
+                    self.used.insert(id);
+                }
             }
-            self.collect_ids(child)?;
+            self.collect_ids(child, true)?;
         }
         Ok(())
     }
@@ -271,6 +282,18 @@ impl<'e> Importer<'e, '_> {
         Ok(element)
     }
 
+    /// The unnamed nested objects of `object` with tag `tag`, references
+    /// resolved (a reference to another kind of object is left alone).
+    fn nested_of(&mut self, object: &Object<'e>, tag: &str) -> Result<Vec<&'e Element>, CliError> {
+        let properties = object.nested(tag, |p, id| {
+            Ok(self.resolve_ref(p.element, id)?.tag.as_str())
+        })?;
+        properties
+            .into_iter()
+            .map(|p| self.object_of(p, &[tag]))
+            .collect()
+    }
+
     /// Reports the properties of `object` that nothing read: an error, or
     /// a warning with `--lenient`.
     fn check_unused(&mut self, object: &Object<'e>) -> Result<(), CliError> {
@@ -283,9 +306,7 @@ impl<'e> Importer<'e, '_> {
             };
             let message = format!("{}: {what} is not supported", object.describe());
             if self.options.lenient {
-                let spot = Self::spot(p.element, String::new());
-                self.cx
-                    .warn(&spot, format!("{message}; ignored (--lenient)"));
+                self.warn_at(p.element, format!("{message}; ignored (--lenient)"));
             } else {
                 return Err(p.element.error(format!("{message} (--lenient ignores it)")));
             }
@@ -299,9 +320,7 @@ impl<'e> Importer<'e, '_> {
         let plugin = e.attr("type").unwrap_or("");
         let message = format!("{} type \"{plugin}\" is not supported", e.tag);
         if self.options.lenient {
-            let spot = Self::spot(e, String::new());
-            self.cx
-                .warn(&spot, format!("{message}; {what} (--lenient)"));
+            self.warn_at(e, format!("{message}; {what} (--lenient)"));
             Ok(false)
         } else {
             Err(e.error(format!("{message} (--lenient: {what})")))
@@ -316,9 +335,8 @@ impl<'e> Importer<'e, '_> {
             self.sensor(sensor)?;
         }
         if let Some(second) = sensors.next() {
-            let spot = Self::spot(second, String::new());
-            self.cx.warn(
-                &spot,
+            self.warn_at(
+                second,
                 "a second <sensor> is ignored (the first one renders)",
             );
         }
@@ -335,11 +353,11 @@ impl<'e> Importer<'e, '_> {
                 "shape" => self.shape(child)?,
                 "emitter" => self.emitter(child)?,
                 // Built when referenced; unused ones are warned about.
-                "bsdf" | "texture" | "spectrum" => {
+                // (A sensor may name its sampler, film or filter by id.)
+                "bsdf" | "texture" | "spectrum" | "sampler" | "film" | "rfilter" => {
                     if child.attr("id").is_none() {
-                        let spot = Self::spot(child, String::new());
-                        self.cx.warn(
-                            &spot,
+                        self.warn_at(
+                            child,
                             format!("<{}> without `id` cannot be referenced: unused", child.tag),
                         );
                     }
@@ -351,9 +369,7 @@ impl<'e> Importer<'e, '_> {
                             child.tag
                         )));
                     }
-                    let spot = Self::spot(child, String::new());
-                    self.cx
-                        .warn(&spot, format!("<{}> ignored (--lenient)", child.tag));
+                    self.warn_at(child, format!("<{}> ignored (--lenient)", child.tag));
                 }
                 other => {
                     return Err(child.error(format!(
@@ -387,9 +403,8 @@ impl<'e> Importer<'e, '_> {
             .collect();
         unused.sort_by_key(|(_, e)| (e.place.file.clone(), e.place.line));
         for (id, e) in unused {
-            let spot = Self::spot(e, String::new());
-            self.cx.warn(
-                &spot,
+            self.warn_at(
+                e,
                 format!("<{} id=\"{id}\"> is defined but never used", e.tag),
             );
         }
@@ -414,7 +429,9 @@ impl<'e> Importer<'e, '_> {
 /// Objects that only matter when referenced (a shape or emitter with an id
 /// is placed whether referenced or not).
 fn is_referable(e: &Element) -> bool {
-    matches!(e.tag.as_str(), "bsdf" | "texture" | "spectrum")
-        || e.attr("type") == Some("shapegroup")
+    matches!(
+        e.tag.as_str(),
+        "bsdf" | "texture" | "spectrum" | "sampler" | "film" | "rfilter"
+    ) || e.attr("type") == Some("shapegroup")
         || (e.tag == "emitter" && e.attr("type") == Some("area"))
 }

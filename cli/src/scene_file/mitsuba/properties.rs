@@ -153,21 +153,29 @@ impl<'e> Object<'e> {
         Some(p)
     }
 
-    /// The unnamed nested objects (and references) with tag `tag`, marked
-    /// used.
-    pub(crate) fn nested(&self, tag: &str) -> Vec<&Property<'e>> {
-        self.properties
-            .iter()
-            .filter(|p| {
-                p.name.is_empty()
-                    && match p.value {
-                        Value::Object(e) => e.tag == tag,
-                        Value::Ref(_) => true,
-                        _ => false,
-                    }
-            })
-            .inspect(|p| p.used.set(true))
-            .collect()
+    /// The unnamed nested objects with tag `tag`, references included
+    /// (`tag_of` names the tag of the element a reference's id names), each
+    /// marked used; an unnamed object or reference of another tag is left
+    /// for its own reader (a sensor's `<ref>` may name its sampler or its
+    /// film).
+    pub(crate) fn nested(
+        &self,
+        tag: &str,
+        mut tag_of: impl FnMut(&Property<'e>, &'e str) -> Result<&'e str, CliError>,
+    ) -> Result<Vec<&Property<'e>>, CliError> {
+        let mut found = Vec::new();
+        for p in self.properties.iter().filter(|p| p.name.is_empty()) {
+            let matches = match p.value {
+                Value::Object(e) => e.tag == tag,
+                Value::Ref(id) => tag_of(p, id)? == tag,
+                _ => false,
+            };
+            if matches {
+                p.used.set(true);
+                found.push(p);
+            }
+        }
+        Ok(found)
     }
 
     /// Every nested object and reference (named or not), marked used.

@@ -219,20 +219,17 @@ impl<'e> Importer<'e, '_> {
         // The film first: the field of view depends on its aspect.
         let mut width = DEFAULT_FILM_WIDTH;
         let mut height = DEFAULT_FILM_HEIGHT;
-        let films = object.nested("film");
+        let films = self.nested_of(&object, "film")?;
         if films.len() > 1 {
             return Err(object.error("has more than one <film>"));
         }
         let mut filter = FilterChoice::Gaussian {
             stddev_px: DEFAULT_GAUSSIAN_STDDEV_PX as f32,
         };
-        if let Some(film) = films.first() {
-            let film = self.object_of(film, &["film"])?;
+        if let Some(&film) = films.first() {
             (width, height, filter) = self.film(film)?;
         }
-        let samplers = object.nested("sampler");
-        if let Some(sampler) = samplers.first() {
-            let sampler = self.object_of(sampler, &["sampler"])?;
+        if let Some(&sampler) = self.nested_of(&object, "sampler")?.first() {
             self.sampler(sampler)?;
         }
         let to_world = object.transform("to_world")?;
@@ -347,9 +344,8 @@ impl<'e> Importer<'e, '_> {
             if !self.options.lenient {
                 return Err(object.error("is not supported (hdrfilm; --lenient renders it as one)"));
             }
-            let spot = Self::spot(e, String::new());
-            self.cx.warn(
-                &spot,
+            self.warn_at(
+                e,
                 format!(
                     "film \"{}\" rendered as an hdrfilm (--lenient)",
                     object.plugin
@@ -399,8 +395,7 @@ impl<'e> Importer<'e, '_> {
         let mut filter = FilterChoice::Gaussian {
             stddev_px: DEFAULT_GAUSSIAN_STDDEV_PX as f32,
         };
-        if let Some(rfilter) = object.nested("rfilter").first() {
-            let rfilter = self.object_of(rfilter, &["rfilter"])?;
+        if let Some(&rfilter) = self.nested_of(&object, "rfilter")?.first() {
             filter = self.rfilter(rfilter)?;
         }
         self.check_unused(&object)?;
@@ -482,10 +477,7 @@ impl<'e> Importer<'e, '_> {
             return self.check_unused(&object);
         };
         if rounded != count as u32 {
-            let spot = Self::spot(e, String::new());
-            self.cx.warn(
-                &spot,
-                format!(
+            self.warn_at(e, format!(
                     "sampler \"{}\": sample_count {count} rounded to {rounded}, as Mitsuba rounds it",
                     object.plugin
                 ),
@@ -509,40 +501,93 @@ impl<'e> Importer<'e, '_> {
         match object.plugin {
             "path" | "volpath" | "volpathmis" => {
                 if object.plugin != "path" {
-                    let spot = Self::spot(e, String::new());
-                    self.cx.warn(
-                        &spot,
+                    self.warn_at(
+                        e,
                         format!(
                             "integrator \"{}\" renders as \"path\" (the scene has no media)",
                             object.plugin
                         ),
                     );
                 }
-                let depth = object.integer("max_depth", -1)?;
-                self.render.max_depth = Some(match depth {
-                    -1 => u32::MAX,
-                    d if d >= 1 && d <= i64::from(u32::MAX) => d as u32,
-                    d => {
-                        return Err(object
-                            .error(format!("max_depth {d}: use -1 (unlimited) or a depth >= 1")));
-                    }
-                });
-                let rr = object.integer("rr_depth", DEFAULT_RR_DEPTH)?;
-                if !(1..=i64::from(u32::MAX)).contains(&rr) {
-                    return Err(object.error(format!("rr_depth {rr}: must be >= 1")));
-                }
-                self.render.rr_depth = Some(rr as u32);
+                self.path_depths(&object)?;
             }
             "direct" => {
                 self.render.max_depth = Some(DIRECT_MAX_DEPTH);
                 object.ignore(&["emitter_samples", "bsdf_samples", "shading_samples"]);
             }
+            "moment" | "aov" => return self.wrapping_integrator(e, &object),
+            "ptracer" => {
+                self.warn_at(
+                    e,
+                    "integrator \"ptracer\" renders as \"path\" (the same image, but that \
+                     path also shows what the camera sees through smooth mirrors and glass, \
+                     which a particle tracer leaves black)",
+                );
+                self.path_depths(&object)?;
+                object.ignore(&["samples_per_pass"]);
+            }
             _ => {
-                return Err(object.error("is not supported (path, direct)"));
+                return Err(object.error("is not supported (path, direct, and volpath, volpathmis, ptracer as path; moment and aov render their nested integrator)"));
             }
         }
         self.render.hide_emitters = Some(object.boolean("hide_emitters", false)?);
         self.check_unused(&object)
+    }
+}
+
+impl<'e> Importer<'e, '_> {
+    /// `max_depth` and `rr_depth` of `path` and the integrators read as it.
+    fn path_depths(&mut self, object: &Object<'e>) -> Result<(), CliError> {
+        let depth = object.integer("max_depth", -1)?;
+        self.render.max_depth = Some(match depth {
+            -1 => u32::MAX,
+            d if d >= 1 && d <= i64::from(u32::MAX) => d as u32,
+            d => {
+                return Err(
+                    object.error(format!("max_depth {d}: use -1 (unlimited) or a depth >= 1"))
+                );
+            }
+        });
+        let rr = object.integer("rr_depth", DEFAULT_RR_DEPTH)?;
+        if !(1..=i64::from(u32::MAX)).contains(&rr) {
+            return Err(object.error(format!("rr_depth {rr}: must be >= 1")));
+        }
+        self.render.rr_depth = Some(rr as u32);
+        Ok(())
+    }
+
+    /// `moment` and `aov`: Mitsuba writes their nested integrator's image
+    /// and, beside it, extra channels (the samples' second moment; depth,
+    /// normals and the like). fspec renders the nested integrator's image,
+    /// the image a user looks at, and warns that the extra channels are
+    /// not written. One nested integrator: with several, Mitsuba writes an
+    /// image of each, and fspec's output holds one.
+    fn wrapping_integrator(&mut self, e: &'e Element, object: &Object<'e>) -> Result<(), CliError> {
+        // Named or not (`aov` names its image's integrator, `image`).
+        let mut nested = Vec::new();
+        for p in object.objects() {
+            nested.push(self.object_of(p, &["integrator"])?);
+        }
+        let [inner] = nested[..] else {
+            return Err(object.error(format!(
+                "needs exactly one nested <integrator> to render (it has {})",
+                nested.len()
+            )));
+        };
+        object.ignore(&["aovs"]);
+        self.check_unused(object)?;
+        let channels = match object.plugin {
+            "moment" => "the second-moment channels",
+            _ => "the AOV channels",
+        };
+        self.warn_at(
+            e,
+            format!(
+                "integrator \"{}\": renders its nested integrator's image; {channels} are not written",
+                object.plugin
+            ),
+        );
+        self.integrator(inner)
     }
 }
 

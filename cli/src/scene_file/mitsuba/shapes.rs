@@ -77,9 +77,7 @@ impl<'e> Importer<'e, '_> {
                 "bsdf" => &mut attached.bsdf,
                 "emitter" => &mut attached.emitter,
                 "medium" if self.options.lenient => {
-                    let spot = Self::spot(element, String::new());
-                    self.cx
-                        .warn(&spot, "media are not supported; ignored (--lenient)");
+                    self.warn_at(element, "media are not supported; ignored (--lenient)");
                     continue;
                 }
                 other => {

@@ -183,10 +183,7 @@ impl<'e> Importer<'e, '_> {
                 SpectrumUse::Emission => SpectrumSource::RgbIlluminant(rgb),
                 SpectrumUse::Unbounded => {
                     if rgb.iter().any(|&c| c > 1.0) {
-                        let spot = Self::spot(p.element, String::new());
-                        self.cx.warn(
-                            &spot,
-                            format!(
+                        self.warn_at(p.element, format!(
                                 "property \"{}\": rgb {rgb:?} is clamped to [0, 1] as Mitsuba 3's spectral variants clamp it (give a <spectrum> for larger values)",
                                 p.name
                             ),

@@ -8,7 +8,15 @@
 //!   upsampled as an sRGB reflectance, clamped to [0, 1] as Mitsuba's
 //!   `srgb_model_fetch` clamps it. As a normal map (`normalmap`) a bitmap
 //!   needs `raw=true` and keeps its three channels as stored.
-//! * `checkerboard`: `color0` (0.4), `color1` (0.2), `to_uv`.
+//! * `rawconstant`: `value`, a number (a reflectance of that value at
+//!   every wavelength, a fraction, heights) or, for a normal map, a vector;
+//!   no colour conversion, as Mitsuba's.
+//! * `checkerboard`: `color0` (0.4), `color1` (0.2), `to_uv`. As a
+//!   reflectance (Mitsuba's `eval`), `color0` where both coordinates'
+//!   fractional parts are above ½ or neither is; as a fraction (an opacity,
+//!   a weight, a roughness: Mitsuba's `eval_1`, whose test is the opposite
+//!   one), `color0` where exactly one is. The fraction is a 2 × 2 image
+//!   looked up without filtering and repeated, which is that pattern.
 //!
 //! # Coordinates
 //!
@@ -23,7 +31,7 @@
 
 use super::Importer;
 use super::document::Element;
-use super::properties::Object;
+use super::properties::{Object, Value};
 use super::spectra::SpectrumUse;
 use crate::error::CliError;
 use crate::hdr_image::{Encoding, load_rgb_image_as};
@@ -59,10 +67,27 @@ struct Bitmap {
     describe: String,
 }
 
+/// Texels along each side of a checkerboard read as a fraction: one
+/// period of the pattern is two squares.
+const CHECKER_TEXELS: u32 = 2;
+
 /// Mitsuba's checkerboard defaults.
 const DEFAULT_COLOR0: f64 = 0.4;
 /// Mitsuba's checkerboard default of the second colour.
 const DEFAULT_COLOR1: f64 = 0.2;
+
+/// A `rawconstant`'s `value` as one number (Mitsuba's `eval_1` refuses a
+/// vector).
+fn raw_scalar(object: &Object<'_>) -> Result<f64, CliError> {
+    match object.get("value") {
+        Some(p) => match p.value {
+            Value::Float(v) => Ok(v),
+            Value::Integer(v) => Ok(v as f64),
+            ref other => Err(p.wrong_type("a float", other)),
+        },
+        None => Err(object.error("needs a `value`")),
+    }
+}
 
 /// The 2-D part of `to_uv` (module docs), then `flip_v` turning `v` over.
 fn uv_matrix(to_uv: &Transform, flip_v: bool) -> [[f32; 3]; 2] {
@@ -136,8 +161,17 @@ impl<'e> Importer<'e, '_> {
                     },
                 )?
             }
+            "rawconstant" => {
+                // The value as it is, at every wavelength (no upsampling).
+                let value = raw_scalar(&object)?;
+                self.check_unused(&object)?;
+                let id = self
+                    .cx
+                    .add_spectrum(&spot, SpectrumSource::Constant(value))?;
+                return Ok(Albedo::Spectrum(id));
+            }
             _ => {
-                return Err(object.error("is not supported (bitmap, checkerboard)"));
+                return Err(object.error("is not supported (bitmap, checkerboard, rawconstant)"));
             }
         };
         self.check_unused(&object)?;
@@ -173,8 +207,26 @@ impl<'e> Importer<'e, '_> {
             ScalarUse::Fraction => "an opacity, weight or roughness",
             ScalarUse::Heights => "a bump map",
         };
+        if object.plugin == "checkerboard" && usage == ScalarUse::Fraction {
+            return self.scalar_checkerboard(&object, &to_uv, key);
+        }
+        if object.plugin == "rawconstant" {
+            let value = raw_scalar(&object)? as f32;
+            let value = match usage {
+                ScalarUse::Fraction => value.clamp(0.0, 1.0),
+                ScalarUse::Heights => value,
+            };
+            let texture = Texture::scalar(1, 1, vec![value], SpectralRange::VISIBLE);
+            let id = self.constant_texture(&object, texture)?;
+            self.fraction_textures.insert(key, id);
+            return Ok(id);
+        }
         if object.plugin != "bitmap" {
-            return Err(object.error(format!("is not supported as {what} (bitmap)")));
+            let plugins = match usage {
+                ScalarUse::Fraction => "bitmap, checkerboard, rawconstant",
+                ScalarUse::Heights => "bitmap, rawconstant",
+            };
+            return Err(object.error(format!("is not supported as {what} ({plugins})")));
         }
         let (image, sampling) = self.bitmap(&object, &to_uv)?;
         let grey = image.texels.iter().all(|&[r, g, b]| r == g && g == b);
@@ -203,6 +255,51 @@ impl<'e> Importer<'e, '_> {
         Ok(id)
     }
 
+    /// A `checkerboard` read as a fraction (module docs): `color0` and
+    /// `color1` are numbers, clamped to [0, 1] as a fraction bitmap's
+    /// values are.
+    fn scalar_checkerboard(
+        &mut self,
+        object: &Object<'e>,
+        to_uv: &Transform,
+        key: (usize, bool),
+    ) -> Result<TextureId, CliError> {
+        let color0 = self.scalar(object, "color0", DEFAULT_COLOR0)? as f32;
+        let color1 = self.scalar(object, "color1", DEFAULT_COLOR1)? as f32;
+        let [color0, color1] = [color0, color1].map(|c| c.clamp(0.0, 1.0));
+        // Rows from the top (Mitsuba's v = 0), as an image's: color0 where
+        // exactly one coordinate is in a cell's upper half.
+        let values = vec![color1, color0, color0, color1];
+        let sampling = TextureSampling {
+            wrap: WrapMode::Repeat,
+            filter: FilterMode::Nearest,
+            uv: UvTransform::from_matrix(uv_matrix(to_uv, true))
+                .map_err(|err| object.error(format!("to_uv: {err}")))?,
+        };
+        let texture = Texture::scalar(
+            CHECKER_TEXELS,
+            CHECKER_TEXELS,
+            values,
+            SpectralRange::VISIBLE,
+        )
+        .map_err(|err| object.error(err))?;
+        let id = self.cx.add_texture(texture.with_sampling(sampling));
+        self.check_unused(object)?;
+        self.fraction_textures.insert(key, id);
+        Ok(id)
+    }
+
+    /// A `rawconstant`'s one-texel texture, its properties checked.
+    fn constant_texture(
+        &mut self,
+        object: &Object<'e>,
+        texture: Result<Texture, spectral_core::SpectralError>,
+    ) -> Result<TextureId, CliError> {
+        let texture = texture.map_err(|err| object.error(err))?;
+        self.check_unused(object)?;
+        Ok(self.cx.add_texture(texture))
+    }
+
     /// A normal map's texture (`normalmap`'s `normalmap`; built once per
     /// element): a `bitmap` with `raw=true`, its three channels as stored
     /// (Mitsuba's `eval_3`, which its spectral variants refuse on a bitmap
@@ -213,9 +310,23 @@ impl<'e> Importer<'e, '_> {
             return Ok(id);
         }
         let object = Object::new(e)?;
+        if object.plugin == "rawconstant" {
+            let value = match object.get("value").map(|p| (p, &p.value)) {
+                Some((_, Value::Vector(v))) => v.to_array(),
+                Some((_, Value::Float(v))) => [*v as f32; 3],
+                Some((p, other)) => return Err(p.wrong_type("a float or a vector", other)),
+                None => return Err(object.error("needs a `value`")),
+            };
+            let id = self.constant_texture(
+                &object,
+                Texture::vector(1, 1, vec![value], SpectralRange::VISIBLE),
+            )?;
+            self.vector_textures.insert(key, id);
+            return Ok(id);
+        }
         let to_uv = object.transform("to_uv")?;
         if object.plugin != "bitmap" {
-            return Err(object.error("is not supported as a normal map (bitmap)"));
+            return Err(object.error("is not supported as a normal map (bitmap, rawconstant)"));
         }
         if !object.boolean("raw", false)? {
             return Err(object.error(
