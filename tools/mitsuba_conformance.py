@@ -114,6 +114,8 @@ SCENES = {
     "bsdf_tinted_dielectric": {
         "suite": "materials", "ref_spp": 4096, "negative": {"trans": "0.2, 0.5, 0.9"}},
     "bsdf_roughness_map": {"suite": "materials", "ref_spp": 4096, "negative": {"raw": "false"}},
+    "texture_checkerboard_fractions": {
+        "suite": "materials", "ref_spp": 4096, "negative": {"shift": "0.5"}},
     # lights
     "point_light": {"suite": "lights", "ref_spp": 4096, "negative": {"light_x": "1.4"}},
     "spot_light": {"suite": "lights", "ref_spp": 4096, "negative": {"beam": "12"}},
