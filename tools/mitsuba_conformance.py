@@ -99,6 +99,8 @@ SCENES = {
     "plastic_linear": {"suite": "materials", "ref_spp": 4096},
     "plastic_nonlinear": {
         "suite": "materials", "ref_spp": 4096, "negative": {"nonlinear": "false"}},
+    "plastic_nonlinear_textured": {
+        "suite": "materials", "ref_spp": 4096, "negative": {"nonlinear": "false"}},
     "roughplastic_ggx_a010": {"suite": "materials", "ref_spp": 4096},
     "roughplastic_beckmann_a030": {"suite": "materials", "ref_spp": 4096},
     "sidedness": {"suite": "materials", "ref_spp": 4096},

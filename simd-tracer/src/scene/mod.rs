@@ -986,6 +986,11 @@ impl SceneBuilder {
         self.spectra.get(id.index())
     }
 
+    /// The texture `id`, if it was added.
+    pub fn texture(&self, id: TextureId) -> Option<&Texture> {
+        self.textures.get(id.index())
+    }
+
     /// Adds a texture.
     pub fn add_texture(&mut self, texture: Texture) -> TextureId {
         self.textures.push(texture);

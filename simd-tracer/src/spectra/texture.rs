@@ -96,7 +96,7 @@
 
 use crate::spectra::{MAX_COEFFS, SceneSpectrum};
 use spectral_core::upsample::{SigmoidPolynomial, srgb_reflectance};
-use spectral_core::{FourierSpectrum, SpectralError, SpectralRange, Spectrum};
+use spectral_core::{FourierBasis, FourierSpectrum, SpectralError, SpectralRange, Spectrum};
 use std::collections::HashMap;
 
 /// Coefficients stored per texel of RGB textures.
@@ -456,6 +456,86 @@ impl Texture {
             },
             range,
         ))
+    }
+
+    /// This reflectance texture with `f` applied to its value at every
+    /// wavelength of every texel (a nonlinear plastic's `ρ/(1 − ρ F)`), with
+    /// the same sampling: a texture of [`TEXTURE_COEFFS`] Fourier
+    /// coefficients per texel, each the projection of `f` of the texel's
+    /// spectrum (a checkerboard stays a checkerboard of its two spectra
+    /// mapped, tabulated every `step_nm`). Lookups then blend mapped
+    /// texels, where a renderer mapping after the lookup (Mitsuba) maps
+    /// the blend: the two agree at texel centres and with nearest
+    /// filtering, and differ between texels of unequal colours by the
+    /// curvature of `f`. Scalar and vector textures are no reflectances.
+    pub fn mapped_reflectance(
+        &self,
+        step_nm: f64,
+        f: impl Fn(f64) -> f64,
+    ) -> Result<Self, SpectralError> {
+        let basis = FourierBasis::<TEXTURE_COEFFS>::new(self.range);
+        let project = |value: &dyn Fn(f64) -> f64| {
+            basis
+                .project_function(|lambda_nm| f(value(lambda_nm)))
+                .coeffs
+                .map(|c| c as f32)
+        };
+        let data = match &self.data {
+            TextureData::Rgb { sigmoid, .. } => {
+                let mut cache: HashMap<[u32; 3], [f32; TEXTURE_COEFFS]> = HashMap::new();
+                let mut coeffs = Vec::with_capacity(sigmoid.len() * TEXTURE_COEFFS);
+                for texel in sigmoid {
+                    let mapped = *cache.entry(texel.map(f32::to_bits)).or_insert_with(|| {
+                        let poly = SigmoidPolynomial {
+                            coeffs: texel.map(f64::from),
+                        };
+                        project(&|lambda_nm| poly.value(lambda_nm))
+                    });
+                    coeffs.extend_from_slice(&mapped);
+                }
+                TextureData::Fourier {
+                    n: TEXTURE_COEFFS,
+                    coeffs,
+                }
+            }
+            TextureData::Fourier { n, coeffs } => {
+                let mut mapped = Vec::with_capacity(coeffs.len() / n * TEXTURE_COEFFS);
+                for texel in coeffs.chunks_exact(*n) {
+                    let series: FourierSpectrum<f64, MAX_COEFFS> =
+                        FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
+                            texel.get(j).map_or(0.0, |&c| f64::from(c))
+                        }));
+                    let range = self.range;
+                    mapped.extend_from_slice(&project(&|lambda_nm| {
+                        series.eval_cos(range.cos_phase(lambda_nm)).max(0.0)
+                    }));
+                }
+                TextureData::Fourier {
+                    n: TEXTURE_COEFFS,
+                    coeffs: mapped,
+                }
+            }
+            TextureData::Checkerboard { color0, color1 } => {
+                let map = |spectrum: &SceneSpectrum| {
+                    SceneSpectrum::new(spectrum.tabulate_with(step_nm, &f), self.range)
+                };
+                TextureData::Checkerboard {
+                    color0: Box::new(map(color0)?),
+                    color1: Box::new(map(color1)?),
+                }
+            }
+            TextureData::Scalar(_) | TextureData::Vector(_) => {
+                return Err(SpectralError::InvalidParameter(
+                    "a reflectance texture (not a scalar or vector one)",
+                ));
+            }
+        };
+        if let TextureData::Fourier { coeffs, .. } = &data
+            && let Some(index) = coeffs.iter().position(|v| !v.is_finite())
+        {
+            return Err(SpectralError::NonFiniteValue { index });
+        }
+        Ok(Self::with_data(self.width, self.height, data, self.range).with_sampling(self.sampling))
     }
 
     /// The texture looked up with `sampling` instead of the default.
@@ -1102,6 +1182,88 @@ mod tests {
         is(&scaled, 0.3, 0.3, &a);
         is(&scaled, -0.125, 0.125, &b);
         assert_eq!(board.memory_bytes(), a.memory_bytes() + b.memory_bytes());
+    }
+
+    /// A mapped texture holds `f` of each texel's spectrum: at texel
+    /// centres (nearest filtering) the mapped value at a wavelength is `f`
+    /// of the original's within the truncation of [`TEXTURE_COEFFS`]
+    /// coefficients: the bound is `f`'s largest slope on these values
+    /// (`1/(1 − 0.6)² = 6.25` at ρ = 1) times the truncation error of the
+    /// original's own coefficients on these texels, measured here, plus a
+    /// float margin. The sampling is kept, a checkerboard's squares are
+    /// mapped, a scalar texture is refused. Negative control: the original
+    /// values, which `f` (a nonlinear plastic's) moves much further.
+    #[test]
+    fn mapped_textures_hold_f_of_every_texel() {
+        let range = SpectralRange::VISIBLE;
+        let fdr = 0.6;
+        let f = |rho: f64| rho / (1.0 - fdr * rho);
+        let largest_slope = 1.0 / ((1.0 - fdr) * (1.0 - fdr));
+        let texels = [
+            [0.1, 0.8, 0.1],
+            [0.7, 0.2, 0.5],
+            [0.9, 0.9, 0.9],
+            [0.05, 0.1, 0.6],
+        ];
+        let sampling = TextureSampling {
+            filter: FilterMode::Nearest,
+            ..TextureSampling::default()
+        };
+        let rgb = Texture::rgb(2, 2, &texels, range)
+            .unwrap()
+            .with_sampling(sampling);
+        let centres = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
+        let wavelengths_nm = [420.0, 480.0, 550.0, 610.0, 680.0];
+        let points: Vec<(f32, f32, f32)> = centres
+            .iter()
+            .flat_map(|&(u, v)| wavelengths_nm.map(|l| (u, v, l)))
+            .collect();
+        let series_at = |t: &Texture, u: f32, v: f32, lambda_nm: f32| {
+            let series: FourierSpectrum<f64, MAX_COEFFS> =
+                FourierSpectrum::from_coeffs(t.fourier_at(u, v).map(f64::from));
+            series.eval_cos(range.cos_phase(f64::from(lambda_nm)))
+        };
+        let truncation = points
+            .iter()
+            .map(|&(u, v, l)| (series_at(&rgb, u, v, l) - f64::from(rgb.value_at(u, v, l))).abs())
+            .fold(0.0f64, f64::max);
+        let tolerance = largest_slope * truncation + 1e-3;
+        let mapped = rgb.mapped_reflectance(1.0, f).unwrap();
+        assert_eq!(mapped.sampling(), sampling);
+        let mut largest_error = 0.0f64;
+        let mut largest_change = 0.0f64;
+        for &(u, v, lambda_nm) in &points {
+            let original = f64::from(rgb.value_at(u, v, lambda_nm));
+            let got = f64::from(mapped.value_at(u, v, lambda_nm));
+            largest_error = largest_error.max((got - f(original)).abs());
+            largest_change = largest_change.max((got - original).abs());
+        }
+        println!(
+            "truncation {truncation:.4}: mapped off by {largest_error:.4} (bound {tolerance:.4}), the original by {largest_change:.4}"
+        );
+        assert!(largest_error < tolerance, "{largest_error}");
+        assert!(largest_change > 3.0 * tolerance, "{largest_change}");
+        // Mapped again (halved): a Fourier texture maps from its own
+        // coefficients.
+        let halved = mapped.mapped_reflectance(1.0, |rho| 0.5 * rho).unwrap();
+        for &(u, v, lambda_nm) in &points {
+            let once = f64::from(mapped.value_at(u, v, lambda_nm));
+            let again = f64::from(halved.value_at(u, v, lambda_nm));
+            assert!((again - 0.5 * once).abs() < 1e-3, "{again} against {once}");
+        }
+        let a = spectrum(SpectrumSource::RgbReflectance([0.6, 0.3, 0.1]));
+        let b = spectrum(SpectrumSource::RgbReflectance([0.1, 0.1, 0.1]));
+        let board = Texture::checkerboard(&a, &b, range)
+            .unwrap()
+            .mapped_reflectance(1.0, f)
+            .unwrap();
+        for (u, original) in [(0.25, &a), (0.75, &b)] {
+            let got = f64::from(board.value_at(u, 0.25, 550.0));
+            let want = f(f64::from(original.value(550.0)));
+            assert!((got - want).abs() < 1e-4, "{got} against {want}");
+        }
+        let scalar = Texture::scalar(1, 1, vec![0.5], range).unwrap();
+        assert!(scalar.mapped_reflectance(1.0, f).is_err());
     }
 
     #[test]

@@ -381,6 +381,23 @@ impl Construction<'_> {
         ))
     }
 
+    /// A nonlinear plastic's albedo texture: `ρ/(1 − ρ F_dr,int)` of every
+    /// texel of texture `id` (added before), as a new texture.
+    pub(crate) fn nonlinear_albedo_texture(
+        &mut self,
+        at: &Spot,
+        id: TextureId,
+        fdr_inside: f32,
+    ) -> Result<TextureId, CliError> {
+        let texture = self.builder.texture(id).ok_or_else(|| {
+            self.src
+                .error_at(at, "the albedo texture was not added to the scene")
+        })?;
+        let mapped = simd_tracer::shading::material::nonlinear_albedo_texture(texture, fdr_inside)
+            .map_err(|e| self.src.error_at(at, format!("invalid texture: {e}")))?;
+        Ok(self.builder.add_texture(mapped))
+    }
+
     /// Warns about defined materials that nothing referred to.
     pub(super) fn warn_unused_materials(&mut self) {
         for name in &self.material_order {

@@ -360,8 +360,8 @@ impl<'e> Importer<'e, '_> {
     }
 
     /// Mitsuba's `plastic` / `roughplastic` (`simd_tracer`'s
-    /// `MitsubaPlastic`): a nonlinear plastic needs a spectrum (its albedo
-    /// `ρ / (1 − ρ F_dr)` is tabulated), not a texture.
+    /// `MitsubaPlastic`): a nonlinear plastic's albedo `ρ / (1 − ρ F_dr)`
+    /// is tabulated, or for a texture mapped texel by texel.
     fn plastic(&mut self, object: &Object<'e>, spot: &Spot) -> Result<Bsdf, CliError> {
         let rough = self.roughness(object)?;
         if rough.alpha != rough.alpha_v {
@@ -397,11 +397,11 @@ impl<'e> Importer<'e, '_> {
                 let source = self.cx.nonlinear_albedo(spot, id, prepared.fdr_inside)?;
                 Albedo::Spectrum(self.cx.add_spectrum(spot, source)?)
             }
-            (true, Albedo::Texture(_)) => {
-                return Err(
-                    object.error("nonlinear with a textured diffuse_reflectance is not supported")
-                );
-            }
+            (true, Albedo::Texture(id)) => Albedo::Texture(self.cx.nonlinear_albedo_texture(
+                spot,
+                id,
+                prepared.fdr_inside,
+            )?),
         };
         Ok(prepared.bsdf(albedo))
     }

@@ -54,7 +54,7 @@ pub use coated::{CoatParams, CoatTransmittance, LobeChoice, MIN_LOBE_PROBABILITY
 mod plastic;
 pub use plastic::{
     MitsubaPlastic, PreparedPlastic, ROUGH_COAT_ROWS, RoughCoat, diffuse_fresnel_fit,
-    nonlinear_albedo,
+    nonlinear_albedo, nonlinear_albedo_texture,
 };
 mod interface;
 pub use interface::thin_dielectric_reflectance;

@@ -39,8 +39,10 @@
 
 use super::{Albedo, Bsdf, CoatParams, CoatTransmittance, LobeChoice};
 use crate::shading::microfacet::{self, Microfacet};
+use crate::spectra::texture::Texture;
 use crate::spectra::{SceneSpectrum, SpectrumSource};
 use glam::Vec3;
+use spectral_core::SpectralError;
 use spectral_core::optics::fresnel_dielectric;
 
 /// Nodes of the rough coat's transmittance table (Mitsuba's
@@ -160,8 +162,23 @@ pub fn diffuse_fresnel_fit(eta: f32) -> f32 {
 /// like every tabulated spectrum), to be added to the scene as the
 /// material's albedo.
 pub fn nonlinear_albedo(albedo: &SceneSpectrum, fdr_inside: f32) -> SpectrumSource {
+    albedo.tabulate_with(NONLINEAR_ALBEDO_STEP_NM, nonlinear(fdr_inside))
+}
+
+/// [`nonlinear_albedo`] of every texel of a reflectance texture
+/// ([`Texture::mapped_reflectance`]; Mitsuba maps the value after the
+/// lookup, the texture maps the texels before it).
+pub fn nonlinear_albedo_texture(
+    albedo: &Texture,
+    fdr_inside: f32,
+) -> Result<Texture, SpectralError> {
+    albedo.mapped_reflectance(NONLINEAR_ALBEDO_STEP_NM, nonlinear(fdr_inside))
+}
+
+/// `ρ ↦ ρ/(1 − ρ F_dr,int)`.
+fn nonlinear(fdr_inside: f32) -> impl Fn(f64) -> f64 {
     let fdr = f64::from(fdr_inside);
-    albedo.tabulate_with(NONLINEAR_ALBEDO_STEP_NM, |rho| rho / (1.0 - rho * fdr))
+    move |rho| rho / (1.0 - rho * fdr)
 }
 
 /// A `plastic` (`microfacet: None`) or `roughplastic` of Mitsuba 3.9.1.
