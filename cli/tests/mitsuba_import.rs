@@ -1631,3 +1631,37 @@ fn wrapped_integrators_and_referenced_samplers_load() -> TestResult {
     )?;
     Ok(())
 }
+
+/// A conductor whose `eta` and `k` samples end inside the spectral range
+/// (Mitsuba's documentation's gold, 300 to 800 nm: zero beyond, where the
+/// index is 0) loads, and reflects everything there, the Fresnel limit
+/// and Mitsuba's value; inside the samples it is gold. It was refused as
+/// "NaN" before.
+#[test]
+fn a_conductor_past_its_samples_reflects_everything() -> TestResult {
+    use simd_tracer::shading::material::Bsdf;
+    let dir = test_dir("conductor-past-samples")?;
+    let body = r#"    <shape type="rectangle"><bsdf type="conductor">
+        <spectrum name="eta" value="300:1.8, 400:1.65, 500:0.9, 600:0.2, 700:0.16, 800:0.18"/>
+        <spectrum name="k" value="300:1.92, 400:1.95, 500:1.95, 600:2.97, 700:3.8, 800:5.12"/>
+    </bsdf></shape>
+    <emitter type="constant"/>"#;
+    let path = write(&dir, "gold.xml", &scene(body))?;
+    let built = load(&path, &[], false)?.builder.build()?;
+    let conductor = built
+        .materials()
+        .iter()
+        .find(|m| matches!(m.bsdf, Bsdf::Conductor { .. }))
+        .ok_or("no conductor")?;
+    let Bsdf::Conductor { fresnel, .. } = conductor.bsdf else {
+        return Err("no conductor".into());
+    };
+    let function = built.angular()[fresnel.index()].function();
+    for cos in [0.2, 0.6, 1.0] {
+        let past = function.eval(cos, 820.0, None);
+        assert_eq!(past, 1.0, "820 nm, cos {cos}");
+        let inside = function.eval(cos, 650.0, None);
+        assert!(inside > 0.5 && inside < 0.99, "650 nm, cos {cos}: {inside}");
+    }
+    Ok(())
+}
