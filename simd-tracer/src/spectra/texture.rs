@@ -505,9 +505,8 @@ impl Texture {
                         FourierSpectrum::from_coeffs(core::array::from_fn(|j| {
                             texel.get(j).map_or(0.0, |&c| f64::from(c))
                         }));
-                    let range = self.range;
                     mapped.extend_from_slice(&project(&|lambda_nm| {
-                        series.eval_cos(range.cos_phase(lambda_nm)).max(0.0)
+                        series.eval_cos(self.range.cos_phase(lambda_nm)).max(0.0)
                     }));
                 }
                 TextureData::Fourier {

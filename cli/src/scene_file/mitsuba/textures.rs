@@ -79,14 +79,9 @@ const DEFAULT_COLOR1: f64 = 0.2;
 /// A `rawconstant`'s `value` as one number (Mitsuba's `eval_1` refuses a
 /// vector).
 fn raw_scalar(object: &Object<'_>) -> Result<f64, CliError> {
-    match object.get("value") {
-        Some(p) => match p.value {
-            Value::Float(v) => Ok(v),
-            Value::Integer(v) => Ok(v as f64),
-            ref other => Err(p.wrong_type("a float", other)),
-        },
-        None => Err(object.error("needs a `value`")),
-    }
+    object
+        .float_opt("value")?
+        .ok_or_else(|| object.error("needs a `value`"))
 }
 
 /// The 2-D part of `to_uv` (module docs), then `flip_v` turning `v` over.
