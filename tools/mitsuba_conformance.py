@@ -121,6 +121,7 @@ SCENES = {
     # lights
     "point_light": {"suite": "lights", "ref_spp": 4096, "negative": {"light_x": "1.4"}},
     "spot_light": {"suite": "lights", "ref_spp": 4096, "negative": {"beam": "12"}},
+    "sphere_lights": {"suite": "lights", "ref_spp": 4096, "negative": {"radius": "0.36"}},
     "directional_light": {"suite": "lights", "ref_spp": 4096},
     "constant_env": {"suite": "lights", "ref_spp": 4096},
     "envmap_rotated": {"suite": "lights", "ref_spp": 4096, "negative": {"angle": "75"}},

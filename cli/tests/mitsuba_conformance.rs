@@ -95,7 +95,8 @@
 //! `<default name=… value=…/>` that their negative control overrides,
 //! as Mitsuba's `-D name=value` would: rough conductor α 0.1 → 0.3, rough
 //! dielectric IOR 1.5 → 2.0, plastic `nonlinear` true → false, the point
-//! light 0.2 further along x, the environment map rotated 75° instead of
+//! light 0.2 further along x, a sphere light's radius 0.3 → 0.36, the
+//! environment map rotated 75° instead of
 //! 70°, blackbody 2 000 K → 2 200 K, checkerboard `to_uv` scale 3 → 3.5,
 //! an instance rotated 40° instead of 25°, `fov` 30° → 32°, Gaussian σ
 //! 0.3 → 0.5 px, `max_depth` 3 → 4, and a `$alpha` 0.2 → 0.4. Each must
@@ -291,6 +292,7 @@ conformance! {
     texture_checkerboard_fractions: [0.0032, 0.0029, 0.0032], 0.437 (0.036), 1.997 (0.700); "shift" = "0.5";   // M
     point_light:                    [0.0006, 0.0003, 0.0008], 0.132 (0.011), 0.551 (0.096); "light_x" = "1.4";  // M, F
     spot_light:                     [0.0011, 0.0009, 0.0011], 0.139 (0.013), 0.619 (0.154); "beam" = "12";      // M, F
+    sphere_lights:                  [0.0058, 0.0051, 0.0046], 0.231 (0.018), 1.117 (0.181); "radius" = "0.36";  // M
     directional_light:              [0.0004, 0.0003, 0.0007], 0.178 (0.014), 0.679 (0.152);                     // M, F
     constant_env:                   [0.0004, 0.0004, 0.0005], 0.239 (0.021), 0.685 (0.093);                     // M, F
     envmap_rotated:                 [0.0004, 0.0001, 0.0008], 0.181 (0.013), 0.610 (0.091); "angle" = "75";     // M, F

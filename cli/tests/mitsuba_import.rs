@@ -1665,3 +1665,43 @@ fn a_conductor_past_its_samples_reflects_everything() -> TestResult {
     }
     Ok(())
 }
+
+/// A `sphere` with an `area` emitter is one spherical light, sampled in
+/// its cone, at its centre and radius after `to_world`; stretched into an
+/// ellipsoid, or facing inwards (`flip_normals`), it stays emissive
+/// triangles.
+#[test]
+fn emitting_spheres_are_spherical_lights() -> TestResult {
+    let dir = test_dir("emitting_spheres")?;
+    let lamp = |transform: &str, flip: bool| {
+        format!(
+            r#"    <shape type="sphere">
+        <point name="center" x="0.5" y="0" z="0"/><float name="radius" value="0.25"/>
+        <transform name="to_world">{transform}</transform>
+        <boolean name="flip_normals" value="{flip}"/>
+        <emitter type="area"><rgb name="radiance" value="5"/></emitter>
+    </shape>
+    <shape type="rectangle"><bsdf type="diffuse"/></shape>"#
+        )
+    };
+    let similar = r#"<scale value="2"/><rotate y="1" angle="30"/><translate x="1" y="2" z="-3"/>"#;
+    let path = write(&dir, "sphere.xml", &scene(&lamp(similar, false)))?;
+    let built = load(&path, &[], false)?.builder.build()?;
+    let spheres = built.light_sampler().spheres();
+    assert_eq!(spheres.len(), 1);
+    let center = glam::Vec3::new(1.0 + 3f32.sqrt() / 2.0, 2.0, -3.0 - 0.5);
+    assert!(
+        (spheres[0].center - center).length() < 1e-5,
+        "{}",
+        spheres[0].center
+    );
+    assert!((spheres[0].radius - 0.5).abs() < 1e-6);
+    let stretched = r#"<scale x="2" y="1" z="1"/>"#;
+    for (transform, flip) in [(stretched, false), (similar, true)] {
+        let path = write(&dir, "other.xml", &scene(&lamp(transform, flip)))?;
+        let built = load(&path, &[], false)?.builder.build()?;
+        assert!(built.light_sampler().spheres().is_empty());
+        assert!(!built.lights().is_empty(), "{transform} {flip}");
+    }
+    Ok(())
+}

@@ -1519,3 +1519,33 @@ fn a_blend_with_a_mirror_reflects_its_weight() -> TestResult {
     assert!((more / 0.6 - 1.0).abs() < 0.03, "{more}");
     Ok(())
 }
+
+/// An emissive TOML `sphere` placed by rotations, translations and a
+/// uniform scale is one spherical light at its centre and radius; stretched
+/// into an ellipsoid it stays emissive triangles.
+#[test]
+fn emissive_toml_spheres_are_spherical_lights() -> TestResult {
+    let shape = |transform: &str| {
+        format!(
+            "{HEAD}[materials.lamp]\ntype = \"lambert\"\nalbedo = {{ constant = 0 }}\n\
+             emission = \"d65\"\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"lamp\"\n\
+             center = [0, 1, 0]\nradius = 0.5\ntransform = {transform}\n\
+             [[shapes]]\ntype = \"rectangle\"\nmaterial = \"grey\"\n"
+        )
+    };
+    let similar = "[{ scale = 2 }, { rotate = { axis = [0, 0, 1], angle_deg = 90 } }, \
+                   { translate = [3, 0, 0] }]";
+    let (_dir, path) = scene("sphere-light", &shape(similar))?;
+    let built = load(&path)?;
+    let spheres = built.light_sampler().spheres();
+    assert_eq!(spheres.len(), 1);
+    // (0, 1, 0) × 2 turned 90° about z is (−2, 0, 0); moved to (1, 0, 0).
+    assert!((spheres[0].center - glam::Vec3::new(1.0, 0.0, 0.0)).length() < 1e-5);
+    assert!((spheres[0].radius - 1.0).abs() < 1e-6);
+    assert!(built.lights().is_empty());
+    let (_dir, path) = scene("ellipsoid-light", &shape("[{ scale = [1, 2, 1] }]"))?;
+    let built = load(&path)?;
+    assert!(built.light_sampler().spheres().is_empty());
+    assert!(!built.lights().is_empty());
+    Ok(())
+}

@@ -303,6 +303,7 @@ fn smooth_instances_interpolate_their_normals_before_the_map() -> TestResult {
                 material: grey,
                 flip_normals: false,
                 face_normals: false,
+                sphere: false,
             },
         )?;
         let sphere = b.add_instanced_mesh(vec![(sphere_mesh(24), grey)])?;
@@ -551,6 +552,7 @@ fn row_of_spheres(segments: u32, count: usize, instancing: Instancing) -> TestRe
             material: grey,
             flip_normals: false,
             face_normals: false,
+            sphere: false,
         },
     )?;
     let sphere = b.add_instanced_mesh(vec![(sphere_mesh(segments), grey)])?;
@@ -637,6 +639,7 @@ fn twin_scene(instancing: Instancing, nudge: f32) -> TestResult<Scene> {
             material: floor,
             flip_normals: false,
             face_normals: false,
+            sphere: false,
         },
     )?;
     let mut sphere: MeshData = sphere_mesh(24);

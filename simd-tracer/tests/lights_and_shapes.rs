@@ -4,7 +4,7 @@
 //! tessellated sphere's smooth shading against the exact sphere (with the
 //! faceted sphere as the negative control), the shading-normal guard, and
 //! the environment map against the constant environment and a closed-form
-//! irradiance.
+//! irradiance, and a spherical lamp against the irradiance of a sphere.
 
 use glam::{Mat3, Vec3};
 use simd_tracer::film::Buffer;
@@ -253,6 +253,7 @@ fn sphere_scene(rho: f64, n: Vec3, face_normals: bool) -> TestResult<SceneBuilde
             material: m,
             flip_normals: false,
             face_normals,
+            sphere: false,
         },
     )?;
     let up = if n.y.abs() > 0.9 { Vec3::X } else { Vec3::Y };
@@ -339,6 +340,7 @@ fn bent_shading_normals_do_not_leak_light_through_a_surface() -> TestResult {
                 material: m,
                 flip_normals: false,
                 face_normals: false,
+                sphere: false,
             },
         )?;
         let i = b.add_spectrum("I", SpectrumSource::Constant(1.0))?;
@@ -517,5 +519,107 @@ fn hidden_emitters_light_the_scene_but_are_not_seen() -> TestResult {
     let (lit_seen, _) = render_y(&fourier()?, &sphere, &settings(4, 16, 4, false))?;
     let (lit_hidden, _) = render_y(&fourier()?, &sphere, &settings(4, 16, 4, true))?;
     assert_eq!(lit_seen, lit_hidden);
+    Ok(())
+}
+
+/// How [`lamp_over_floor`] places its lamp's mesh.
+#[derive(Clone, Copy)]
+struct LampPlacement {
+    /// Placed as a sphere: one light sampled in its cone, or else plain
+    /// emissive triangles.
+    sphere: bool,
+    /// Front faces into the ball.
+    flip_normals: bool,
+}
+
+/// The floor point straight below a spherical lamp of radius `radius` and
+/// radiance `radiance` centred at height `height`, seen by a narrow camera
+/// from the side.
+fn lamp_over_floor(rho: f64, lamp: [f32; 3], placement: LampPlacement) -> TestResult<Scene> {
+    let [radius, height, radiance] = lamp;
+    let mut b = floor_scene(rho, Vec3::new(3.0, 1.0, 0.0), Vec3::ZERO)?;
+    let e = b.add_spectrum("lamp", SpectrumSource::Constant(f64::from(radiance)))?;
+    let black = b.add_spectrum("black", SpectrumSource::Constant(0.0))?;
+    let mut material = Material::lambert("lamp", black);
+    material.emission = Some(e);
+    let m = b.add_material(material);
+    let transform = Transform::scale(Vec3::splat(radius))?
+        .then(&Transform::translate(Vec3::new(0.0, height, 0.0))?)?;
+    b.add_mesh_data(
+        &sphere_mesh(segments_for_sag(DEFAULT_SAG)),
+        &MeshPlacement {
+            transform: &transform,
+            material: m,
+            flip_normals: placement.flip_normals,
+            face_normals: false,
+            sphere: placement.sphere,
+        },
+    )?;
+    Ok(b.build()?)
+}
+
+/// A Lambert floor of albedo `ρ` below a sphere of radiance `L` that
+/// subtends the half-angle `θ` has radiance `ρ L sin² θ` (the irradiance of
+/// a sphere above a surface facing it is `π L sin² θ`). The lamp sampled
+/// in its cone gives it within four standard errors and the tessellation's
+/// bound (2 sag, module docs of `shading::sphere_light`), with a standard
+/// deviation a fifth or less of the same lamp's triangles sampled by area.
+/// Negative control: the formula with a radius 2 % larger is off by more
+/// than the tolerance.
+#[test]
+fn a_spherical_lamp_lights_the_floor_below_it() -> TestResult {
+    let (rho, radius, height, radiance) = (0.5, 0.4f32, 2.0f32, 30.0f32);
+    let expected_for = |r: f64| rho * f64::from(radiance) * (r / f64::from(height)).powi(2);
+    let expected = expected_for(f64::from(radius));
+    let s = settings(16, 16, 2, false);
+    let lamp = [radius, height, radiance];
+    let as_sphere = LampPlacement {
+        sphere: true,
+        flip_normals: false,
+    };
+    let cone = lamp_over_floor(rho, lamp, as_sphere)?;
+    assert_eq!(cone.light_sampler().spheres().len(), 1);
+    assert!(cone.lights().is_empty());
+    let (mean, error) = render_y(&fourier()?, &cone, &s)?;
+    let tolerance = 4.0 * error + 2.0 * f64::from(DEFAULT_SAG) * expected;
+    assert!(
+        (mean - expected).abs() < tolerance,
+        "{mean} vs {expected} ± {tolerance}"
+    );
+    let wrong = expected_for(1.02 * f64::from(radius));
+    assert!((mean - wrong).abs() > tolerance, "{mean} vs {wrong}");
+    let as_triangles = LampPlacement {
+        sphere: false,
+        ..as_sphere
+    };
+    let area = lamp_over_floor(rho, lamp, as_triangles)?;
+    assert!(area.light_sampler().spheres().is_empty());
+    let (area_mean, area_error) = render_y(&fourier()?, &area, &s)?;
+    assert!(
+        (area_mean - expected).abs() < 4.0 * area_error + tolerance,
+        "{area_mean} vs {expected}"
+    );
+    eprintln!(
+        "sphere lamp: cone {mean:.5} ± {error:.5}, area {area_mean:.5} ± {area_error:.5}, \
+         exact {expected:.5}"
+    );
+    assert!(error < 0.2 * area_error, "{error} vs {area_error}");
+    Ok(())
+}
+
+/// A lamp whose front faces point into the ball (`flip_normals`) is not
+/// lit from outside: it stays a set of triangles (black from outside), not
+/// a sphere light that would light the floor.
+#[test]
+fn an_inward_facing_sphere_is_not_a_sphere_light() -> TestResult {
+    let inward = LampPlacement {
+        sphere: true,
+        flip_normals: true,
+    };
+    let scene = lamp_over_floor(0.5, [1.0, 2.0, 30.0], inward)?;
+    assert!(scene.light_sampler().spheres().is_empty());
+    assert!(!scene.lights().is_empty());
+    let (mean, _) = render_y(&fourier()?, &scene, &settings(4, 4, 2, false))?;
+    assert_eq!(mean, 0.0);
     Ok(())
 }

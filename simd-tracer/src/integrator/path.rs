@@ -7,7 +7,7 @@ use super::packet_shading::{
     shading_normals, uniforms,
 };
 use super::{PathContext, RR_MAX_SURVIVAL, SHADOW_EPSILON};
-use crate::ids::SpectrumId;
+use crate::ids::{NO_INSTANCE, SpectrumId};
 use crate::packet::PacketHit;
 use crate::packet::RayPacket;
 use crate::sampling::sampler::{BounceDimensions, PathSampler};
@@ -49,6 +49,31 @@ fn environment_spectra<T: Transport>(
         }
     });
     transport.gather(scene, wavelengths, &spectra)
+}
+
+/// `p_light` with the lanes of `lanes` that hit a sphere light's triangle
+/// given that light's pdf from the ray's origin
+/// ([`crate::shading::light_sampler::LightSampler::sphere_pdf`]; the
+/// triangles' own records hold no selection probability).
+fn sphere_light_pdfs(
+    scene: &Scene,
+    hit: &PacketHit,
+    rays: &RayPacket,
+    lanes: LaneMask,
+    p_light: f32x8,
+) -> f32x8 {
+    let sampler = scene.light_sampler();
+    let mut pdf = p_light.to_array();
+    for lane in lanes.iter() {
+        if hit.instance[lane] != NO_INSTANCE {
+            continue;
+        }
+        let origin = Vec3::from(rays.origin.map(|axis| axis.to_array()[lane]));
+        if let Some(p) = sampler.sphere_pdf(hit.triangle[lane], origin) {
+            pdf[lane] = p;
+        }
+    }
+    f32x8::new(pdf)
 }
 
 /// The light samples of the lanes that chose a light other than a
@@ -352,7 +377,10 @@ impl<S: Copy> PathState<S> {
         let emits = surface.emits_towards(cos_o).and(active);
         if !emits.is_empty() && visible {
             let distance = hit.t * direction_length;
-            let p_light = surface.light_pdf(distance * distance, cos_o);
+            let mut p_light = surface.light_pdf(distance * distance, cos_o);
+            if scene.light_sampler().has_spheres() {
+                p_light = sphere_light_pdfs(scene, hit, rays, emits, p_light);
+            }
             let weight = self
                 .previous_pdf
                 .simd_gt(f32x8::ZERO)

@@ -121,6 +121,7 @@ impl InstancedMesh {
                     material: *material,
                     flip_normals: false,
                     face_normals: false,
+                    sphere: false,
                 },
             )?;
         }

@@ -34,13 +34,14 @@ use crate::scene::instances::{
     Instancing, MIN_INSTANCE_USES, SmoothCorners,
 };
 use crate::scene::mesh::MeshData;
-use crate::scene::transform::Transform;
+use crate::scene::transform::{SIMILARITY_TOLERANCE, Transform};
 use crate::scene::triangle_store::TriangleStore;
 use crate::shading::light::{Light, LightSet};
 use crate::shading::light_sampler::{DirectionalLight, LightSampler, PointLight, SceneLights};
 use crate::shading::material::{
     Bsdf, Material, MaterialTables, Relief, SceneFluorophore, tabulated_sides,
 };
+use crate::shading::sphere_light::SphereLight;
 use crate::shading::surface::SurfacePacket;
 use crate::shading::surface::{PackedSurfaces, Surface, triangle_area};
 use crate::simd::{LANES, LaneMask};
@@ -736,6 +737,47 @@ fn geometric_normal([a, b, c]: &[Vec3; 3]) -> Vec3 {
     (*b - *a).cross(*c - *a).normalize()
 }
 
+/// Whether triangle `index` belongs to one of `spheres` (in ascending
+/// order of their triangles).
+fn in_sphere_light(spheres: &[SphereLight], index: usize) -> bool {
+    let Ok(triangle) = u32::try_from(index) else {
+        return false;
+    };
+    let at = spheres.partition_point(|s| s.triangles.end <= triangle);
+    spheres.get(at).is_some_and(|s| s.holds(triangle))
+}
+
+/// Checks that every vertex of each sphere light's triangles lies on its
+/// sphere, within [`SIMILARITY_TOLERANCE`] of the radius (the vertices of
+/// [`analytic::sphere_mesh`] are on the unit sphere, placed by a
+/// similarity).
+fn validate_sphere_lights(spheres: &[SphereLight], triangles: &[[Vec3; 3]]) -> Result<(), String> {
+    for sphere in spheres {
+        sphere.validate()?;
+        let range = sphere.triangles.start as usize..sphere.triangles.end as usize;
+        let Some(vertices) = triangles.get(range) else {
+            return Err(format!(
+                "sphere light triangles {:?} of {}",
+                sphere.triangles,
+                triangles.len()
+            ));
+        };
+        let bound = 4.0 * SIMILARITY_TOLERANCE * sphere.radius;
+        let off = |v: &Vec3| ((*v - sphere.center).length() - sphere.radius).abs();
+        if let Some(v) = vertices
+            .iter()
+            .flatten()
+            .find(|v| off(v).is_nan() || off(v) > bound)
+        {
+            return Err(format!(
+                "sphere light at {} radius {}: vertex {v} is off the sphere",
+                sphere.center, sphere.radius
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The least the BVH keeps per (non-degenerate) triangle
 /// ([`crate::accel::BYTES_PER_TRIANGLE`], derived from the BVH's own types).
 pub const BVH_TRIANGLE_BYTES: usize = crate::accel::BYTES_PER_TRIANGLE;
@@ -803,6 +845,21 @@ pub struct SceneBuilder {
     instancing: Instancing,
     skipped: usize,
     checks: DerivedChecks,
+    /// Meshes placed as spheres ([`MeshPlacement::sphere`]).
+    spheres: Vec<SphereMark>,
+}
+
+/// A placed mesh that tessellates a sphere, for [`SceneBuilder::build`]
+/// to light as one [`SphereLight`] when its material emits outwards.
+#[derive(Debug, Clone)]
+struct SphereMark {
+    /// The builder's triangles of the mesh.
+    triangles: core::ops::Range<usize>,
+    center: Vec3,
+    radius: f32,
+    material: MaterialId,
+    /// Whether the front faces point out of the ball (no `flip_normals`).
+    outward: bool,
 }
 
 /// Where a smooth triangle's vertex normals go in the table
@@ -893,6 +950,11 @@ pub struct MeshPlacement<'a> {
     pub flip_normals: bool,
     /// Ignore the vertex normals (flat shading), Mitsuba's `face_normals`.
     pub face_normals: bool,
+    /// The mesh tessellates the unit sphere about the origin, its vertices
+    /// on it ([`crate::scene::analytic::sphere_mesh`]): placed by a
+    /// similarity with an emitting material, it is sampled as one
+    /// spherical light ([`crate::shading::sphere_light`]).
+    pub sphere: bool,
 }
 
 /// What [`SceneBuilder::add_mesh_data`] added.
@@ -936,6 +998,7 @@ impl SceneBuilder {
             instancing: Instancing::Auto,
             skipped: 0,
             checks: DerivedChecks::default(),
+            spheres: Vec::new(),
         }
     }
 
@@ -1224,6 +1287,7 @@ impl SceneBuilder {
         placement: &MeshPlacement<'_>,
     ) -> Result<MeshAdded, SceneError> {
         mesh.validate().map_err(SceneError::Mesh)?;
+        let first = self.triangles.len();
         self.triangles.reserve(mesh.triangles.len());
         self.triangle_material.reserve(mesh.triangles.len());
         let transform = placement.transform;
@@ -1284,7 +1348,39 @@ impl SceneBuilder {
                 }
             }
         }
+        if let (true, Some(radius)) = (placement.sphere, transform.uniform_scale()) {
+            self.spheres.push(SphereMark {
+                triangles: first..self.triangles.len(),
+                center: transform.point(Vec3::ZERO),
+                radius,
+                material: placement.material,
+                outward: !placement.flip_normals,
+            });
+        }
         Ok(added)
+    }
+
+    /// The meshes placed as spheres ([`MeshPlacement::sphere`]) that are
+    /// lit as spherical lights: those whose material emits towards the
+    /// outside (front faces out, or two-sided), in triangle order.
+    fn sphere_lights(&self) -> Vec<SphereLight> {
+        self.spheres
+            .iter()
+            .filter_map(|mark| {
+                let material = self.materials.get(mark.material.index())?;
+                let emission = material.emission.filter(|e| !e.is_none())?;
+                let start = u32::try_from(mark.triangles.start).ok()?;
+                let end = u32::try_from(mark.triangles.end).ok()?;
+                let light = SphereLight {
+                    center: mark.center,
+                    radius: mark.radius,
+                    emission,
+                    triangles: start..end,
+                };
+                let outside = mark.outward || material.two_sided;
+                (outside && light.validate().is_ok()).then_some(light)
+            })
+            .collect()
     }
 
     /// Adds the quad `a b c d` (counter-clockwise) as two triangles.
@@ -1446,6 +1542,7 @@ impl SceneBuilder {
                             material: placement.material.unwrap_or(*own),
                             flip_normals: placement.flip_normals,
                             face_normals: placement.face_normals,
+                            sphere: false,
                         },
                     )?;
                 }
@@ -1578,6 +1675,7 @@ impl SceneBuilder {
             ));
         }
         let tangents = self.tangents();
+        let spheres = self.sphere_lights();
         let bvh = Bvh::build(&self.triangles);
         let full = self.checks == DerivedChecks::Full;
         if full {
@@ -1587,6 +1685,7 @@ impl SceneBuilder {
                     .validate(&self.materials)
                     .map_err(SceneError::Bvh)?;
             }
+            validate_sphere_lights(&spheres, &self.triangles).map_err(SceneError::Light)?;
         }
         // Material ids were checked above, so every triangle has a record
         // (`Surface::NONE` is unreachable). The records are packed as they
@@ -1622,6 +1721,7 @@ impl SceneBuilder {
         let candidates: Vec<Light> = (0..triangles.len())
             .into_par_iter()
             .filter(|&index| packed_surfaces.emits(index))
+            .filter(|&index| !in_sphere_light(&spheres, index))
             .filter_map(|index| {
                 let vertices = vertices_of(index);
                 let id = *self.triangle_material.get(index)?;
@@ -1662,6 +1762,7 @@ impl SceneBuilder {
             points: &self.point_lights,
             directional: &directional,
             environment: self.environment_map.as_ref(),
+            spheres: &spheres,
             scene_radius,
             spectra: &self.spectra,
         })
@@ -1743,6 +1844,7 @@ mod tests {
                         material: m,
                         flip_normals: false,
                         face_normals: false,
+                        sphere: false,
                     },
                 )?;
             }

@@ -32,6 +32,14 @@ impl Default for Transform {
     }
 }
 
+/// Relative tolerance of [`Transform::uniform_scale`] on `MᵀM = s² I`:
+/// axes equal in length within about 5·10⁻⁵ and orthogonal within as much,
+/// a tenth of the default sag of tessellated spheres
+/// ([`crate::scene::analytic::DEFAULT_SAG`], 10⁻³ radii): a transform within
+/// it deforms a sphere less than its tessellation does, while rotations and
+/// scalings composed in `f32` (errors of a few 10⁻⁷) pass.
+pub const SIMILARITY_TOLERANCE: f32 = 1e-4;
+
 /// Why a transform is refused.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct TransformError(pub &'static str);
@@ -153,6 +161,21 @@ impl Transform {
         self.to_world.matrix3.determinant() < 0.0
     }
 
+    /// The scale `s` if the linear part is `s` times a rotation or a
+    /// mirroring (a similarity: spheres stay spheres), within a relative
+    /// [`SIMILARITY_TOLERANCE`] on `MᵀM = s² I`; `None` otherwise.
+    pub fn uniform_scale(&self) -> Option<f32> {
+        let m = self.to_world.matrix3;
+        let gram = m.transpose() * m;
+        let scale_sq = (gram.x_axis.x + gram.y_axis.y + gram.z_axis.z) / 3.0;
+        if !(scale_sq > 0.0 && scale_sq.is_finite()) {
+            return None;
+        }
+        let off = (gram - Mat3A::from_diagonal(Vec3::splat(scale_sq))).to_cols_array();
+        let worst = off.iter().fold(0.0f32, |w, x| w.max(x.abs()));
+        (worst <= SIMILARITY_TOLERANCE * scale_sq).then(|| scale_sq.sqrt())
+    }
+
     /// The factor by which areas of a surface with unit normal `n` (before
     /// the transform) grow: `|det M| · |M⁻ᵀ n|`.
     pub fn area_scale(&self, n: Vec3) -> f32 {
@@ -167,6 +190,27 @@ mod tests {
 
     fn close(a: Vec3, b: Vec3) -> bool {
         (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn similarities_have_a_uniform_scale() {
+        let scaled = Transform::scale(Vec3::splat(2.5))
+            .and_then(|s| s.then(&Transform::rotate(Vec3::new(1.0, 2.0, 3.0), 37.0)?))
+            .and_then(|s| s.then(&Transform::translate(Vec3::new(4.0, 5.0, 6.0))?))
+            .expect("valid");
+        assert!((scaled.uniform_scale().expect("similarity") - 2.5).abs() < 1e-5);
+        let mirrored = Transform::scale(Vec3::new(-3.0, 3.0, 3.0)).expect("valid");
+        assert!((mirrored.uniform_scale().expect("similarity") - 3.0).abs() < 1e-5);
+        let stretched = Transform::scale(Vec3::new(1.0, 1.0, 1.01)).expect("valid");
+        assert_eq!(stretched.uniform_scale(), None);
+        let sheared = Transform::matrix_rows([
+            [1.0, 0.1, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ])
+        .expect("valid");
+        assert_eq!(sheared.uniform_scale(), None);
     }
 
     #[test]

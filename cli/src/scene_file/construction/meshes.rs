@@ -99,6 +99,9 @@ pub(crate) struct Placement {
     pub(crate) flip_normals: bool,
     /// Shade flat, ignoring vertex normals.
     pub(crate) face_normals: bool,
+    /// The mesh is the unit sphere's tessellation
+    /// ([`simd_tracer::scene::MeshPlacement::sphere`]).
+    pub(crate) sphere: bool,
 }
 
 /// A mesh's parts, each with its material, as read from a file or made by
@@ -123,6 +126,7 @@ impl Mesher {
                         material: *material,
                         flip_normals: placement.flip_normals,
                         face_normals: placement.face_normals,
+                        sphere: placement.sphere,
                     },
                 )
                 .map_err(|e| e.to_string())?;

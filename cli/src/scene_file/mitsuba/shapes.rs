@@ -175,6 +175,7 @@ impl<'e> Importer<'e, '_> {
                 transform,
                 flip_normals,
                 face_normals,
+                sphere: plugin == "sphere",
             },
         )))
     }
@@ -251,6 +252,7 @@ impl<'e> Importer<'e, '_> {
             transform: object.transform("to_world")?,
             flip_normals: false,
             face_normals: false,
+            sphere: false,
         };
         self.check_unused(object)?;
         let spot = Self::spot(object.element, object.describe());

@@ -37,6 +37,7 @@ impl Loader<'_> {
             transform,
             flip_normals: flag("flip_normals")?,
             face_normals: flag("face_normals")?,
+            sphere: false,
         })
     }
 
@@ -311,7 +312,10 @@ impl Loader<'_> {
                 "material",
                 "a shape needs `material`",
             )?)?;
-            let placement = self.placement(&table, local)?;
+            let placement = Placement {
+                sphere: kind == "sphere",
+                ..self.placement(&table, local)?
+            };
             let (name, only) = self.instancing(&table)?;
             let parts = vec![(mesh, material)];
             match name {
