@@ -1758,7 +1758,7 @@ impl SceneBuilder {
         .reduce(|(min, max), (lo, hi)| (min.min(lo), max.max(hi)));
         let scene_radius = bounds.map_or(1.0, |(min, max)| 0.5 * (max - min).length());
         let light_sampler = LightSampler::new(&SceneLights {
-            triangle_power: lights.total_power(),
+            triangle_groups: lights.group_powers(),
             points: &self.point_lights,
             directional: &directional,
             environment: self.environment_map.as_ref(),
@@ -1768,8 +1768,8 @@ impl SceneBuilder {
         })
         .map_err(SceneError::Light)?;
         light_sampler.validate().map_err(SceneError::Light)?;
-        if light_sampler.has_others() {
-            lights.scale_selection(light_sampler.triangle_share());
+        if !light_sampler.group_shares().is_empty() {
+            lights.select_groups(light_sampler.group_shares());
         }
         for (triangle, light_pmf) in lights.pmfs() {
             packed_surfaces.set_light_pmf(triangle as usize, light_pmf);

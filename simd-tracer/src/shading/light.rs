@@ -1,8 +1,12 @@
 //! Emissive triangles and their sampling for next-event estimation.
 //!
-//! A light is chosen with probability proportional to its power
-//! `Φ ∝ A · π · mean(L_e)` (doubled if two-sided), then a point uniformly on
-//! the triangle (`b0 = 1 − √u`, `b1 = v √u`; Turk 1990). The solid-angle pdf
+//! The triangles form groups, each a run of consecutive triangles of one
+//! material (a lamp's mesh, a quad): the light selection
+//! ([`crate::shading::light_sampler`]) gives each group its probability
+//! and, within a group, a triangle is chosen with probability
+//! proportional to its power `Φ ∝ A · π · mean(L_e)` (doubled if
+//! two-sided); with one group, in proportion to its power alone. Then a
+//! point uniformly on the triangle (`b0 = 1 − √u`, `b1 = v √u`; Turk 1990). The solid-angle pdf
 //! of a point `y` seen from `x` is `P(light) · |x − y|² / (A cos θ_y)`, the
 //! same expression MIS uses when a BSDF-sampled ray hits the light.
 //!
@@ -49,6 +53,10 @@ pub struct LightSet {
     registers: Option<LightRegisters>,
     /// `Σ A π L̄` (doubled when two-sided) over the lights.
     total_power: f64,
+    /// Per group (module docs): the end of its lights in `lights`.
+    group_ends: Vec<u32>,
+    /// Per group: its power.
+    group_powers: Vec<f64>,
 }
 
 /// Up to [`LANES`] lights, each field in one register (lane `l`: light
@@ -209,6 +217,21 @@ impl LightSet {
                 powers.push(power);
             }
         }
+        for (index, pair) in set.lights.windows(2).enumerate() {
+            let [a, b] = [&pair[0], &pair[1]];
+            if a.triangle + 1 != b.triangle || a.surface.material != b.surface.material {
+                set.group_ends.push(index as u32 + 1);
+            }
+        }
+        if !set.lights.is_empty() {
+            set.group_ends.push(set.lights.len() as u32);
+        }
+        let mut start = 0;
+        for &end in &set.group_ends {
+            set.group_powers
+                .push(powers[start..end as usize].iter().sum());
+            start = end as usize;
+        }
         let total: f64 = powers.iter().sum();
         set.total_power = total;
         let mut running = 0.0;
@@ -237,14 +260,46 @@ impl LightSet {
         self.total_power
     }
 
-    /// Multiplies every selection probability by `share`, the probability
-    /// that next-event estimation samples a triangle at all
-    /// ([`crate::shading::light_sampler`]), in the lights and their
-    /// registers ([`LightSet::pmfs`] then gives the scaled ones). The CDF is
-    /// left relative: the caller rescales its light number.
-    pub fn scale_selection(&mut self, share: f32) {
-        for light in &mut self.lights {
-            light.surface.light_pmf *= share;
+    /// The power of each group of lights (module docs).
+    pub fn group_powers(&self) -> &[f64] {
+        &self.group_powers
+    }
+
+    /// Gives group `g` the selection probability `shares[g]` (absolute:
+    /// their sum is the probability that next-event estimation samples a
+    /// triangle at all, [`crate::shading::light_sampler`]), shared among
+    /// its lights in proportion to their power, in the lights and their
+    /// registers ([`LightSet::pmfs`] then gives the new ones). The CDF is
+    /// conditional on choosing a triangle: the caller rescales its light
+    /// number. Applied once, to the probabilities [`LightSet::new`] made;
+    /// `shares` of another length than the groups leave the set as it is.
+    pub fn select_groups(&mut self, shares: &[f64]) {
+        if shares.len() != self.group_ends.len() || self.total_power <= 0.0 {
+            return;
+        }
+        let triangle_share: f64 = shares.iter().sum();
+        let mut start = 0;
+        for ((&end, &share), &power) in self.group_ends.iter().zip(shares).zip(&self.group_powers) {
+            let lights = &mut self.lights[start..end as usize];
+            start = end as usize;
+            // Each light's probability by power is p/total; within its group
+            // it is (p/total)/(P_g/total).
+            let scale = if power > 0.0 {
+                share * self.total_power / power
+            } else {
+                0.0
+            };
+            for light in lights {
+                light.surface.light_pmf = (f64::from(light.surface.light_pmf) * scale) as f32;
+            }
+        }
+        let mut running = 0.0f64;
+        for (light, cdf) in self.lights.iter().zip(&mut self.cdf) {
+            running += f64::from(light.surface.light_pmf);
+            *cdf = (running / triangle_share) as f32;
+        }
+        if let Some(last) = self.cdf.last_mut() {
+            *last = 1.0;
         }
         self.registers = LightRegisters::new(&self.lights, &self.cdf);
     }
@@ -285,6 +340,20 @@ impl LightSet {
             return Err(format!(
                 "light triangle {} of {} triangles",
                 light.triangle, self.triangle_count
+            ));
+        }
+        let ends_rise = self.group_ends.windows(2).all(|pair| pair[0] < pair[1]);
+        let last_end = self.group_ends.last().map_or(0, |&end| end as usize);
+        if !ends_rise
+            || last_end != self.lights.len()
+            || self.group_ends.first() == Some(&0)
+            || self.group_powers.len() != self.group_ends.len()
+        {
+            return Err(format!(
+                "{} light groups ending at {:?} for {} lights",
+                self.group_powers.len(),
+                self.group_ends,
+                self.lights.len()
             ));
         }
         if self.registers != LightRegisters::new(&self.lights, &self.cdf) {
@@ -446,6 +515,28 @@ mod tests {
             emits_towards(false, 0.1) && !emits_towards(false, -0.1) && emits_towards(true, -0.1)
         );
         assert!(LightSet::default().sample(0.5, 0.5, 0.5).is_none());
+    }
+
+    /// The dim and the bright light are two groups (their triangles are not
+    /// consecutive, and their materials differ); given probabilities 0.6
+    /// and 0.4 they keep them, and the set stays valid. Shares of the wrong
+    /// length change nothing.
+    #[test]
+    fn groups_take_their_probabilities() {
+        let (_, _, mut set) = lights();
+        assert_eq!(set.group_powers().len(), 2);
+        let [dim, bright] = [set.group_powers()[0], set.group_powers()[1]];
+        assert!((bright / dim - 3.0).abs() < 1e-9, "{dim} {bright}");
+        let before = set.clone();
+        set.select_groups(&[1.0]);
+        assert_eq!(set, before);
+        set.select_groups(&[0.6, 0.4]);
+        assert!((set.pmf_of_triangle(0) - 0.6).abs() < 1e-6);
+        assert!((set.pmf_of_triangle(2) - 0.4).abs() < 1e-6);
+        assert_eq!(set.validate(), Ok(()));
+        // The CDF is conditional on choosing a triangle: 0.6 of [0, 1).
+        let pick = |u: f32| set.sample(u, 0.3, 0.3).map(|s| s.triangle);
+        assert_eq!((pick(0.59), pick(0.61)), (Some(0), Some(2)));
     }
 
     /// `count` lights of powers 1, 2, … (emission spectra `i + 1`), at

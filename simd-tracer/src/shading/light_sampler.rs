@@ -1,8 +1,9 @@
-//! Which light next-event estimation samples: the emissive triangles
-//! ([`crate::shading::light::LightSet`]) as one group, and the lights that
-//! are not triangles — point lights, directional lights, spherical lights
-//! and an environment map. Each of these lights (the group counting as
-//! one) is chosen with a defensive mixture of two probabilities: half
+//! Which light next-event estimation samples: the groups of emissive
+//! triangles ([`crate::shading::light::LightSet`]: a run of triangles of
+//! one material, such as a lamp's mesh), and the lights that are not
+//! triangles — point lights, directional lights, spherical lights and an
+//! environment map. Each of these lights (a group counting as one) is
+//! chosen with a defensive mixture of two probabilities: half
 //! proportional to its power (pbrt-v4's power light sampler), half uniform
 //! (Mitsuba 3's choice),
 //!
@@ -28,11 +29,14 @@
 //!   among the emissive triangles, and a BSDF sample that hits one is
 //!   MIS-weighted with [`LightSampler::sphere_pdf`].
 //!
-//! Bars are means over the spectral range. The triangles' share `P_tri`
-//! scales their selection probabilities (stored in the surface records for
-//! MIS); a lane whose light number `ξ ≥ P_tri` samples the other lights
-//! with `(ξ − P_tri)/(1 − P_tri)`. With no other light `P_tri = 1` and
-//! nothing changes.
+//! Bars are means over the spectral range. The groups' probabilities
+//! become their triangles' ([`LightSet::select_groups`], stored in the
+//! surface records for MIS); their sum is the triangles' share `P_tri`. A
+//! lane whose light number `ξ ≥ P_tri` samples the other lights with
+//! `(ξ − P_tri)/(1 − P_tri)`. With one group and no other light
+//! `P_tri = 1` and the triangles keep their probabilities by power.
+//!
+//! [`LightSet::select_groups`]: crate::shading::light::LightSet::select_groups
 //!
 //! Point and directional lights are delta lights: reached only by NEE
 //! (no MIS; their sample's "pdf" is the selection probability and the
@@ -135,6 +139,8 @@ pub struct LightSampler {
     cdf: Vec<f32>,
     environment: Option<Distribution2D>,
     environment_pmf: f32,
+    /// Absolute selection probability of each group of triangles.
+    group_shares: Vec<f64>,
     /// The spherical lights, in ascending order of their triangles.
     spheres: Vec<SphereLight>,
     /// Absolute selection probability of each sphere.
@@ -150,6 +156,7 @@ impl Default for LightSampler {
             cdf: Vec::new(),
             environment: None,
             environment_pmf: 0.0,
+            group_shares: Vec::new(),
             spheres: Vec::new(),
             sphere_pmf: Vec::new(),
         }
@@ -159,8 +166,9 @@ impl Default for LightSampler {
 /// The lights of a scene as [`LightSampler::new`] reads them.
 #[derive(Debug, Clone, Copy)]
 pub struct SceneLights<'a> {
-    /// Power of all emissive triangles (`Σ A π L̄`).
-    pub triangle_power: f64,
+    /// Power of each group of emissive triangles (`Σ A π L̄`,
+    /// [`crate::shading::light::LightSet::group_powers`]).
+    pub triangle_groups: &'a [f64],
     /// Point lights.
     pub points: &'a [PointLight],
     /// Directional lights.
@@ -168,7 +176,7 @@ pub struct SceneLights<'a> {
     /// The environment map.
     pub environment: Option<&'a EnvironmentMap>,
     /// Spherical area lights, in ascending order of their triangles (which
-    /// are not counted in `triangle_power`).
+    /// are not among the groups of `triangle_groups`).
     pub spheres: &'a [SphereLight],
     /// Radius of the scene's bounding sphere.
     pub scene_radius: f32,
@@ -227,17 +235,14 @@ impl LightSampler {
         if let Some(bad) = powers.iter().position(|p| !(p.is_finite() && *p >= 0.0)) {
             return Err(format!("light {bad}: power is not finite"));
         }
-        let triangle_power = lights.triangle_power.max(0.0);
+        let groups: Vec<f64> = lights.triangle_groups.iter().map(|p| p.max(0.0)).collect();
+        let triangle_power: f64 = groups.iter().sum();
         let other_power: f64 = powers.iter().sum();
         let total = triangle_power + other_power;
-        if others.is_empty() || total.is_nan() || total <= 0.0 {
+        if (others.is_empty() && groups.len() <= 1) || total.is_nan() || total <= 0.0 {
             return Ok(Self::default());
         }
-        let lit = powers
-            .iter()
-            .chain([&triangle_power])
-            .filter(|&&p| p > 0.0)
-            .count();
+        let lit = powers.iter().chain(&groups).filter(|&&p| p > 0.0).count();
         let share = |power: f64| {
             if power > 0.0 {
                 (1.0 - UNIFORM_SHARE) * power / total + UNIFORM_SHARE / lit as f64
@@ -245,11 +250,17 @@ impl LightSampler {
                 0.0
             }
         };
-        let triangle_share = share(triangle_power);
+        let group_shares: Vec<f64> = groups.iter().map(|&p| share(p)).collect();
+        let triangle_share: f64 = if others.is_empty() {
+            1.0
+        } else {
+            group_shares.iter().sum()
+        };
         let other_share = 1.0 - triangle_share;
         let mut sampler = Self {
             triangle_share: triangle_share as f32,
             others,
+            group_shares,
             ..Self::default()
         };
         let mut running = 0.0;
@@ -281,8 +292,9 @@ impl LightSampler {
 
     /// Checks the invariants: one probability and CDF entry per light, the
     /// CDF non-decreasing to 1, probabilities summing with the triangles'
-    /// share to 1, a distribution exactly when an environment is sampled,
-    /// one probability per valid sphere light.
+    /// share to 1, the groups' probabilities to that share, a distribution
+    /// exactly when an environment is sampled, one probability per valid
+    /// sphere light.
     pub fn validate(&self) -> Result<(), String> {
         let n = self.others.len();
         if self.sphere_pmf.len() != self.spheres.len() {
@@ -309,6 +321,13 @@ impl LightSampler {
         if (sum - 1.0).abs() > 1e-4 {
             return Err(format!("selection probabilities sum to {sum}"));
         }
+        let groups: f64 = self.group_shares.iter().sum();
+        if !self.group_shares.is_empty() && (groups - f64::from(self.triangle_share)).abs() > 1e-4 {
+            return Err(format!(
+                "the groups' probabilities sum to {groups}, the triangles' share is {}",
+                self.triangle_share
+            ));
+        }
         let sampled = self.others.contains(&OtherLight::Environment);
         match (&self.environment, sampled) {
             (Some(d), true) => d.validate(),
@@ -321,6 +340,13 @@ impl LightSampler {
     #[inline]
     pub fn triangle_share(&self) -> f32 {
         self.triangle_share
+    }
+
+    /// The absolute selection probability of each group of triangles
+    /// (empty when the triangles keep their probabilities by power: one
+    /// group and no other light).
+    pub fn group_shares(&self) -> &[f64] {
+        &self.group_shares
     }
 
     /// Whether there are lights besides triangles.
@@ -564,7 +590,7 @@ mod tests {
     fn sampler(map: &EnvironmentMap) -> LightSampler {
         let spectra = [];
         match LightSampler::new(&SceneLights {
-            triangle_power: 0.0,
+            triangle_groups: &[],
             points: &[],
             directional: &[],
             environment: Some(map),
@@ -680,7 +706,7 @@ mod tests {
             .filter_map(|&c| SceneSpectrum::new(SpectrumSource::Constant(c), range).ok())
             .collect();
         let sampler = match LightSampler::new(&SceneLights {
-            triangle_power: 1.0,
+            triangle_groups: &[1.0],
             points: &[PointLight {
                 position: Vec3::new(0.5, 2.0, -1.0),
                 intensity: SpectrumId(0),
@@ -783,7 +809,7 @@ mod tests {
         let spheres = [sphere(10..30, 0.5), sphere(30..40, 2.0)];
         let points = [point(1.0), point(0.0)];
         let lights = SceneLights {
-            triangle_power: 3.0,
+            triangle_groups: &[1.0, 2.0],
             points: &points,
             directional: &[],
             environment: None,
@@ -793,30 +819,29 @@ mod tests {
         };
         let sampler = LightSampler::new(&lights).expect("valid lights");
         assert_eq!(sampler.validate(), Ok(()));
-        // Powers: triangles 3, points 4π and 0, spheres 4π² ρ².
+        // Powers: two groups of triangles 1 and 2, points 4π and 0, spheres
+        // 4π² ρ²; five lights of positive power.
         let pi = PI;
-        let powers = [
-            3.0,
-            4.0 * pi,
-            0.0,
-            4.0 * pi * pi * 0.25,
-            4.0 * pi * pi * 4.0,
-        ];
+        let powers = [1.0, 2.0, 4.0 * pi, 0.0, pi * pi, 16.0 * pi * pi];
         let total: f64 = powers.iter().sum();
         let expected: Vec<f64> = powers
             .iter()
             .map(|&p| {
                 if p > 0.0 {
-                    0.5 * p / total + 0.5 / 4.0
+                    0.5 * p / total + 0.5 / 5.0
                 } else {
                     0.0
                 }
             })
             .collect();
-        let close = |a: f32, b: f64| (f64::from(a) - b).abs() < 1e-6;
-        assert!(close(sampler.triangle_share(), expected[0]));
-        for (k, &want) in expected[1..].iter().enumerate() {
-            assert!(close(sampler.pmf[k], want), "light {k}: {}", sampler.pmf[k]);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-6;
+        assert!(close(sampler.group_shares()[0], expected[0]));
+        assert!(close(sampler.group_shares()[1], expected[1]));
+        let share = f64::from(sampler.triangle_share());
+        assert!(close(share, expected[0] + expected[1]), "{share}");
+        for (k, &want) in expected[2..].iter().enumerate() {
+            let got = f64::from(sampler.pmf[k]);
+            assert!(close(got, want), "light {k}: {got}");
         }
         // The MIS pdf of a sphere's triangle: its probability over Ω.
         let origin = Vec3::ZERO;
