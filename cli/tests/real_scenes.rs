@@ -1522,17 +1522,20 @@ fn a_blend_with_a_mirror_reflects_its_weight() -> TestResult {
 
 /// An emissive TOML `sphere` placed by rotations, translations and a
 /// uniform scale is one spherical light at its centre and radius; stretched
-/// into an ellipsoid it stays emissive triangles.
+/// into an ellipsoid, emitting from both sides (it could enclose the
+/// scene) or tessellated more coarsely than the default `sag`, it stays
+/// emissive triangles.
 #[test]
 fn emissive_toml_spheres_are_spherical_lights() -> TestResult {
-    let shape = |transform: &str| {
+    let lamp = |transform: &str, extra: &str| {
         format!(
             "{HEAD}[materials.lamp]\ntype = \"lambert\"\nalbedo = {{ constant = 0 }}\n\
-             emission = \"d65\"\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"lamp\"\n\
+             emission = \"d65\"\n{extra}[[shapes]]\ntype = \"sphere\"\nmaterial = \"lamp\"\n\
              center = [0, 1, 0]\nradius = 0.5\ntransform = {transform}\n\
              [[shapes]]\ntype = \"rectangle\"\nmaterial = \"grey\"\n"
         )
     };
+    let shape = |transform: &str| lamp(transform, "");
     let similar = "[{ scale = 2 }, { rotate = { axis = [0, 0, 1], angle_deg = 90 } }, \
                    { translate = [3, 0, 0] }]";
     let (_dir, path) = scene("sphere-light", &shape(similar))?;
@@ -1543,9 +1546,19 @@ fn emissive_toml_spheres_are_spherical_lights() -> TestResult {
     assert!((spheres[0].center - glam::Vec3::new(1.0, 0.0, 0.0)).length() < 1e-5);
     assert!((spheres[0].radius - 1.0).abs() < 1e-6);
     assert!(built.lights().is_empty());
-    let (_dir, path) = scene("ellipsoid-light", &shape("[{ scale = [1, 2, 1] }]"))?;
-    let built = load(&path)?;
-    assert!(built.light_sampler().spheres().is_empty());
-    assert!(!built.lights().is_empty());
+    let others = [
+        ("ellipsoid-light", shape("[{ scale = [1, 2, 1] }]")),
+        ("two-sided-light", lamp(similar, "two_sided = true\n")),
+        (
+            "coarse-light",
+            lamp(similar, "").replace("radius = 0.5\n", "radius = 0.5\nsag = 0.01\n"),
+        ),
+    ];
+    for (name, text) in others {
+        let (_dir, path) = scene(name, &text)?;
+        let built = load(&path)?;
+        assert!(built.light_sampler().spheres().is_empty(), "{name}");
+        assert!(!built.lights().is_empty(), "{name}");
+    }
     Ok(())
 }

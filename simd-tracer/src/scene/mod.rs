@@ -951,9 +951,12 @@ pub struct MeshPlacement<'a> {
     /// Ignore the vertex normals (flat shading), Mitsuba's `face_normals`.
     pub face_normals: bool,
     /// The mesh tessellates the unit sphere about the origin, its vertices
-    /// on it ([`crate::scene::analytic::sphere_mesh`]): placed by a
-    /// similarity with an emitting material, it is sampled as one
-    /// spherical light ([`crate::shading::sphere_light`]).
+    /// on it ([`crate::scene::analytic::sphere_mesh`]), no coarser than
+    /// [`crate::scene::analytic::DEFAULT_SAG`]: placed by a similarity with
+    /// a material that emits from its front (outer) side alone, it is
+    /// sampled as one spherical light ([`crate::shading::sphere_light`]).
+    /// A coarser tessellation should not be marked: light sampling counts
+    /// the analytic sphere, whose outline exceeds the mesh's by the sag.
     pub sphere: bool,
 }
 
@@ -1361,8 +1364,8 @@ impl SceneBuilder {
     }
 
     /// The meshes placed as spheres ([`MeshPlacement::sphere`]) that are
-    /// lit as spherical lights: those whose material emits towards the
-    /// outside (front faces out, or two-sided), in triangle order.
+    /// lit as spherical lights: those whose material emits from the outer
+    /// side alone (front faces out, one-sided), in triangle order.
     fn sphere_lights(&self) -> Vec<SphereLight> {
         self.spheres
             .iter()
@@ -1377,8 +1380,9 @@ impl SceneBuilder {
                     emission,
                     triangles: start..end,
                 };
-                let outside = mark.outward || material.two_sided;
-                (outside && light.validate().is_ok()).then_some(light)
+                // From its outer side only: module docs of `sphere_light`.
+                let outside_only = mark.outward && !material.two_sided;
+                (outside_only && light.validate().is_ok()).then_some(light)
             })
             .collect()
     }

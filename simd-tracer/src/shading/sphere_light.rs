@@ -37,7 +37,13 @@
 //!
 //! From a point inside the ball (or on the light itself) there is no cone:
 //! the light is not sampled and its pdf is 0, so BSDF sampling alone (MIS
-//! weight 1) sees it, which is unbiased.
+//! weight 1) sees it, which is unbiased. Hence only spheres that emit from
+//! their outer side alone are sphere lights (`SceneBuilder::build`): a
+//! two-sided one may enclose the scene (a sky dome), where every light
+//! sample that chose it would be lost; its triangles, sampled by area,
+//! light the inside. And only spheres tessellated at least as finely as
+//! the default sag ([`crate::scene::analytic::DEFAULT_SAG`]): the band
+//! above grows with the sag (`MeshPlacement::sphere`).
 
 use crate::ids::SpectrumId;
 use glam::Vec3;
@@ -75,8 +81,13 @@ struct Cone {
     /// Unit direction to the centre.
     axis: Vec3,
     distance_to_center: f32,
+    /// `d² − r²`, the product of the two distances to the sphere along
+    /// any ray from the origin that meets it.
+    roots_product: f32,
     /// `1 − cos θ_max`.
     one_minus_cos_max: f32,
+    /// `1/Ω`.
+    pdf_sr: f32,
 }
 
 impl SphereLight {
@@ -110,7 +121,8 @@ impl SphereLight {
     }
 
     /// The cone seen from `origin`; `None` inside the ball, on its surface
-    /// or where the numbers are not finite.
+    /// or where the numbers are not finite (so that [`Self::pdf_sr`] and
+    /// [`Self::sample`] agree on where the light can be sampled).
     fn cone(&self, origin: Vec3) -> Option<Cone> {
         let to_center = self.center - origin;
         let distance_sq = to_center.length_squared();
@@ -122,18 +134,21 @@ impl SphereLight {
         let sin_sq_max = radius_sq / distance_sq;
         let cos_max = (1.0 - sin_sq_max).max(0.0).sqrt();
         let one_minus_cos_max = sin_sq_max / (1.0 + cos_max);
-        (one_minus_cos_max > 0.0).then(|| Cone {
+        let pdf_sr = 1.0 / (TAU * one_minus_cos_max);
+        let roots_product = distance_sq - radius_sq;
+        (one_minus_cos_max > 0.0 && pdf_sr.is_finite() && roots_product > 0.0).then(|| Cone {
             axis: to_center / distance_to_center,
             distance_to_center,
+            roots_product,
             one_minus_cos_max,
+            pdf_sr,
         })
     }
 
     /// Solid-angle pdf `1/Ω` with which [`SphereLight::sample`] draws a
     /// direction towards the light from `origin`; 0 from inside the ball.
     pub fn pdf_sr(&self, origin: Vec3) -> f32 {
-        self.cone(origin)
-            .map_or(0.0, |cone| 1.0 / (TAU * cone.one_minus_cos_max))
+        self.cone(origin).map_or(0.0, |cone| cone.pdf_sr)
     }
 
     /// A direction drawn uniformly in the cone the sphere subtends from
@@ -150,14 +165,12 @@ impl SphereLight {
         let wi = (cone.axis * cos_theta + (t1 * cos_phi + t2 * sin_phi) * sin_theta).normalize();
         let d = cone.distance_to_center;
         let r = self.radius;
-        let near_minus_far = (d * d - r * r).max(0.0);
         let half_chord = (r * r - d * d * sin_sq).max(0.0).sqrt();
-        let distance = near_minus_far / (d * cos_theta + half_chord);
-        let pdf_sr = 1.0 / (TAU * cone.one_minus_cos_max);
-        (distance > 0.0 && distance.is_finite() && pdf_sr.is_finite()).then_some(ConeSample {
+        let distance = cone.roots_product / (d * cos_theta + half_chord);
+        (distance > 0.0 && distance.is_finite()).then_some(ConeSample {
             wi,
             distance,
-            pdf_sr,
+            pdf_sr: cone.pdf_sr,
         })
     }
 }

@@ -312,8 +312,9 @@ impl Loader<'_> {
                 "material",
                 "a shape needs `material`",
             )?)?;
+            // A coarse sphere stays triangles (`MeshPlacement::sphere`).
             let placement = Placement {
-                sphere: kind == "sphere",
+                sphere: kind == "sphere" && sag <= DEFAULT_SAG,
                 ..self.placement(&table, local)?
             };
             let (name, only) = self.instancing(&table)?;
