@@ -41,7 +41,7 @@ use crate::shading::light_sampler::{DirectionalLight, LightSampler, PointLight, 
 use crate::shading::material::{
     Bsdf, Material, MaterialTables, Relief, SceneFluorophore, tabulated_sides,
 };
-use crate::shading::sphere_light::SphereLight;
+use crate::shading::sphere_light::{SphereLight, sphere_holding};
 use crate::shading::surface::SurfacePacket;
 use crate::shading::surface::{PackedSurfaces, Surface, triangle_area};
 use crate::simd::{LANES, LaneMask};
@@ -740,11 +740,7 @@ fn geometric_normal([a, b, c]: &[Vec3; 3]) -> Vec3 {
 /// Whether triangle `index` belongs to one of `spheres` (in ascending
 /// order of their triangles).
 fn in_sphere_light(spheres: &[SphereLight], index: usize) -> bool {
-    let Ok(triangle) = u32::try_from(index) else {
-        return false;
-    };
-    let at = spheres.partition_point(|s| s.triangles.end <= triangle);
-    spheres.get(at).is_some_and(|s| s.holds(triangle))
+    u32::try_from(index).is_ok_and(|triangle| sphere_holding(spheres, triangle).is_some())
 }
 
 /// Checks that every vertex of each sphere light's triangles lies on its

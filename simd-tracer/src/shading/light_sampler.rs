@@ -50,7 +50,7 @@
 
 use crate::ids::SpectrumId;
 use crate::sampling::distribution::Distribution2D;
-use crate::shading::sphere_light::SphereLight;
+use crate::shading::sphere_light::{SphereLight, sphere_holding};
 use crate::shading::spot_cone::SpotCone;
 use crate::spectra::SceneSpectrum;
 use crate::spectra::environment::EnvironmentMap;
@@ -387,11 +387,8 @@ impl LightSampler {
     /// from `origin`: the MIS weight of a BSDF sample that hits it. `None`
     /// if the triangle is not a sphere light's.
     pub fn sphere_pdf(&self, triangle: u32, origin: Vec3) -> Option<f32> {
-        let index = self
-            .spheres
-            .partition_point(|s| s.triangles.end <= triangle);
-        let sphere = self.spheres.get(index).filter(|s| s.holds(triangle))?;
-        Some(self.sphere_pmf.get(index)? * sphere.pdf_sr(origin))
+        let index = sphere_holding(&self.spheres, triangle)?;
+        Some(self.sphere_pmf.get(index)? * self.spheres.get(index)?.pdf_sr(origin))
     }
 
     /// Bytes held.

@@ -175,6 +175,17 @@ impl SphereLight {
     }
 }
 
+/// The index of the light among `spheres` (in ascending order of their
+/// triangles, not overlapping) that triangle `triangle` belongs to, by
+/// bisection.
+pub fn sphere_holding(spheres: &[SphereLight], triangle: u32) -> Option<usize> {
+    let at = spheres.partition_point(|s| s.triangles.end <= triangle);
+    spheres
+        .get(at)
+        .is_some_and(|s| s.holds(triangle))
+        .then_some(at)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
