@@ -10,7 +10,9 @@
    transport (hero wavelengths and `--sampling lights`) and the hybrid
    with C = 1, 4, 8 (its default `--sampling lights`), with C = 4 and
    hero wavelengths, and with C = 4 tracing every wavelength of a split
-   on its own path (`--dispersion-paths all`) on `prism`; the renders of
+   on its own path (`--dispersion-paths all`), and with C = 4 and N = 12
+   with its caustics left to the camera paths (`--caustics camera`; the
+   other hybrids trace light paths, fspec's default) on `prism`; the renders of
    each round are alternated and the median of three rounds is kept.
 2. Noise at equal time: every transport gets the CPU time of the hybrid
    (C = 4) at `--budget-spp` samples per pixel, converted to its own spp by
@@ -59,6 +61,8 @@ TRANSPORTS = {
     "hybrid C=1": ["--transport", "hybrid", "--wavelengths", "1"],
     "hybrid C=4": ["--transport", "hybrid", "--wavelengths", "4"],
     "hybrid N=12 C=4": ["--transport", "hybrid", "--wavelengths", "4", "--coeffs", "12"],
+    "hybrid N=12 C=4 camera": ["--transport", "hybrid", "--wavelengths", "4", "--coeffs", "12",
+                               "--caustics", "camera"],
     "hybrid C=4 hero": ["--transport", "hybrid", "--wavelengths", "4", "--sampling", "hero"],
     "hybrid C=8": ["--transport", "hybrid", "--wavelengths", "8"],
     "hybrid C=4 all": ["--transport", "hybrid", "--wavelengths", "4", "--dispersion-paths", "all"],

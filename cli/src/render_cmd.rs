@@ -126,6 +126,22 @@ pub enum DispersionPaths {
     All,
 }
 
+/// Where the hybrid's caustics of dispersive glass come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Caustics {
+    /// Camera paths alone, which find a lamp behind glass only by chance
+    /// (what partial films written before this choice existed were
+    /// rendered with).
+    #[default]
+    Camera,
+    /// Light paths from the lamps carry the light that passes dispersive
+    /// glass before its first diffuse bounce
+    /// (`simd_tracer::integrator::light_paths`; pinhole cameras, scenes
+    /// without fluorescence, `--dispersion-paths hero`).
+    LightPaths,
+}
+
 /// How coefficients become colour.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -293,6 +309,11 @@ pub struct RenderArgs {
     /// (hero) [default: HYBRID_DISPERSION_PATHS].
     #[arg(long, value_enum)]
     pub dispersion_paths: Option<DispersionPaths>,
+    /// Hybrid: where the caustics of dispersive glass come from: light
+    /// paths from the lamps (light-paths) or camera paths alone (camera)
+    /// [default: HYBRID_CAUSTICS].
+    #[arg(long, value_enum)]
+    pub caustics: Option<Caustics>,
     /// Conversion from coefficients to colour.
     #[arg(long, value_enum, default_value_t = ToColor::Zeroth)]
     pub to_color: ToColor,
@@ -913,6 +934,10 @@ pub enum TransportSpec {
         /// wavelength (absent from older partial films: hero).
         #[serde(default)]
         paths: DispersionPaths,
+        /// Where its caustics come from (absent from older partial films:
+        /// camera).
+        #[serde(default)]
+        caustics: Caustics,
     },
 }
 
@@ -980,6 +1005,7 @@ impl TransportSpec {
                 buffer: args.buffer,
                 to_color: args.to_color,
                 paths: args.dispersion_paths.unwrap_or(HYBRID_DISPERSION_PATHS),
+                caustics: args.caustics.unwrap_or(HYBRID_CAUSTICS),
             },
         }
     }
@@ -1046,6 +1072,12 @@ pub const HYBRID_SAMPLING: Sampling = Sampling::Lights;
 /// `--dispersion-paths` says otherwise (`docs/results.md`, "Every
 /// wavelength of a split on its own path").
 pub const HYBRID_DISPERSION_PATHS: DispersionPaths = DispersionPaths::Hero;
+
+/// Where the hybrid's caustics come from unless `--caustics` says
+/// otherwise: light paths, which find a lamp behind glass where camera
+/// paths only stumble on it (`docs/results.md`, "Light paths for the
+/// caustics").
+pub const HYBRID_CAUSTICS: Caustics = Caustics::LightPaths;
 
 /// Wavelengths drawn where a hybrid path meets dispersion when
 /// `--wavelengths` is not given: 4, measured against 1 and 8 on the
@@ -1207,6 +1239,7 @@ struct HybridChoices {
     buffer: BufferKind,
     to_color: ToColor,
     paths: DispersionPaths,
+    caustics: Caustics,
 }
 
 fn hybrid<const N: usize, const C: usize, K: TransportTask>(
@@ -1219,6 +1252,7 @@ fn hybrid<const N: usize, const C: usize, K: TransportTask>(
         buffer,
         to_color,
         paths,
+        caustics,
     } = choices;
     let transport = HybridTransport::<N, C>::new(&HybridSettings {
         range: basis.range,
@@ -1231,6 +1265,7 @@ fn hybrid<const N: usize, const C: usize, K: TransportTask>(
         observer: basis.observer,
         density: density(sampling, &basis).as_ref(),
         children: paths == DispersionPaths::All,
+        light_paths: caustics == Caustics::LightPaths,
     })
     .map_err(range_error)?;
     task.run(&transport)
@@ -1305,12 +1340,14 @@ pub fn with_transport<K: TransportTask>(
             buffer,
             to_color,
             paths,
+            caustics,
         } => {
             let c = HybridChoices {
                 sampling,
                 buffer,
                 to_color,
                 paths,
+                caustics,
             };
             match (coeffs, wavelengths) {
                 (12, 1) => hybrid::<12, 1, K>(basis, c, task),
@@ -2162,6 +2199,7 @@ mod tests {
             buffer: BufferKind::Rgb,
             to_color: ToColor::Series,
             paths: DispersionPaths::All,
+            caustics: Caustics::LightPaths,
         };
         for (coeffs, wavelengths) in HYBRID_SIZES {
             assert!(

@@ -99,6 +99,7 @@ fn transports(range: SpectralRange) -> TestResult<Vec<(String, Renderer)>> {
                 observer: &Default::default(),
                 density: None,
                 children: true,
+                light_paths: true,
             })?,
         ),
         boxed(
@@ -111,6 +112,7 @@ fn transports(range: SpectralRange) -> TestResult<Vec<(String, Renderer)>> {
                 observer: &Default::default(),
                 density: None,
                 children: false,
+                light_paths: true,
             })?,
         ),
     ])

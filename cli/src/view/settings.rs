@@ -276,6 +276,7 @@ impl ViewSettings {
                 buffer,
                 to_color,
                 paths,
+                caustics,
             } => args.extend([
                 "--transport".into(),
                 "hybrid".into(),
@@ -291,6 +292,8 @@ impl ViewSettings {
                 name(&|| to_color.to_possible_value()),
                 "--dispersion-paths".into(),
                 name(&|| paths.to_possible_value()),
+                "--caustics".into(),
+                name(&|| caustics.to_possible_value()),
             ]),
         }
         if let Some(observer) = &self.observer {
@@ -480,7 +483,7 @@ pub fn default_transport() -> TransportSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render_cmd::DispersionPaths;
+    use crate::render_cmd::{Caustics, DispersionPaths};
 
     fn settings() -> ViewSettings {
         ViewSettings {
@@ -525,6 +528,7 @@ mod tests {
                 buffer: BufferKind::Rgb,
                 to_color: ToColor::Series,
                 paths: DispersionPaths::All,
+                caustics: Caustics::Camera,
             },
         ] {
             let s = ViewSettings {

@@ -114,6 +114,12 @@ impl<const N: usize> Film for HybridFilm<N> {
         }
     }
 
+    fn add_light_paths(&self, pixel: &mut Self::Pixel, xyz: &[f64; 3]) {
+        for (acc, &v) in pixel.sampled_xyz.iter_mut().zip(xyz) {
+            *acc += v;
+        }
+    }
+
     fn resolve(&self, pixel: &Self::Pixel) -> Xyz {
         let fourier = self.fourier.resolve(&pixel.fourier);
         let count = pixel.fourier.count;

@@ -163,6 +163,11 @@ pub trait Film: Sync {
     fn passes_interact(&self) -> bool {
         false
     }
+    /// Adds the light paths' XYZ sums of a pixel, in the units of its
+    /// weighted sums (`render::light_film`): the hybrid film's sampled
+    /// part takes them; films whose transports trace no light paths never
+    /// receive any.
+    fn add_light_paths(&self, _pixel: &mut Self::Pixel, _xyz: &[f64; 3]) {}
     /// The pixel's XYZ.
     fn resolve(&self, pixel: &Self::Pixel) -> Xyz;
     /// The pixel's mean Fourier coefficients, if the film keeps them.

@@ -138,6 +138,7 @@ pub fn trace_group_from<T: Transport, const G: usize>(
         transport,
         scene,
         settings,
+        ..
     } = *context;
     let GroupState {
         paths,

@@ -35,6 +35,7 @@
 //! Russian roulette starts at `rr_depth` (Mitsuba's default 5) with
 //! survival probability `min(0.95, mean spectral throughput)`.
 
+mod caustics;
 pub mod compaction;
 
 use crate::scene::Scene;
@@ -44,6 +45,7 @@ mod group;
 mod packet_shading;
 pub use group::{GROUP, GroupStart, GroupState, trace, trace_group, trace_group_from};
 mod last_segment;
+pub mod light_paths;
 mod path;
 pub use path::ChildPath;
 
@@ -57,6 +59,10 @@ pub struct PathContext<'a, T> {
     pub scene: &'a Scene,
     /// Depth limits.
     pub settings: &'a IntegratorSettings,
+    /// Light paths carry the caustics through dispersive glass
+    /// (`render::light_paths`): the camera paths leave those paths out
+    /// (`caustics.rs`).
+    pub light_traced_caustics: bool,
 }
 
 /// Depth and roulette settings.

@@ -1,6 +1,7 @@
 //! One packet's paths between bounces: throughput, emission sums, the
 //! light sample and the bounce itself.
 
+use super::caustics::CausticLanes;
 use super::emission::{EmissionSums, Emitted};
 use super::packet_shading::{
     Shading, SmoothLanes, consistent_sides, front_shading_cosines, offset_x8, power_heuristic_x8,
@@ -257,6 +258,8 @@ pub(super) struct PathState<S> {
     /// Solid-angle pdf of the BSDF sample that produced each lane's ray (0:
     /// no MIS).
     pub(super) previous_pdf: f32x8,
+    /// Which paths the light paths carry (`caustics.rs`).
+    pub(super) caustics: CausticLanes,
 }
 
 /// A packet's light samples (next-event estimation) waiting for the
@@ -289,6 +292,7 @@ impl<S: Copy> PathState<S> {
             throughput: transport.one(),
             active,
             previous_pdf: f32x8::ZERO,
+            caustics: CausticLanes::NONE,
         }
     }
 
@@ -305,6 +309,7 @@ impl<S: Copy> PathState<S> {
         self.throughput = transport.one();
         self.active = active;
         self.previous_pdf = f32x8::ZERO;
+        self.caustics = CausticLanes::NONE;
     }
 
     /// One bounce at the hits of `rays`: escapes and emission, the light
@@ -322,6 +327,7 @@ impl<S: Copy> PathState<S> {
             transport,
             scene,
             settings,
+            light_traced_caustics,
         } = *context;
         let BounceLanes {
             rays,
@@ -373,8 +379,13 @@ impl<S: Copy> PathState<S> {
         let normal = Vec3x8::select(front, surface.normal, -surface.normal);
 
         // Emission at the hit points, MIS-weighted against NEE (weight 1
-        // after a camera ray or a delta lobe: no MIS).
-        let emits = surface.emits_towards(cos_o).and(active);
+        // after a camera ray or a delta lobe: no MIS), but for the paths
+        // that light paths carry.
+        let mut emits = surface.emits_towards(cos_o).and(active);
+        if light_traced_caustics && !emits.is_empty() {
+            let in_light_set = LaneMask::from_simd(surface.light_pmf.simd_gt(f32x8::ZERO));
+            emits = emits.and_not(self.caustics.light_traced(emits.and(in_light_set)));
+        }
         if !emits.is_empty() && visible {
             let distance = hit.t * direction_length;
             let mut p_light = surface.light_pdf(distance * distance, cos_o);
@@ -599,6 +610,12 @@ impl<S: Copy> PathState<S> {
         active = active
             .and(sample.valid)
             .and(LaneMask::from_simd(sample.weight.simd_gt(f32x8::ZERO)));
+        if light_traced_caustics {
+            let delta = LaneMask::from_simd(sample.pdf.simd_eq(f32x8::ZERO));
+            let refracted = LaneMask::from_simd(sample.wi.dot(normal).simd_lt(f32x8::ZERO));
+            let dispersive = shading.dispersive(active.and(delta).and(refracted));
+            self.caustics.after_sample(depth, active, delta, dispersive);
+        }
         let mut terminating = sample.terminate_secondary.and(active);
         if T::SPLITS_AT_DISPERSION && !terminating.is_empty() && transport.spawns_children(scene) {
             let spawning = terminating.and_not(self.fluorescence.shifted);

@@ -96,11 +96,14 @@
 //! [`RenderResult::rejected`].
 
 mod film_state;
+mod light_film;
 
 pub use film_state::FilmState;
+use light_film::LightFilm;
 
 use crate::film::filter::{Filter, FilterError, MAX_SPLAT_MARGIN_PX};
 use crate::film::{Film, FilmMode};
+use crate::integrator::light_paths::{FilmHit, LightPathSettings, LightPaths};
 use crate::integrator::{
     GROUP, GroupStart, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
     trace_group_from,
@@ -115,6 +118,7 @@ use crate::transport::{FilmPixel, FilmSample, Transport};
 use glam::Vec3;
 use rayon::prelude::*;
 use spectral_core::color::Xyz;
+use std::borrow::Cow;
 use std::sync::{Mutex, TryLockError};
 use std::time::{Duration, Instant};
 use wide::f32x8;
@@ -576,13 +580,15 @@ fn next_batch(
 }
 
 fn render_tile<T: Transport>(
-    transport: &T,
-    scene: &Scene,
+    context: &PathContext<'_, T>,
     settings: &RenderSettings,
     pass: u32,
     state: &mut GroupState<T::Spectra, GROUP>,
     tile: &mut Tile<FilmPixel<T>>,
 ) {
+    let PathContext {
+        transport, scene, ..
+    } = *context;
     // The tile's packets in block order ([`packet_origins`]), traced GROUP
     // at a time; the last group is padded with packets without pixels.
     let mut origins = packet_origins(tile.x0, tile.y0, tile.width, tile.height);
@@ -637,13 +643,8 @@ fn render_tile<T: Transport>(
             let pixels = pixels(&lanes[g]);
             transport.sample_wavelengths(|lane| keys.wavelength_stream(pixels[lane]))
         });
-        let context = PathContext {
-            transport,
-            scene,
-            settings: &settings.integrator,
-        };
         let radiance = trace_group(
-            &context,
+            context,
             state,
             &camera_rays,
             &mut path_rngs,
@@ -660,7 +661,7 @@ fn render_tile<T: Transport>(
         if !state.children.is_empty() {
             let parents = |packet: usize, lane: usize| pixels(&lanes[packet % GROUP])[lane % LANES];
             trace_children(
-                &context,
+                context,
                 state,
                 (&keys, &parents),
                 &mut group_samples,
@@ -1365,6 +1366,32 @@ pub fn render_observed<T: Transport>(
         .map_err(|e| RenderError::Threads(e.to_string()))?;
     let states = ThreadStates::new(pool.current_num_threads());
     let start = Instant::now();
+    let light_paths = LightPaths::new(
+        scene,
+        LightPathSettings {
+            spectra: transport.light_path_spectra(),
+            integrator: settings.integrator,
+            seed: settings.seed,
+            width: settings.width,
+            height: settings.height,
+            children: transport.spawns_children(scene),
+        },
+    );
+    let mut light_film = light_paths.as_ref().map(|_| {
+        LightFilm::new(
+            window,
+            (settings.width, settings.height),
+            settings.filter.clone(),
+            settings.film,
+        )
+    });
+    let mut light_rays = RayCounts::default();
+    let context = PathContext {
+        transport,
+        scene,
+        settings: &settings.integrator,
+        light_traced_caustics: light_paths.is_some(),
+    };
     // The film's tiles cut to the traced pixels (splatting: those within
     // the margin of the window): each starts on the film's packet grid, so
     // its packets are the full render's.
@@ -1436,7 +1463,7 @@ pub fn render_observed<T: Transport>(
                 for pass in first..end {
                     tiles.par_iter_mut().for_each(|tile| {
                         states.with(transport, |state| {
-                            render_tile(transport, scene, settings, pass, state, tile);
+                            render_tile(&context, settings, pass, state, tile);
                         });
                     });
                     flush_rings(film, &mut tiles, &sources, margin, &window);
@@ -1445,10 +1472,15 @@ pub fn render_observed<T: Transport>(
                 tiles.par_iter_mut().for_each(|tile| {
                     states.with(transport, |state| {
                         for pass in first..end {
-                            render_tile(transport, scene, settings, pass, state, tile);
+                            render_tile(&context, settings, pass, state, tile);
                         }
                     });
                 });
+            }
+            if let (Some(paths), Some(film)) = (&light_paths, &mut light_film) {
+                for pass in first..end {
+                    trace_light_paths(paths, pass, film, &mut light_rays);
+                }
             }
         });
         if film.passes_interact() {
@@ -1471,10 +1503,8 @@ pub fn render_observed<T: Transport>(
         passes = end - job.first_pass;
         let elapsed = start.elapsed();
         let resolve = || {
-            let pixels = tiles
-                .iter()
-                .flat_map(|tile| tile.window_pixels(&window))
-                .map(|((x, y), pixel)| (window_index(&window, x, y), pixel));
+            let lit = with_light_paths(film, &tiles, &window, light_film.as_ref());
+            let pixels = lit.iter().map(|(index, pixel)| (*index, pixel.as_ref()));
             let (xyz, coefficients) = resolve_pixels(film, &window, pixels, !job.xyz_only);
             PartialImage {
                 width: window.width,
@@ -1508,8 +1538,19 @@ pub fn render_observed<T: Transport>(
     for tile in &mut tiles {
         tile.ring = Vec::new();
     }
+    if let Some(light) = &light_film {
+        for tile in &mut tiles {
+            let (x0, y0, width) = (tile.x0, tile.y0, tile.width);
+            for (index, pixel) in tile.pixels.iter_mut().enumerate() {
+                let (x, y) = (x0 + index as u32 % width, y0 + index as u32 / width);
+                if window.contains(x, y) {
+                    film.add_light_paths(pixel, light.at(x, y));
+                }
+            }
+        }
+    }
     let mut rejected = resumed_rejected;
-    let mut rays = RayCounts::default();
+    let mut rays = light_rays;
     for tile in &tiles {
         rejected += tile.rejected;
         rays.add(&tile.rays);
@@ -1547,6 +1588,61 @@ pub fn render_observed<T: Transport>(
         elapsed: start.elapsed(),
     };
     Ok((result, state))
+}
+
+/// Light paths a task of the light-path pass traces
+/// ([`trace_light_paths`]): enough to spread a pass over the threads, few
+/// enough that a task's hits stay small.
+const LIGHT_PATH_CHUNK: u64 = 4096;
+
+/// Traces pass `pass`'s light paths in parallel chunks and adds their hits
+/// to `film` in the order of the paths (`light_film.rs`: the bits do not
+/// depend on the threads).
+fn trace_light_paths(paths: &LightPaths, pass: u32, film: &mut LightFilm, rays: &mut RayCounts) {
+    let starts: Vec<u64> = (0..paths.per_pass())
+        .step_by(LIGHT_PATH_CHUNK as usize)
+        .collect();
+    let chunks: Vec<(Vec<FilmHit>, RayCounts)> = starts
+        .into_par_iter()
+        .map(|start| {
+            let end = start.saturating_add(LIGHT_PATH_CHUNK).min(paths.per_pass());
+            let (mut hits, mut counts) = (Vec::new(), RayCounts::default());
+            paths.trace(pass, start..end, &mut hits, &mut counts);
+            (hits, counts)
+        })
+        .collect();
+    for (hits, counts) in &chunks {
+        for hit in hits {
+            film.add(hit);
+        }
+        rays.add(counts);
+    }
+}
+
+/// The window's pixels with their index, copied with the light paths'
+/// sums added where there are any (an image resolved before the end of
+/// the render: the tiles keep their camera sums alone until then).
+fn with_light_paths<'a, F: Film>(
+    film: &F,
+    tiles: &'a [Tile<F::Pixel>],
+    window: &'a PixelWindow,
+    light: Option<&LightFilm>,
+) -> Vec<(usize, Cow<'a, F::Pixel>)> {
+    tiles
+        .iter()
+        .flat_map(|tile| tile.window_pixels(window))
+        .map(|((x, y), pixel)| {
+            let pixel = match light {
+                Some(light) => {
+                    let mut lit = pixel.clone();
+                    film.add_light_paths(&mut lit, light.at(x, y));
+                    Cow::Owned(lit)
+                }
+                None => Cow::Borrowed(pixel),
+            };
+            (window_index(window, x, y), pixel)
+        })
+        .collect()
 }
 
 /// The index of film pixel `(x, y)` in `window`, row-major from its corner.

@@ -33,6 +33,8 @@ pub enum Purpose {
     Path = 1,
     /// Wavelength sampling of the sampled transports.
     Wavelengths = 2,
+    /// Light paths (`integrator::light_paths`), one stream per path.
+    LightPaths = 3,
 }
 
 use crate::simd::LANES;

@@ -69,6 +69,18 @@ pub struct Camera {
     clip: Option<ClipRange>,
 }
 
+/// A point of the film and the camera's importance there
+/// ([`Camera::project`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FilmPoint {
+    /// Column, px from the film's left edge.
+    pub x: f32,
+    /// Row, px from the film's top edge.
+    pub y: f32,
+    /// Film area, px², per steradian of directions at the pinhole there.
+    pub density_per_sr: f32,
+}
+
 /// A camera's clip planes (module docs): depths along the viewing
 /// direction, `0 ≤ near < far` (`far` may be infinite).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -408,6 +420,40 @@ impl Camera {
         }
     }
 
+    /// Where a pinhole camera sees `point` (a light path's connection to
+    /// the camera, `integrator::light_paths`): the film point, px, whose
+    /// ray ([`Camera::film_ray`]) passes through it, and the factor that
+    /// turns radiance arriving at the pinhole along that ray into density
+    /// over the film, `dA_px/dω = 1/(k² cos³θ)` (`k` the film-plane size of
+    /// a pixel at distance 1, `θ` the angle to the viewing direction: the
+    /// film plane at distance 1 holds `1/k²` pixels per unit area, and a
+    /// unit area there subtends `cos³θ` sr). `None` for an orthographic or
+    /// thin-lens camera, a point behind the camera or outside the clip
+    /// planes.
+    pub fn project(&self, point: Vec3, width: u32, height: u32) -> Option<FilmPoint> {
+        if self.lens.is_some() || !matches!(self.projection, Projection::Perspective { .. }) {
+            return None;
+        }
+        let to_point = point - self.position;
+        let depth = to_point.dot(self.forward);
+        let in_clip = self
+            .clip
+            .is_none_or(|clip| depth >= clip.near && depth <= clip.far);
+        if !(depth > 0.0 && in_clip) {
+            return None;
+        }
+        let scale = self.pixel_scale(width, height);
+        let [cx, cy] = self.film_centre(width, height);
+        let dx = to_point.dot(self.right) / depth;
+        let dy = -to_point.dot(self.up) / depth;
+        let cos = depth / to_point.length();
+        Some(FilmPoint {
+            x: cx + dx / scale,
+            y: cy + dy / scale,
+            density_per_sr: 1.0 / (scale * scale * cos * cos * cos),
+        })
+    }
+
     /// The ray of the pinhole direction `d` ([`Camera::film_ray`])
     /// through `lens`, from the point `(p, q)` of the unit disk: its origin
     /// on the lens and its unit direction towards `d`'s point on the focal
@@ -502,6 +548,83 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A point on a film ray projects back to that film point, shifted or
+    /// not; the density is the film area per solid angle, measured by the
+    /// solid angle of a small square of pixels (the negative control: the
+    /// density with `cos²θ` instead of `cos³θ` is off by 10 % at the
+    /// film's corner). Points behind the camera or outside its clip planes,
+    /// and orthographic or thin-lens cameras, have no film point.
+    #[test]
+    fn points_project_to_the_film_points_whose_rays_meet_them() -> Result<(), CameraError> {
+        let cam = Camera::look_at_with(
+            Vec3::new(0.3, 1.0, 3.9),
+            Vec3::new(0.1, 0.9, 0.0),
+            Vec3::Y,
+            Projection::Perspective { fov_deg: 50.0 },
+        )?;
+        let (width, height) = (640, 360);
+        for cam in [cam, cam.with_shift([0.1, -0.2])?] {
+            for &(x, y) in &[
+                (320.0f32, 180.0f32),
+                (3.5, 7.25),
+                (639.0, 359.0),
+                (100.0, 300.0),
+            ] {
+                let (origin, direction) = cam.film_ray(x, y, width, height);
+                let Some(point) = cam.project(origin + 2.7 * direction, width, height) else {
+                    panic!("no film point");
+                };
+                assert!(
+                    (point.x - x).abs() < 1e-3 && (point.y - y).abs() < 1e-3,
+                    "{point:?}"
+                );
+                // A square of h × h pixels around (x, y) subtends Ω ≈ the
+                // solid angle of its corners' directions' parallelogram.
+                let h = 0.5f32;
+                let unit =
+                    |dx: f32, dy: f32| cam.film_ray(x + dx, y + dy, width, height).1.normalize();
+                let (a, b, c) = (unit(-h, -h), unit(h, -h), unit(-h, h));
+                let solid_angle = (b - a).cross(c - a).length();
+                let expected = (2.0 * h) * (2.0 * h) / solid_angle;
+                assert!(
+                    (point.density_per_sr / expected - 1.0).abs() < 2e-3,
+                    "{} vs {expected}",
+                    point.density_per_sr
+                );
+                let cos = direction.normalize().dot(cam.forward);
+                if (x, y) == (3.5, 7.25) {
+                    assert!((point.density_per_sr * cos / expected - 1.0).abs() > 0.1);
+                }
+            }
+        }
+        assert!(
+            cam.project(cam.position - cam.forward, width, height)
+                .is_none()
+        );
+        let clipped = cam.with_clip(1.0, 3.0)?;
+        for (depth, seen) in [(0.5, false), (2.0, true), (3.5, false)] {
+            let point = cam.position + depth * cam.forward;
+            assert_eq!(
+                clipped.project(point, width, height).is_some(),
+                seen,
+                "{depth}"
+            );
+        }
+        let lens = cam.with_lens(0.1, 2.0)?;
+        assert!(
+            lens.project(cam.position + cam.forward, width, height)
+                .is_none()
+        );
+        let ortho = Camera::look_at_with(
+            Vec3::ZERO,
+            Vec3::Z,
+            Vec3::Y,
+            Projection::Orthographic { view_size: 2.0 },
+        )?;
+        assert!(ortho.project(Vec3::Z, width, height).is_none());
+        Ok(())
     }
 
     /// Orthographic rays: all parallel to the view, from a film plane

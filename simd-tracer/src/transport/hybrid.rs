@@ -102,7 +102,7 @@ use super::fourier::{FourierTransport, gather_fourier};
 use super::sampled::{
     PacketWavelengths, SampledTransport, fluoresce_sampled, gather_sampled, sampled_lane,
 };
-use super::{FilmSample, SplitLanes, Transport, id_spectra};
+use super::{FilmSample, LightPathSpectra, SplitLanes, Transport, id_spectra};
 use crate::film::{Buffer, FourierSample, HybridFilm, HybridSample, all_finite};
 use crate::ids::SpectrumId;
 use crate::sampling::sampler::{PathSampler, UniformStream, wavelength_dimension};
@@ -130,6 +130,9 @@ pub struct HybridTransport<const N: usize, const C: usize> {
     /// Whether a split's secondary wavelengths go on as children where
     /// the direction depends on wavelength ([`HybridSettings::children`]).
     pub(super) children: bool,
+    /// The light paths' spectral side, where they are asked for
+    /// ([`HybridSettings::light_paths`]).
+    pub(super) light_paths: Option<LightPathSpectra>,
 }
 
 /// The settings of a [`HybridTransport`] besides its sizes.
@@ -153,6 +156,10 @@ pub struct HybridSettings<'a> {
     /// (module docs, "Children"); otherwise the secondaries are
     /// terminated (pbrt's rule) and the hero goes on alone.
     pub children: bool,
+    /// Light paths carry the caustics that dispersive glass casts
+    /// (`integrator::light_paths`; the camera paths leave those paths to
+    /// them).
+    pub light_paths: bool,
 }
 
 impl<const N: usize, const C: usize> HybridTransport<N, C> {
@@ -182,6 +189,12 @@ impl<const N: usize, const C: usize> HybridTransport<N, C> {
             basis: FourierBasis::new(range),
             idle,
             children: settings.children,
+            light_paths: settings.light_paths.then(|| LightPathSpectra {
+                range,
+                strategy: settings.strategy,
+                density: settings.density.cloned(),
+                observer: Arc::clone(settings.observer),
+            }),
         })
     }
 }
@@ -305,6 +318,10 @@ impl<const N: usize, const C: usize> Transport for HybridTransport<N, C> {
             self.sampled
                 .terminate_secondary(&mut wavelengths.sampled, lane);
         }
+    }
+
+    fn light_path_spectra(&self) -> Option<LightPathSpectra> {
+        self.light_paths.clone()
     }
 
     fn spawns_children(&self, scene: &Scene) -> bool {

@@ -30,6 +30,11 @@ use crate::sampling::sampler::{PathSampler, UniformStream};
 use crate::scene::Scene;
 use crate::shading::material::{Fluorescence, LaneSpectrum};
 use crate::simd::{LANES, LaneMask};
+use emission_density::EmissionDensity;
+use spectral_core::SpectralRange;
+use spectral_core::observer::Observer;
+use spectral_core::sampling::{SampledSpectrum, SampledWavelengths, WavelengthStrategy};
+use std::sync::Arc;
 use wide::f32x8;
 
 mod fourier;
@@ -55,6 +60,46 @@ pub struct SplitLanes {
 
 mod binned;
 pub use binned::BinnedSampledTransport;
+
+/// The spectral side of light paths (`integrator::light_paths`): each
+/// path carries one wavelength, drawn as the hybrid transport draws a
+/// split's (from the scene's lights density where it has one), and
+/// reaches the film as the sampled estimate `L x̄(λ)/p(λ) / ∫ȳ` of the
+/// film's observer.
+#[derive(Debug, Clone)]
+pub struct LightPathSpectra {
+    range: SpectralRange,
+    strategy: WavelengthStrategy,
+    density: Option<Arc<EmissionDensity>>,
+    observer: Arc<Observer>,
+}
+
+impl LightPathSpectra {
+    /// One wavelength from the uniform number `u`.
+    pub fn draw(&self, u: f32) -> SampledWavelengths<1> {
+        match &self.density {
+            Some(density) => density.sample_hero(u),
+            None => SampledWavelengths::sample(self.strategy, &self.range, [u]),
+        }
+    }
+
+    /// A BSDF's or an emitter's spectral factor at `lambda_nm`.
+    pub fn factor(&self, scene: &Scene, spectrum: &LaneSpectrum, lambda_nm: f32) -> f32 {
+        let x = spectrum
+            .of
+            .as_ref()
+            .map_or(0.0, |r| fourier::reference_value(scene, r, lambda_nm));
+        spectrum.constant + spectrum.scale * x
+    }
+
+    /// The film's XYZ estimate of `value` carried at `wavelength`.
+    pub fn xyz(&self, value: f32, wavelength: &SampledWavelengths<1>) -> [f32; 3] {
+        SampledSpectrum { values: [value] }
+            .to_channels(wavelength, &self.observer)
+            .to_array()
+            .map(|v| v as f32)
+    }
+}
 /// A spectral representation of light paths (module docs).
 pub trait Transport: Sync {
     /// Per-packet wavelengths (unit for Fourier).
@@ -84,6 +129,12 @@ pub trait Transport: Sync {
         _lanes: SplitLanes,
         _rngs: &mut PathSampler,
     ) {
+    }
+    /// The spectral side of light paths that carry the caustics of
+    /// dispersive glass (`integrator::light_paths`): only the hybrid's,
+    /// where its settings ask for them.
+    fn light_path_spectra(&self) -> Option<LightPathSpectra> {
+        None
     }
     /// Draws the wavelengths of a packet; `stream(lane)` makes a lane's
     /// wavelength numbers on demand (hashing its key costs about as

@@ -610,7 +610,7 @@ fn angular_ref(id: AngularId, cos: f32, thickness: f32) -> SpectralRef {
 
 /// The dielectric's relative index for directions: the hero wavelength's
 /// with dispersion in sampled mode, else the reference wavelength's.
-fn direction_ior(ior: &Ior, hero_nm: Option<f32>) -> (f32, bool) {
+pub(crate) fn direction_ior(ior: &Ior, hero_nm: Option<f32>) -> (f32, bool) {
     match hero_nm {
         Some(l) if ior.is_dispersive() => (ior.at(f64::from(l)) as f32, true),
         _ => (ior.at(REFERENCE_WAVELENGTH_NM) as f32, false),

@@ -1,0 +1,99 @@
+//! The camera side of light-traced caustics (`render/light_paths.rs`):
+//! which of a packet's paths belong to the light paths' share of path
+//! space, so that the camera paths leave them out.
+//!
+//! A path `x₁ … x_k` from the camera to an emissive triangle is the light
+//! paths' when
+//!
+//! * its first surface `x₁` scattered through a non-delta lobe (a light
+//!   path reaches the camera by a connection from such a vertex), and
+//! * the events between its last non-delta vertex and the emitter are all
+//!   delta, at least one of them a refraction through a dispersive
+//!   dielectric (light that a shadow ray cannot follow, whose direction
+//!   depends on wavelength: a camera path finds it only by chance), and
+//! * the emitter is one the light paths start from: a triangle of the
+//!   light set (sphere lights, instances and the environment are not).
+//!
+//! Every other path stays the camera paths'. Both sides classify a vertex
+//! the same way — by the lobe that scattered there (a light sample or
+//! connection is a non-delta event; a sampled lobe with pdf 0 a delta
+//! one) and by the geometry (a refraction leaves on the other side of the
+//! surface) — so the two sets partition path space: each path is counted
+//! by exactly one estimator, and the sum is unbiased without weights.
+
+use crate::simd::LaneMask;
+
+/// The partition's state of a packet's paths (module docs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(super) struct CausticLanes {
+    /// Lanes whose first surface scattered through a non-delta lobe.
+    scattered_first: LaneMask,
+    /// Lanes whose events since their last non-delta one are all delta,
+    /// at least one of them a dispersive refraction.
+    dispersive_chain: LaneMask,
+}
+
+impl CausticLanes {
+    /// No path yet.
+    pub(super) const NONE: Self = Self {
+        scattered_first: LaneMask::NONE,
+        dispersive_chain: LaneMask::NONE,
+    };
+
+    /// Records the events that the bounce at `depth` sampled for its lanes
+    /// `active`: `delta` took a delta lobe, and of those
+    /// `dispersive_refraction` refracted through a dispersive dielectric.
+    pub(super) fn after_sample(
+        &mut self,
+        depth: u32,
+        active: LaneMask,
+        delta: LaneMask,
+        dispersive_refraction: LaneMask,
+    ) {
+        let delta = delta.and(active);
+        if depth == 1 {
+            self.scattered_first = active.and_not(delta);
+        }
+        let chain = self.dispersive_chain.or(dispersive_refraction);
+        self.dispersive_chain = chain.and(delta);
+    }
+
+    /// Of the lanes `emitters` (hits on triangles that light paths start
+    /// from, by a BSDF-sampled ray), those whose paths the light paths
+    /// carry.
+    pub(super) fn light_traced(&self, emitters: LaneMask) -> LaneMask {
+        emitters
+            .and(self.scattered_first)
+            .and(self.dispersive_chain)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Paths diffuse → glass → glass → lamp are the light paths'; a path
+    /// whose first event is delta, a chain without dispersion, or a chain
+    /// broken by a non-delta event is not.
+    #[test]
+    fn chains_of_dispersive_delta_events_after_a_first_diffuse_one() {
+        let all = LaneMask(0b1111);
+        let mut lanes = CausticLanes::NONE;
+        // Lane 0: diffuse first; lane 1: delta (mirror) first; lanes 2, 3 diffuse.
+        lanes.after_sample(1, all, LaneMask(0b0010), LaneMask::NONE);
+        // Depth 2: lanes 0, 1, 2 refract through dispersive glass, lane 3 a mirror.
+        lanes.after_sample(2, all, LaneMask(0b1111), LaneMask(0b0111));
+        // Depth 3: lane 2 scatters diffusely again, the others leave the glass.
+        lanes.after_sample(
+            3,
+            all,
+            LaneMask(0b1011),
+            LaneMask(0b1011).and(LaneMask(0b0011)),
+        );
+        assert_eq!(lanes.light_traced(all), LaneMask(0b0001));
+        assert_eq!(lanes.light_traced(LaneMask(0b1110)), LaneMask::NONE);
+        // A mirror after the glass keeps the chain.
+        lanes.after_sample(4, all, LaneMask(0b0001), LaneMask::NONE);
+        assert_eq!(lanes.light_traced(all), LaneMask(0b0001));
+    }
+}

@@ -1,0 +1,491 @@
+//! Light paths for the caustics of dispersive glass: paths traced from the
+//! lamps, through the glass, to a surface that a connection to the camera
+//! sees.
+//!
+//! **Why.** A caustic — a lamp's light focused by glass onto a wall — is
+//! reached by camera paths only by chance: a shadow ray cannot pass the
+//! glass, so a path from the wall must *sample* its way through the prism
+//! onto the lamp, and a small lamp behind glass is almost never hit. The
+//! hybrid transport's caustic was therefore its noisiest region (and every
+//! sampled transport's: `docs/results.md`, "Hybrid transport"). Traced from
+//! the lamp, the same light lands on the wall with the lamp's density, and
+//! a connection to the pinhole finds its pixel (pbrt-v4's and Mitsuba's
+//! light tracers, `LightPathIntegrator` and `ptracer`).
+//!
+//! **Which paths** (`caustics.rs`, the camera side): a path is the light
+//! paths' when the events from its lamp up to its first non-delta vertex
+//! are all delta, at least one a refraction through a dispersive
+//! dielectric, and the vertex the camera sees scattered through a non-delta
+//! lobe. Camera paths leave exactly those out, so the two estimators count
+//! disjoint parts of path space and their sum needs no weights. The walk
+//! below follows that definition: it connects to the camera at every
+//! non-delta vertex once its first stretch of delta events held a
+//! dispersive refraction, and ends as soon as a non-delta event comes
+//! without one (no path with that beginning is its).
+//!
+//! **The estimate.** A path starts on an emissive triangle of the light
+//! set, chosen with the light sampler's probability `P` (the set's own
+//! choice, conditional on choosing a triangle), at a uniform point (pdf
+//! `1/A`), in a cosine-distributed direction on an emitting side (pdf
+//! `cos θ/π`, times ½ for a two-sided lamp), at one wavelength `λ` drawn by
+//! the hybrid's density `p(λ)`: its weight is `β = L_e(λ) π A / P`. Each
+//! bounce multiplies `β` by the BSDF sample's `f cos θ/p` at `λ` (the
+//! direction at a dispersive surface is `λ`'s own), with two corrections
+//! for the adjoint BSDF (Veach's thesis, §5.2–5.3; pbrt-v4's
+//! `TransportMode::Importance`): a refraction's radiance factor `1/η²` is
+//! undone (`η²` for a plain dielectric), and interpolated normals weigh in
+//! as `|ω_l·n_s| |ω_o·n_g| / (|ω_l·n_g| |ω_o·n_s|)`. A connection from
+//! vertex `y` (light from `ω_l`, towards the camera `ω_c` at distance `d`,
+//! film point `x`) adds to the film, per unit film area,
+//!
+//! ```text
+//! C(x) = β f(ω_c, ω_l) |ω_l·n_s| |ω_c·n_g| / |ω_l·n_g| / d² · dA_px/dω
+//! ```
+//!
+//! (`Camera::project`: `dA_px/dω = 1/(k² cos³θ)`), where the camera's
+//! BSDF evaluation with the viewer at `ω_c` is the adjoint's value for
+//! light from `ω_l` (generalized reciprocity: no `η` enters a connection).
+//! With `M` light paths a pass, `C/M` at `λ` becomes XYZ as a sampled
+//! estimate does (`x̄(λ)/p(λ)/∫ȳ`); a pixel receives it weighted by its
+//! filter (`render::light_film`). Russian roulette and the depth limit are
+//! the camera paths': a connection from the `i`-th vertex is a path of
+//! `i + 1` segments.
+//!
+//! **Limits.** A pinhole camera only (a thin lens or an orthographic
+//! camera sees a point along one ray, which a connection cannot find; the
+//! renderer then leaves the caustics to the camera paths). Not in scenes
+//! with fluorescence (a fluorescent bounce shifts the light path's one
+//! wavelength by a re-emission the camera side integrates) nor with
+//! `--dispersion-paths all` (children start past a refraction with their
+//! own states). The `η²` correction knows plain dielectrics; a refraction
+//! through another transmitting BSDF (a principled or masked one) keeps
+//! the radiance factor, which cancels over a path that leaves the medium
+//! it entered, so only light connected from inside such a medium is off.
+
+use super::{IntegratorSettings, RAY_EPSILON, RR_MAX_SURVIVAL, RayCounts, SHADOW_EPSILON};
+use crate::packet::{PacketHit, Ray};
+use crate::sampling::rng::{Purpose, Rng};
+use crate::scene::Scene;
+use crate::scene::camera::Projection;
+use crate::shading::material::{Bsdf, LaneSpectrum, ShadingPoint, direction_ior, sample_cosine};
+use crate::simd::{LANES, LaneMask};
+use crate::transport::LightPathSpectra;
+use core::ops::Range;
+use glam::{Vec2, Vec3};
+use spectral_core::sampling::SampledWavelengths;
+use std::f32::consts::PI;
+use wide::f32x8;
+
+/// Where a light path met the film: the film point, px, and the XYZ it
+/// adds there per px² of film and per pass (the path's `C` over the pass's
+/// number of light paths, module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FilmHit {
+    /// Column, px.
+    pub x: f32,
+    /// Row, px.
+    pub y: f32,
+    /// XYZ per px² and pass.
+    pub xyz: [f32; 3],
+}
+
+/// What the light paths of a render need (module docs).
+#[derive(Debug, Clone)]
+pub struct LightPaths<'a> {
+    scene: &'a Scene,
+    spectra: LightPathSpectra,
+    settings: IntegratorSettings,
+    seed: u64,
+    width: u32,
+    height: u32,
+}
+
+/// The light paths' inputs besides the scene ([`LightPaths::new`]).
+#[derive(Debug, Clone)]
+pub struct LightPathSettings {
+    /// The transport's light-path spectra (`None`: no light paths).
+    pub spectra: Option<LightPathSpectra>,
+    /// Depth and roulette, the camera paths'.
+    pub integrator: IntegratorSettings,
+    /// The render's seed.
+    pub seed: u64,
+    /// The film's size, px.
+    pub width: u32,
+    /// The film's height, px.
+    pub height: u32,
+    /// Whether the transport spawns children at dispersive refractions.
+    pub children: bool,
+}
+
+/// The geometry of a light path's vertex.
+struct Vertex {
+    position: Vec3,
+    /// Geometric normal (the triangle's front).
+    normal: Vec3,
+    /// Interpolated normal (the triangle's front), where smooth.
+    smooth: Option<Vec3>,
+    uv: Vec2,
+    dp_duv: [Vec3; 2],
+    front_only: bool,
+}
+
+impl Vertex {
+    /// The shading point seen from `view` (module `path`'s convention:
+    /// the geometric normal turned to `view`, the interpolated one where it
+    /// faces `view` too).
+    fn seen_from(&self, view: Vec3, lambda_nm: f32, lobe: f32) -> ShadingPoint {
+        let front = self.normal.dot(view) >= 0.0;
+        let side = if front { self.normal } else { -self.normal };
+        let n = self
+            .smooth
+            .map(|s| if front { s } else { -s })
+            .filter(|s| s.dot(view) > 0.0)
+            .unwrap_or(side);
+        ShadingPoint {
+            n,
+            front,
+            uv: self.uv,
+            dp_duv: self.dp_duv,
+            hero_nm: Some(lambda_nm),
+            lobe,
+        }
+    }
+
+    /// Whether a viewer along `view` sees the surface scatter (a
+    /// one-sided BSDF is black from behind its shading normal).
+    fn scatters_towards(&self, view: Vec3) -> bool {
+        !self.front_only || self.smooth.unwrap_or(self.normal).dot(view) > 0.0
+    }
+
+    /// Where a ray leaving towards `direction` starts.
+    fn departure(&self, direction: Vec3) -> Vec3 {
+        let side = if self.normal.dot(direction) >= 0.0 {
+            self.normal
+        } else {
+            -self.normal
+        };
+        offset(self.position, side)
+    }
+}
+
+/// A ray origin moved off the surface along `n` (the camera paths'
+/// `offset_x8`, one lane).
+fn offset(p: Vec3, n: Vec3) -> Vec3 {
+    let scale = p.abs().max_element().max(1.0) * RAY_EPSILON;
+    Vec3::new(
+        n.x.mul_add(scale, p.x),
+        n.y.mul_add(scale, p.y),
+        n.z.mul_add(scale, p.z),
+    )
+}
+
+/// The relative index `η` a refraction crosses at a plain dielectric,
+/// seen from the side of `p` (`1` for other BSDFs, module docs).
+fn refraction_eta(bsdf: &Bsdf, p: &ShadingPoint) -> f32 {
+    match bsdf {
+        Bsdf::Dielectric { ior, .. } => {
+            let (eta, _) = direction_ior(ior, p.hero_nm);
+            if p.front { eta } else { 1.0 / eta }
+        }
+        Bsdf::Faces(faces) => refraction_eta(&faces[usize::from(!p.front)], p),
+        _ => 1.0,
+    }
+}
+
+/// `|ω_l·n_s| |ω_o·n_g| / (|ω_l·n_g| |ω_o·n_s|)`: the adjoint's factor
+/// for interpolated normals (module docs), 1 on flat triangles.
+fn shading_normal_factor(vertex: &Vertex, shading: Vec3, from: Vec3, to: Vec3) -> f32 {
+    if vertex.smooth.is_none() {
+        return 1.0;
+    }
+    let n = vertex.normal;
+    let denominator = from.dot(n).abs() * to.dot(shading).abs();
+    if denominator > 0.0 {
+        from.dot(shading).abs() * to.dot(n).abs() / denominator
+    } else {
+        0.0
+    }
+}
+
+impl<'a> LightPaths<'a> {
+    /// The light paths of a render, or `None` where it traces none: the
+    /// transport asks for none, nothing disperses, the scene has no
+    /// emissive triangle, fluorescence or children, or the camera is not a
+    /// pinhole (module docs).
+    pub fn new(scene: &'a Scene, settings: LightPathSettings) -> Option<Self> {
+        let spectra = settings.spectra?;
+        let camera = scene.camera();
+        let pinhole = camera.lens().is_none()
+            && matches!(camera.projection(), Projection::Perspective { .. });
+        let disperses = scene.materials().iter().any(|m| m.bsdf.disperses());
+        let usable = pinhole
+            && disperses
+            && !settings.children
+            && scene.fluorophores().is_empty()
+            && !scene.lights().is_empty()
+            && scene.light_sampler().triangle_share() > 0.0;
+        usable.then_some(Self {
+            scene,
+            spectra,
+            settings: settings.integrator,
+            seed: settings.seed,
+            width: settings.width,
+            height: settings.height,
+        })
+    }
+
+    /// Light paths a pass traces: one per pixel of the film (of the whole
+    /// film, so that a crop traces the same paths).
+    pub fn per_pass(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height)
+    }
+
+    /// Traces light paths `paths` of pass `pass`, appending their film
+    /// hits to `hits` in path order and counting their rays.
+    pub fn trace(
+        &self,
+        pass: u32,
+        paths: Range<u64>,
+        hits: &mut Vec<FilmHit>,
+        counts: &mut RayCounts,
+    ) {
+        for index in paths {
+            let mut rng = Rng::for_sample(self.seed, index, u64::from(pass), Purpose::LightPaths);
+            self.trace_path(&mut rng, hits, counts);
+        }
+    }
+
+    /// The vertex a ray hit.
+    fn vertex(
+        &self,
+        ray: &Ray,
+        t: f32,
+        triangle: u32,
+        instance: u32,
+        (u, v): (f32, f32),
+    ) -> Option<Vertex> {
+        let scene = self.scene;
+        let surface = scene.hit_surface(triangle, instance)?;
+        let uv = scene
+            .hit_uvs(triangle, instance)
+            .map_or(Vec2::ZERO, |[a, b, c]| a * (1.0 - u - v) + b * u + c * v);
+        let smooth = if scene.has_vertex_normals() {
+            let hit = PacketHit {
+                t: f32x8::splat(t),
+                u: f32x8::splat(u),
+                v: f32x8::splat(v),
+                triangle: [triangle; LANES],
+                instance: [instance; LANES],
+                hit: LaneMask(1),
+            };
+            scene.hit_smooth_normals(&hit, LaneMask(1))[0]
+        } else {
+            None
+        };
+        let dp_duv = if scene.needs_tangent() {
+            scene.hit_tangents(triangle, instance)
+        } else {
+            [Vec3::ZERO; 2]
+        };
+        Some(Vertex {
+            position: ray.origin + ray.direction * t,
+            normal: surface.normal,
+            smooth,
+            uv,
+            dp_duv,
+            front_only: surface.front_only,
+        })
+    }
+
+    /// One light path (module docs).
+    fn trace_path(&self, rng: &mut Rng, hits: &mut Vec<FilmHit>, counts: &mut RayCounts) {
+        let scene = self.scene;
+        let wavelength = self.spectra.draw(rng.next_f32());
+        let (lambda_nm, pdf_per_nm) = (wavelength.lambda_nm()[0], wavelength.pdf_per_nm()[0]);
+        let (u_light, u, v) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let Some(light) = scene.lights().sample(u_light, u, v) else {
+            return;
+        };
+        let surface = light.surface;
+        let pmf = surface.light_pmf / scene.light_sampler().triangle_share();
+        let emission = LaneSpectrum::scene(surface.emission);
+        let le = self.spectra.factor(scene, &emission, lambda_nm);
+        if !(pmf > 0.0 && surface.area > 0.0 && le > 0.0 && pdf_per_nm > 0.0) {
+            return;
+        }
+        let (mut normal, mut side_probability) = (surface.normal, 1.0);
+        if surface.two_sided {
+            side_probability = 0.5;
+            if rng.next_f32() < 0.5 {
+                normal = -normal;
+            }
+        }
+        let direction = sample_cosine(normal, rng.next_f32(), rng.next_f32());
+        if direction.dot(normal) <= 0.0 {
+            return;
+        }
+        let mut beta = le * PI * surface.area / (pmf * side_probability);
+        let start = beta;
+        let mut ray = Ray {
+            origin: offset(light.point, normal),
+            direction,
+            t_max: f32::INFINITY,
+        };
+        // Still in the first stretch of delta events, and whether it held a
+        // dispersive refraction (module docs).
+        let (mut first_stretch, mut dispersed) = (true, false);
+        let per_pass = self.per_pass() as f32;
+        for depth in 1u32.. {
+            counts.closest += 1;
+            let Some(hit) = scene.intersect(&ray) else {
+                return;
+            };
+            let Some(material) = scene
+                .hit_material(hit.triangle, hit.instance)
+                .and_then(|m| scene.materials().get(m.index()))
+            else {
+                return;
+            };
+            let Some(vertex) = self.vertex(&ray, hit.t, hit.triangle, hit.instance, (hit.u, hit.v))
+            else {
+                return;
+            };
+            let bsdf = &material.bsdf;
+            let from = -ray.direction.normalize();
+            let u_lobe = rng.next_f32();
+            if dispersed && depth.saturating_add(1) <= self.settings.max_depth {
+                if let Some(hit) =
+                    self.connect(&vertex, bsdf, from, (&wavelength, u_lobe), beta, counts)
+                {
+                    hits.push(FilmHit {
+                        xyz: hit.xyz.map(|c| c / per_pass),
+                        ..hit
+                    });
+                }
+            }
+            if depth.saturating_add(2) > self.settings.max_depth || !vertex.scatters_towards(from) {
+                return;
+            }
+            let p = vertex.seen_from(from, lambda_nm, u_lobe);
+            let Some(sample) = bsdf.sample(
+                &scene.material_tables(),
+                &p,
+                from,
+                u_lobe,
+                rng.next_f32(),
+                rng.next_f32(),
+            ) else {
+                return;
+            };
+            let side = if vertex.normal.dot(from) >= 0.0 {
+                vertex.normal
+            } else {
+                -vertex.normal
+            };
+            let to = sample.wi;
+            if vertex.smooth.is_some() && to.dot(side) * to.dot(p.n) <= 0.0 {
+                return;
+            }
+            let refracted = to.dot(side) < 0.0;
+            let delta = sample.pdf == 0.0;
+            let mut factor =
+                sample.weight * self.spectra.factor(scene, &sample.spectrum, lambda_nm);
+            if refracted {
+                let eta = refraction_eta(bsdf, &p);
+                factor *= eta * eta;
+            }
+            factor *= shading_normal_factor(&vertex, p.n, from, to);
+            if !(factor > 0.0 && factor.is_finite()) {
+                return;
+            }
+            beta *= factor;
+            if first_stretch {
+                if delta {
+                    dispersed |= refracted && bsdf.disperses();
+                } else if dispersed {
+                    first_stretch = false;
+                } else {
+                    return;
+                }
+            }
+            if depth >= self.settings.rr_depth {
+                let survival = (beta / start).min(RR_MAX_SURVIVAL);
+                if rng.next_f32() >= survival {
+                    return;
+                }
+                beta /= survival;
+            }
+            ray = Ray {
+                origin: vertex.departure(to),
+                direction: to,
+                t_max: f32::INFINITY,
+            };
+        }
+    }
+
+    /// The connection of `vertex`, lit from `from` by `beta` at the
+    /// wavelength (with the bounce's lobe number), to the camera: its film
+    /// hit, unscaled by the pass's number of paths (module docs).
+    fn connect(
+        &self,
+        vertex: &Vertex,
+        bsdf: &Bsdf,
+        from: Vec3,
+        (wavelength, u_lobe): (&SampledWavelengths<1>, f32),
+        beta: f32,
+        counts: &mut RayCounts,
+    ) -> Option<FilmHit> {
+        let scene = self.scene;
+        let camera = scene.camera();
+        let film = camera.project(vertex.position, self.width, self.height)?;
+        let to_camera = camera.position() - vertex.position;
+        let distance_sq = to_camera.length_squared();
+        let view = to_camera / distance_sq.sqrt();
+        if !vertex.scatters_towards(view) {
+            return None;
+        }
+        let lambda_nm = wavelength.lambda_nm()[0];
+        let p = vertex.seen_from(view, lambda_nm, u_lobe);
+        let side = if vertex.normal.dot(view) >= 0.0 {
+            vertex.normal
+        } else {
+            -vertex.normal
+        };
+        if vertex.smooth.is_some() && from.dot(side) * from.dot(p.n) <= 0.0 {
+            return None;
+        }
+        let eval = bsdf.eval(&scene.material_tables(), &p, view, from);
+        let cos_from = from.dot(vertex.normal).abs();
+        if !(eval.value > 0.0 && cos_from > 0.0) {
+            return None;
+        }
+        let value = beta
+            * eval.value
+            * self.spectra.factor(scene, &eval.spectrum, lambda_nm)
+            * view.dot(vertex.normal).abs()
+            / cos_from
+            / distance_sq
+            * film.density_per_sr;
+        if !(value.is_finite() && value > 0.0) {
+            return None;
+        }
+        // The shadow ray ends short of the pinhole, or at the near clip
+        // plane, in front of which the camera sees nothing.
+        let origin = vertex.departure(view);
+        let to_pinhole = camera.position() - origin;
+        let depth = to_pinhole.dot(camera.axes().forward);
+        let near = camera.clip().map_or(0.0, |clip| clip.near);
+        let t_max = (1.0 - SHADOW_EPSILON).min(1.0 - near / depth);
+        counts.shadow += 1;
+        let blocked = scene.occluded(&Ray {
+            origin,
+            direction: to_pinhole,
+            t_max,
+        });
+        (!blocked).then(|| FilmHit {
+            x: film.x,
+            y: film.y,
+            xyz: self.spectra.xyz(value, wavelength),
+        })
+    }
+}
