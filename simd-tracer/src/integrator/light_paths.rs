@@ -27,11 +27,16 @@
 //! set, chosen with the light sampler's probability `P` (the set's own
 //! choice, conditional on choosing a triangle), at a uniform point (pdf
 //! `1/A`), in a cosine-distributed direction on an emitting side (pdf
-//! `cos θ/π`, times ½ for a two-sided lamp), at one wavelength `λ` drawn by
-//! the hybrid's density `p(λ)`: its weight is `β = L_e(λ) π A / P`. Each
-//! bounce multiplies `β` by the BSDF sample's `f cos θ/p` at `λ` (the
-//! direction at a dispersive surface is `λ`'s own), with two corrections
-//! for the adjoint BSDF (Veach's thesis, §5.2–5.3; pbrt-v4's
+//! `cos θ/π`, times ½ for a two-sided lamp), carrying
+//! [`LIGHT_PATH_WAVELENGTHS`] wavelengths `λ_i` drawn as the hybrid draws a
+//! split's (hero rotations, each with the marginal density `p`): each
+//! starts with the weight `β_i = L_e(λ_i) π A / P`. Up to the first
+//! surface whose direction depends on wavelength the path is shared (the
+//! hero's sample, each wavelength's factor); there each wavelength takes
+//! its own direction and goes on alone, carrying `1/C` of the estimate
+//! (`(1/C) Σ_i`, the sampled estimator over the `C` wavelengths). Each
+//! bounce multiplies `β` by the BSDF sample's `f cos θ/p` at `λ`, with two
+//! corrections for the adjoint BSDF (Veach's thesis, §5.2–5.3; pbrt-v4's
 //! `TransportMode::Importance`): a refraction's radiance factor `1/η²` is
 //! undone (`η²` for a plain dielectric), and interpolated normals weigh in
 //! as `|ω_l·n_s| |ω_o·n_g| / (|ω_l·n_g| |ω_o·n_s|)`. A connection from
@@ -45,7 +50,7 @@
 //! (`Camera::project`: `dA_px/dω = 1/(k² cos³θ)`), where the camera's
 //! BSDF evaluation with the viewer at `ω_c` is the adjoint's value for
 //! light from `ω_l` (generalized reciprocity: no `η` enters a connection).
-//! With `M` light paths a pass, `C/M` at `λ` becomes XYZ as a sampled
+//! With `M` light paths a pass, `C/(C M)` at `λ` becomes XYZ as a sampled
 //! estimate does (`x̄(λ)/p(λ)/∫ȳ`); a pixel receives it weighted by its
 //! filter (`render::light_film`). Russian roulette and the depth limit are
 //! the camera paths': a connection from the `i`-th vertex is a path of
@@ -54,7 +59,7 @@
 //! **Limits.** A pinhole camera only (a thin lens or an orthographic
 //! camera sees a point along one ray, which a connection cannot find; the
 //! renderer then leaves the caustics to the camera paths). Not in scenes
-//! with fluorescence (a fluorescent bounce shifts the light path's one
+//! with fluorescence (a fluorescent bounce shifts a light path's
 //! wavelength by a re-emission the camera side integrates) nor with
 //! `--dispersion-paths all` (children start past a refraction with their
 //! own states). The `η²` correction knows plain dielectrics; a refraction
@@ -115,6 +120,39 @@ pub struct LightPathSettings {
     pub height: u32,
     /// Whether the transport spawns children at dispersive refractions.
     pub children: bool,
+}
+
+/// Wavelengths a light path carries until dispersion sends each its own
+/// way (the hybrid's default `C`: the stretch from the lamp to the glass
+/// is shared, and past it each wavelength's walk carries a quarter of the
+/// estimate, so the caustic's colour is the mean of four wavelengths'
+/// instead of one's).
+pub const LIGHT_PATH_WAVELENGTHS: usize = 4;
+
+/// A BSDF sample of a light path at one wavelength ([`LightPaths::scatter`]).
+struct Scatter {
+    to: Vec3,
+    /// `f cos θ/p` of the adjoint at the wavelength.
+    factor: f32,
+    delta: bool,
+    refracted: bool,
+}
+
+/// One wavelength's light path past the stretch its wavelengths share.
+struct Walk {
+    ray: Ray,
+    /// Segments up to the end of `ray`.
+    depth: u32,
+    beta: f32,
+    /// `beta` at the lamp (Russian roulette's reference).
+    start: f32,
+    /// Still in the first stretch of delta events (module docs).
+    first_stretch: bool,
+    /// That stretch held a dispersive refraction.
+    dispersed: bool,
+    wavelength: SampledWavelengths<1>,
+    /// The walk's share of the path's estimate, `1/C`.
+    share: f32,
 }
 
 /// The geometry of a light path's vertex.
@@ -297,20 +335,19 @@ impl<'a> LightPaths<'a> {
         })
     }
 
-    /// One light path (module docs).
+    /// One light path (module docs): the stretch its wavelengths share,
+    /// from the lamp to the first surface whose direction depends on
+    /// wavelength, where each goes on alone ([`Self::walk`]).
     fn trace_path(&self, rng: &mut Rng, hits: &mut Vec<FilmHit>, counts: &mut RayCounts) {
         let scene = self.scene;
-        let wavelength = self.spectra.draw(rng.next_f32());
-        let (lambda_nm, pdf_per_nm) = (wavelength.lambda_nm()[0], wavelength.pdf_per_nm()[0]);
+        let wavelengths = self.spectra.draw::<LIGHT_PATH_WAVELENGTHS>(rng.next_f32());
         let (u_light, u, v) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
         let Some(light) = scene.lights().sample(u_light, u, v) else {
             return;
         };
         let surface = light.surface;
         let pmf = surface.light_pmf / scene.light_sampler().triangle_share();
-        let emission = LaneSpectrum::scene(surface.emission);
-        let le = self.spectra.factor(scene, &emission, lambda_nm);
-        if !(pmf > 0.0 && surface.area > 0.0 && le > 0.0 && pdf_per_nm > 0.0) {
+        if !(pmf > 0.0 && surface.area > 0.0) {
             return;
         }
         let (mut normal, mut side_probability) = (surface.normal, 1.0);
@@ -324,100 +361,195 @@ impl<'a> LightPaths<'a> {
         if direction.dot(normal) <= 0.0 {
             return;
         }
-        let mut beta = le * PI * surface.area / (pmf * side_probability);
-        let start = beta;
+        let emission = LaneSpectrum::scene(surface.emission);
+        let lambdas = *wavelengths.lambda_nm();
+        let start = lambdas.map(|lambda_nm| {
+            let le = self.spectra.factor(scene, &emission, lambda_nm);
+            le * PI * surface.area / (pmf * side_probability)
+        });
+        let mut beta = start;
         let mut ray = Ray {
             origin: offset(light.point, normal),
             direction,
             t_max: f32::INFINITY,
         };
-        // Still in the first stretch of delta events, and whether it held a
-        // dispersive refraction (module docs).
-        let (mut first_stretch, mut dispersed) = (true, false);
-        let per_pass = self.per_pass() as f32;
+        let tables = scene.material_tables();
         for depth in 1u32.. {
             counts.closest += 1;
-            let Some(hit) = scene.intersect(&ray) else {
+            let Some((vertex, bsdf)) = self.hit(&ray) else {
                 return;
             };
-            let Some(material) = scene
-                .hit_material(hit.triangle, hit.instance)
-                .and_then(|m| scene.materials().get(m.index()))
-            else {
-                return;
-            };
-            let Some(vertex) = self.vertex(&ray, hit.t, hit.triangle, hit.instance, (hit.u, hit.v))
-            else {
-                return;
-            };
-            let bsdf = &material.bsdf;
             let from = -ray.direction.normalize();
-            let u_lobe = rng.next_f32();
-            if dispersed && depth.saturating_add(1) <= self.settings.max_depth {
-                if let Some(hit) =
-                    self.connect(&vertex, bsdf, from, (&wavelength, u_lobe), beta, counts)
+            if depth.saturating_add(2) > self.settings.max_depth || !vertex.scatters_towards(from) {
+                return;
+            }
+            let uniforms = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            let hero = vertex.seen_from(from, lambdas[0], uniforms[0]);
+            if bsdf.direction_depends_on_wavelength(&tables, &hero, from, uniforms[0]) {
+                let share = 1.0 / LIGHT_PATH_WAVELENGTHS as f32;
+                for (i, (&lambda_nm, &pdf_per_nm)) in
+                    lambdas.iter().zip(wavelengths.pdf_per_nm()).enumerate()
+                {
+                    let Some(scattered) = self.scatter(&vertex, bsdf, from, lambda_nm, uniforms)
+                    else {
+                        continue;
+                    };
+                    // A non-delta event before any dispersion: not a light
+                    // path's (module docs). A total internal reflection at
+                    // this wavelength goes on undispersed.
+                    if !(scattered.delta && beta[i] > 0.0 && pdf_per_nm > 0.0) {
+                        continue;
+                    }
+                    let dispersed = scattered.refracted && bsdf.disperses();
+                    let walk = Walk {
+                        ray: Ray {
+                            origin: vertex.departure(scattered.to),
+                            direction: scattered.to,
+                            t_max: f32::INFINITY,
+                        },
+                        depth: depth.saturating_add(1),
+                        beta: beta[i] * scattered.factor,
+                        start: start[i],
+                        first_stretch: true,
+                        dispersed,
+                        wavelength: SampledWavelengths::from_parts([lambda_nm], [pdf_per_nm]),
+                        share,
+                    };
+                    self.walk(rng, walk, hits, counts);
+                }
+                return;
+            }
+            // The same direction at every wavelength: the hero's sample,
+            // each wavelength's factor. A non-delta event before any
+            // dispersion ends the path.
+            let Some(scattered) = self.scatter(&vertex, bsdf, from, lambdas[0], uniforms) else {
+                return;
+            };
+            if !scattered.delta {
+                return;
+            }
+            beta[0] *= scattered.factor;
+            for (b, &lambda_nm) in beta.iter_mut().zip(&lambdas).skip(1) {
+                *b *= self
+                    .scatter(&vertex, bsdf, from, lambda_nm, uniforms)
+                    .map_or(0.0, |s| s.factor);
+            }
+            if depth >= self.settings.rr_depth {
+                let survival = (beta[0] / start[0]).min(RR_MAX_SURVIVAL);
+                if survival <= 0.0 || rng.next_f32() >= survival {
+                    return;
+                }
+                beta = beta.map(|b| b / survival);
+            }
+            ray = Ray {
+                origin: vertex.departure(scattered.to),
+                direction: scattered.to,
+                t_max: f32::INFINITY,
+            };
+        }
+    }
+
+    /// The vertex and BSDF a ray hits.
+    fn hit(&self, ray: &Ray) -> Option<(Vertex, &'a Bsdf)> {
+        let scene = self.scene;
+        let hit = scene.intersect(ray)?;
+        let material = scene
+            .hit_material(hit.triangle, hit.instance)
+            .and_then(|m| scene.materials().get(m.index()))?;
+        let vertex = self.vertex(ray, hit.t, hit.triangle, hit.instance, (hit.u, hit.v))?;
+        Some((vertex, &material.bsdf))
+    }
+
+    /// The BSDF sample at `vertex` for light from `from` at `lambda_nm`
+    /// with the uniforms `[lobe, u, v]`, and its factor for the adjoint
+    /// (module docs).
+    fn scatter(
+        &self,
+        vertex: &Vertex,
+        bsdf: &Bsdf,
+        from: Vec3,
+        lambda_nm: f32,
+        [u_lobe, u, v]: [f32; 3],
+    ) -> Option<Scatter> {
+        let scene = self.scene;
+        let p = vertex.seen_from(from, lambda_nm, u_lobe);
+        let sample = bsdf.sample(&scene.material_tables(), &p, from, u_lobe, u, v)?;
+        let side = if vertex.normal.dot(from) >= 0.0 {
+            vertex.normal
+        } else {
+            -vertex.normal
+        };
+        let to = sample.wi;
+        if vertex.smooth.is_some() && to.dot(side) * to.dot(p.n) <= 0.0 {
+            return None;
+        }
+        let refracted = to.dot(side) < 0.0;
+        let mut factor = sample.weight * self.spectra.factor(scene, &sample.spectrum, lambda_nm);
+        if refracted {
+            let eta = refraction_eta(bsdf, &p);
+            factor *= eta * eta;
+        }
+        factor *= shading_normal_factor(vertex, p.n, from, to);
+        (factor > 0.0 && factor.is_finite()).then_some(Scatter {
+            to,
+            factor,
+            delta: sample.pdf == 0.0,
+            refracted,
+        })
+    }
+
+    /// One wavelength's walk past the shared stretch: a connection to the
+    /// camera from every vertex once a dispersive refraction came first
+    /// (module docs).
+    fn walk(&self, rng: &mut Rng, mut walk: Walk, hits: &mut Vec<FilmHit>, counts: &mut RayCounts) {
+        let scale = walk.share / self.per_pass() as f32;
+        let lambda_nm = walk.wavelength.lambda_nm()[0];
+        loop {
+            counts.closest += 1;
+            let Some((vertex, bsdf)) = self.hit(&walk.ray) else {
+                return;
+            };
+            let from = -walk.ray.direction.normalize();
+            let uniforms = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            if walk.dispersed && walk.depth.saturating_add(1) <= self.settings.max_depth {
+                let connection = (&walk.wavelength, uniforms[0]);
+                if let Some(hit) = self.connect(&vertex, bsdf, from, connection, walk.beta, counts)
                 {
                     hits.push(FilmHit {
-                        xyz: hit.xyz.map(|c| c / per_pass),
+                        xyz: hit.xyz.map(|c| c * scale),
                         ..hit
                     });
                 }
             }
-            if depth.saturating_add(2) > self.settings.max_depth || !vertex.scatters_towards(from) {
+            if walk.depth.saturating_add(2) > self.settings.max_depth
+                || !vertex.scatters_towards(from)
+            {
                 return;
             }
-            let p = vertex.seen_from(from, lambda_nm, u_lobe);
-            let Some(sample) = bsdf.sample(
-                &scene.material_tables(),
-                &p,
-                from,
-                u_lobe,
-                rng.next_f32(),
-                rng.next_f32(),
-            ) else {
+            let Some(scattered) = self.scatter(&vertex, bsdf, from, lambda_nm, uniforms) else {
                 return;
             };
-            let side = if vertex.normal.dot(from) >= 0.0 {
-                vertex.normal
-            } else {
-                -vertex.normal
-            };
-            let to = sample.wi;
-            if vertex.smooth.is_some() && to.dot(side) * to.dot(p.n) <= 0.0 {
-                return;
-            }
-            let refracted = to.dot(side) < 0.0;
-            let delta = sample.pdf == 0.0;
-            let mut factor =
-                sample.weight * self.spectra.factor(scene, &sample.spectrum, lambda_nm);
-            if refracted {
-                let eta = refraction_eta(bsdf, &p);
-                factor *= eta * eta;
-            }
-            factor *= shading_normal_factor(&vertex, p.n, from, to);
-            if !(factor > 0.0 && factor.is_finite()) {
-                return;
-            }
-            beta *= factor;
-            if first_stretch {
-                if delta {
-                    dispersed |= refracted && bsdf.disperses();
-                } else if dispersed {
-                    first_stretch = false;
+            walk.beta *= scattered.factor;
+            if walk.first_stretch {
+                if scattered.delta {
+                    walk.dispersed |= scattered.refracted && bsdf.disperses();
+                } else if walk.dispersed {
+                    walk.first_stretch = false;
                 } else {
                     return;
                 }
             }
-            if depth >= self.settings.rr_depth {
-                let survival = (beta / start).min(RR_MAX_SURVIVAL);
-                if rng.next_f32() >= survival {
+            if walk.depth >= self.settings.rr_depth {
+                let survival = (walk.beta / walk.start).min(RR_MAX_SURVIVAL);
+                if survival <= 0.0 || rng.next_f32() >= survival {
                     return;
                 }
-                beta /= survival;
+                walk.beta /= survival;
             }
-            ray = Ray {
-                origin: vertex.departure(to),
-                direction: to,
+            walk.depth = walk.depth.saturating_add(1);
+            walk.ray = Ray {
+                origin: vertex.departure(scattered.to),
+                direction: scattered.to,
                 t_max: f32::INFINITY,
             };
         }

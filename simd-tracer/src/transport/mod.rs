@@ -61,11 +61,11 @@ pub struct SplitLanes {
 mod binned;
 pub use binned::BinnedSampledTransport;
 
-/// The spectral side of light paths (`integrator::light_paths`): each
-/// path carries one wavelength, drawn as the hybrid transport draws a
-/// split's (from the scene's lights density where it has one), and
-/// reaches the film as the sampled estimate `L x̄(λ)/p(λ) / ∫ȳ` of the
-/// film's observer.
+/// The spectral side of light paths (`integrator::light_paths`): a path
+/// carries a few wavelengths, drawn as the hybrid transport draws a
+/// split's (from the scene's lights density where it has one), until
+/// dispersion sends each its own way, and reaches the film as the sampled
+/// estimate `L x̄(λ)/p(λ) / ∫ȳ` of the film's observer.
 #[derive(Debug, Clone)]
 pub struct LightPathSpectra {
     range: SpectralRange,
@@ -75,11 +75,19 @@ pub struct LightPathSpectra {
 }
 
 impl LightPathSpectra {
-    /// One wavelength from the uniform number `u`.
-    pub fn draw(&self, u: f32) -> SampledWavelengths<1> {
+    /// `C` wavelengths from the uniform number `u`, as a split draws
+    /// them (hero rotations `u + i/C`; a strategy that reads one number
+    /// per wavelength gets the rotations), each with its marginal density.
+    pub fn draw<const C: usize>(&self, u: f32) -> SampledWavelengths<C> {
         match &self.density {
             Some(density) => density.sample_hero(u),
-            None => SampledWavelengths::sample(self.strategy, &self.range, [u]),
+            None => {
+                let rotations = core::array::from_fn(|i| {
+                    let v = u + i as f32 / C as f32;
+                    if v >= 1.0 { v - 1.0 } else { v }
+                });
+                SampledWavelengths::sample(self.strategy, &self.range, rotations)
+            }
         }
     }
 
