@@ -228,28 +228,14 @@ const SEEDS: u64 = 4;
 /// Longest path: camera, two glass faces, the wall, the sky.
 const MAX_DEPTH: u32 = 6;
 
-/// The mean of `SEEDS` renders of `scene` (seeds from `first`), and the
-/// image means of each.
+/// The mean of `SEEDS` renders of `scene` (seeds from `first`) at `SPP`,
+/// and the image means of each ([`seed_means`]).
 fn renders<T: Transport>(
     t: &T,
     scene: &Scene,
     first: u64,
 ) -> TestResult<(Vec<Xyz>, Vec<[f64; 3]>)> {
-    let mut sum = vec![[0.0f64; 3]; (SIDE * SIDE) as usize];
-    let mut means = Vec::new();
-    for seed in first..first + SEEDS {
-        let result = run(t, scene, &settings(SIDE, SPP, seed, MAX_DEPTH))?;
-        assert_eq!(result.rejected, 0);
-        let mut mean = [0.0f64; 3];
-        for (acc, x) in sum.iter_mut().zip(&result.xyz) {
-            for (k, v) in x.to_array().into_iter().enumerate() {
-                acc[k] += v / SEEDS as f64;
-                mean[k] += v / result.xyz.len() as f64;
-            }
-        }
-        means.push(mean);
-    }
-    Ok((sum.into_iter().map(Xyz::from_array).collect(), means))
+    seed_means(t, scene, first, SPP)
 }
 
 /// Each column's mean over the middle half of the rows: the stripes and
@@ -542,7 +528,8 @@ fn lamp_wedge_scene(lamp_radiance: f64, lamp_half_size: f32) -> TestResult<Scene
     Ok(b.build()?)
 }
 
-/// The image means over seeds of renders of `scene` by `t` at `spp`.
+/// The mean of `SEEDS` renders of `scene` by `t` at `spp` (seeds from
+/// `first`), and the image means of each.
 fn seed_means<T: Transport>(
     t: &T,
     scene: &Scene,
