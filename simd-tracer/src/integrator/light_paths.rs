@@ -385,7 +385,20 @@ impl<'a> LightPaths<'a> {
             }
             let uniforms = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
             let hero = vertex.seen_from(from, lambdas[0], uniforms[0]);
-            if bsdf.direction_depends_on_wavelength(&tables, &hero, from, uniforms[0]) {
+            let depends = bsdf.direction_depends_on_wavelength(&tables, &hero, from, uniforms[0]);
+            let hero_scatter = if depends {
+                None
+            } else {
+                self.scatter(&vertex, bsdf, from, lambdas[0], uniforms)
+            };
+            // A delta refraction through a material that disperses counts
+            // as dispersive on the camera side (`caustics.rs`) even where
+            // its direction does not depend on wavelength (a mask's pass
+            // through): the walks start there too.
+            let refracts_dispersively = hero_scatter
+                .as_ref()
+                .is_some_and(|s| s.delta && s.refracted && bsdf.disperses());
+            if depends || refracts_dispersively {
                 let share = 1.0 / LIGHT_PATH_WAVELENGTHS as f32;
                 for (i, (&lambda_nm, &pdf_per_nm)) in
                     lambdas.iter().zip(wavelengths.pdf_per_nm()).enumerate()
@@ -422,7 +435,7 @@ impl<'a> LightPaths<'a> {
             // The same direction at every wavelength: the hero's sample,
             // each wavelength's factor. A non-delta event before any
             // dispersion ends the path.
-            let Some(scattered) = self.scatter(&vertex, bsdf, from, lambdas[0], uniforms) else {
+            let Some(scattered) = hero_scatter else {
                 return;
             };
             if !scattered.delta {
