@@ -67,7 +67,8 @@
 //! the radiance factor, which cancels over a path that leaves the medium
 //! it entered, so only light connected from inside such a medium is off.
 
-use super::{IntegratorSettings, RAY_EPSILON, RR_MAX_SURVIVAL, RayCounts, SHADOW_EPSILON};
+use super::packet_shading::offset;
+use super::{IntegratorSettings, RR_MAX_SURVIVAL, RayCounts, SHADOW_EPSILON};
 use crate::packet::{PacketHit, Ray};
 use crate::sampling::rng::{Purpose, Rng};
 use crate::scene::Scene;
@@ -204,17 +205,6 @@ impl Vertex {
         };
         offset(self.position, side)
     }
-}
-
-/// A ray origin moved off the surface along `n` (the camera paths'
-/// `offset_x8`, one lane).
-fn offset(p: Vec3, n: Vec3) -> Vec3 {
-    let scale = p.abs().max_element().max(1.0) * RAY_EPSILON;
-    Vec3::new(
-        n.x.mul_add(scale, p.x),
-        n.y.mul_add(scale, p.y),
-        n.z.mul_add(scale, p.z),
-    )
 }
 
 /// The relative index `η` a refraction crosses at a plain dielectric,

@@ -35,6 +35,18 @@ pub(super) fn offset_x8(p: Vec3x8, n: Vec3x8) -> Vec3x8 {
     n.mul_add(scale, p)
 }
 
+/// [`offset_x8`] of one ray (light paths, `light_paths.rs`): the same
+/// operations, so each lane of the packet form equals it bit for bit.
+#[inline]
+pub(super) fn offset(p: Vec3, n: Vec3) -> Vec3 {
+    let scale = p.abs().max_element().max(1.0) * RAY_EPSILON;
+    Vec3::new(
+        n.x.mul_add(scale, p.x),
+        n.y.mul_add(scale, p.y),
+        n.z.mul_add(scale, p.z),
+    )
+}
+
 /// Power heuristic `a²/(a² + b²)`, 0 where both are 0.
 #[inline(always)]
 pub(super) fn power_heuristic_x8(a: f32x8, b: f32x8) -> f32x8 {
