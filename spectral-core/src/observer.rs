@@ -156,7 +156,9 @@ impl Observer {
 
     /// `(r_0, r_1, r_2)` at grid sample `index` (`index < SAMPLES`).
     pub fn sample(&self, index: usize) -> [f64; 3] {
-        self.curves.map(|c| c[index])
+        // Indexed in place: `self.curves.map(..)` would copy the three
+        // curves (11 kB) on every call.
+        core::array::from_fn(|r| self.curves[r][index])
     }
 
     /// `(r_0, r_1, r_2)` at any wavelength: linear between the grid samples,
