@@ -91,6 +91,11 @@ fn hybrid_drawing<const C: usize>(
 /// The hybrid with fspec's defaults for caustics: light paths where
 /// `light_paths`.
 fn hybrid_with_light_paths(light_paths: bool) -> TestResult<HybridTransport<12, 4>> {
+    hybrid_with(light_paths, false)
+}
+
+/// The hybrid with or without light paths and children.
+fn hybrid_with(light_paths: bool, children: bool) -> TestResult<HybridTransport<12, 4>> {
     Ok(HybridTransport::new(&HybridSettings {
         range: RANGE,
         buffer: Buffer::Spectral,
@@ -98,7 +103,7 @@ fn hybrid_with_light_paths(light_paths: bool) -> TestResult<HybridTransport<12, 
         strategy: WavelengthStrategy::Hero,
         observer: &Arc::new(Observer::default()),
         density: None,
-        children: false,
+        children,
         light_paths,
     })?)
 }
@@ -558,7 +563,9 @@ fn seed_means<T: Transport>(
 /// hybrid with light paths converges to the sampled transport (camera
 /// paths only) — its image mean within 4σ of a reference of other seeds,
 /// its mean ΔE2000 of the column profiles within the reference's own
-/// seed-to-seed ΔE — and so does the hybrid without them. Negative
+/// seed-to-seed ΔE — and so do the hybrid without them and the hybrid
+/// whose split wavelengths each follow their own path (children, which
+/// leave the light paths' share out as their parents do). Negative
 /// control: the lamp 10 % darker fails the mean-colour bound.
 #[test]
 fn light_paths_and_camera_paths_share_the_caustic_without_bias() -> TestResult {
@@ -568,20 +575,21 @@ fn light_paths_and_camera_paths_share_the_caustic_without_bias() -> TestResult {
     let (reference, reference_means) = seed_means(&sampled, &scene, 100, 256)?;
     let (second, _) = seed_means(&sampled, &scene, 200, 256)?;
     let noise = mean_delta_e(&second, &reference, white);
-    for light_paths in [true, false] {
-        let hybrid = hybrid_with_light_paths(light_paths)?;
+    for (light_paths, children) in [(true, false), (false, false), (true, true)] {
+        let hybrid = hybrid_with(light_paths, children)?;
         let (image, means) = seed_means(&hybrid, &scene, 300, 256)?;
         let error = mean_delta_e(&image, &reference, white);
         let z = z_scores(&means, &reference_means);
+        let case = format!("light paths {light_paths}, children {children}");
         eprintln!(
-            "light paths {light_paths}: ΔE {error:.3} (reference noise {noise:.3}), z = {z:?}, mean {:?} vs {:?}",
+            "{case}: ΔE {error:.3} (reference noise {noise:.3}), z = {z:?}, mean {:?} vs {:?}",
             means[0], reference_means[0]
         );
         assert!(
             error <= DELTA_E_FACTOR * noise,
-            "{light_paths}: {error} vs {noise}"
+            "{case}: {error} vs {noise}"
         );
-        assert!(z.iter().all(|&z| z <= Z_BOUND), "{light_paths}: z = {z:?}");
+        assert!(z.iter().all(|&z| z <= Z_BOUND), "{case}: z = {z:?}");
     }
     let darker = lamp_wedge_scene(LAMP_RADIANCE * DARKER, 0.5)?;
     let (_, darker_means) = seed_means(&hybrid_with_light_paths(true)?, &darker, 300, 256)?;

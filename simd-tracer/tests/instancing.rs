@@ -18,7 +18,7 @@ use simd_tracer::scene::camera::Camera;
 use simd_tracer::scene::instances::{InstancePlacement, Instancing};
 use simd_tracer::scene::mesh::MeshData;
 use simd_tracer::scene::transform::Transform;
-use simd_tracer::scene::{MeshPlacement, Scene, SceneBuilder};
+use simd_tracer::scene::{MeshPlacement, Scene, SceneBuilder, WideStacks};
 use simd_tracer::shading::light_sampler::DirectionalLight;
 use simd_tracer::shading::material::{Albedo, Bsdf, CoatParams, Material, diffuse_fresnel};
 use simd_tracer::shading::microfacet::Microfacet;
@@ -204,6 +204,7 @@ fn rays_hit_transformed_instances_at_the_analytic_distance_and_normal() -> TestR
         assert_eq!(instances.len(), 2, "{name}");
         assert!(scene.triangles().is_empty(), "{name}: nothing flattened");
         let mut checked = 0;
+        let mut stacks = WideStacks::default();
         for (k, (&centre, to_world)) in centres.iter().zip(&placements).enumerate() {
             let rays = rays_at(centre, &mut rng, 400);
             for chunk in rays.chunks(8) {
@@ -212,6 +213,13 @@ fn rays_hit_transformed_instances_at_the_analytic_distance_and_normal() -> TestR
                 let incoherent = scene.intersect_incoherent(&packet);
                 for (lane, ray) in chunk.iter().enumerate() {
                     let oracle = scene.intersect(ray);
+                    // One ray through the wide trees (light paths' walk).
+                    let one = scene.intersect_one(ray, &mut stacks);
+                    assert_eq!(
+                        one.map(|h| (h.t.to_bits(), h.instance)),
+                        oracle.map(|h| (h.t.to_bits(), h.instance)),
+                        "{name} one ray: {ray:?}"
+                    );
                     // The packet paths equal the scalar oracle bit for bit
                     // (the same mapped ray and the same triangle test).
                     for (path, hits) in [("packet", &coherent), ("incoherent", &incoherent)] {
@@ -441,6 +449,7 @@ fn shadow_rays_are_blocked_by_instances_and_only_by_them() -> TestResult {
         let scene = b.build()?;
         assert!(scene.instances().is_some());
         let (mut blocked, mut open) = (0, 0);
+        let mut stacks = WideStacks::default();
         let rays: Vec<Ray> = rays_at(Vec3::new(1.0, 0.5, -1.0), &mut rng, 800)
             .into_iter()
             .map(|r| Ray {
@@ -454,6 +463,11 @@ fn shadow_rays_are_blocked_by_instances_and_only_by_them() -> TestResult {
             let mask = scene.occluded_incoherent(&packet);
             for (lane, ray) in chunk.iter().enumerate() {
                 assert_eq!(mask.contains(lane), scene.occluded(ray), "{name}");
+                assert_eq!(
+                    mask.contains(lane),
+                    scene.occluded_one(ray, &mut stacks),
+                    "{name}: one ray"
+                );
                 let Some((t, _)) = cube_oracle(&to_world, ray) else {
                     assert!(!mask.contains(lane), "{name}: blocked by nothing");
                     open += 1;

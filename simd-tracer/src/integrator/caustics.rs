@@ -25,7 +25,7 @@ use crate::simd::LaneMask;
 
 /// The partition's state of a packet's paths (module docs).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub(super) struct CausticLanes {
+pub struct CausticLanes {
     /// Lanes whose first surface scattered through a non-delta lobe.
     scattered_first: LaneMask,
     /// Lanes whose events since their last non-delta one are all delta,
@@ -35,7 +35,7 @@ pub(super) struct CausticLanes {
 
 impl CausticLanes {
     /// No path yet.
-    pub(super) const NONE: Self = Self {
+    pub const NONE: Self = Self {
         scattered_first: LaneMask::NONE,
         dispersive_chain: LaneMask::NONE,
     };
@@ -56,6 +56,36 @@ impl CausticLanes {
         }
         let chain = self.dispersive_chain.or(dispersive_refraction);
         self.dispersive_chain = chain.and(delta);
+    }
+
+    /// Where a child (`ChildPath`) of lane `lane` starts, whose own sample
+    /// of the surface that spawned it was `delta` and a `dispersive`
+    /// refraction: `self` is the parent's state before that event (the
+    /// child's event replaces the hero's). Returns the child's
+    /// `(scattered_first, dispersive_chain)`.
+    pub(super) fn child(
+        &self,
+        lane: usize,
+        depth: u32,
+        delta: bool,
+        dispersive: bool,
+    ) -> (bool, bool) {
+        let scattered_first = if depth == 1 {
+            !delta
+        } else {
+            self.scattered_first.contains(lane)
+        };
+        let chain = (self.dispersive_chain.contains(lane) || dispersive) && delta;
+        (scattered_first, chain)
+    }
+
+    /// The state of a packet of children: the lanes `scattered_first` and
+    /// `dispersive_chain` of their [`crate::integrator::ChildPath`]s.
+    pub fn of_children(scattered_first: LaneMask, dispersive_chain: LaneMask) -> Self {
+        Self {
+            scattered_first,
+            dispersive_chain,
+        }
     }
 
     /// Of the lanes `emitters` (hits on triangles that light paths start

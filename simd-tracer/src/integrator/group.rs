@@ -2,6 +2,7 @@
 //! packet's shading, light and BSDF samples, then the group's shadow rays,
 //! with live lanes compacted between the steps.
 
+use super::caustics::CausticLanes;
 use super::compaction;
 use super::last_segment::{LAST_SEGMENT_EMITTERS, last_segment_hits};
 use super::path::{BounceLanes, ChildPath, NeeSample, PathState};
@@ -100,6 +101,7 @@ pub fn trace_group<T: Transport, const G: usize>(
     let start = GroupStart {
         depth: 1,
         throughput: None,
+        caustics: [CausticLanes::NONE; G],
     };
     trace_group_from(
         context,
@@ -120,6 +122,9 @@ pub struct GroupStart<'a, S, const G: usize> {
     pub depth: u32,
     /// The paths' throughput at their first ray.
     pub throughput: Option<&'a [S; G]>,
+    /// The light-path partition's state of each packet at its first ray
+    /// (`caustics.rs`; [`CausticLanes::NONE`] for camera rays).
+    pub caustics: [CausticLanes; G],
 }
 
 /// [`trace_group`] of paths that start at `start` (children past the
@@ -151,6 +156,7 @@ pub fn trace_group_from<T: Transport, const G: usize>(
         if let Some(throughput) = start.throughput {
             path.throughput = throughput[p];
         }
+        path.caustics = start.caustics[p];
     }
     let mut rays = *first_rays;
     let mut hits = rays.each_ref().map(PacketHit::misses);

@@ -36,6 +36,7 @@
 //! survival probability `min(0.95, mean spectral throughput)`.
 
 mod caustics;
+pub use caustics::CausticLanes;
 pub mod compaction;
 
 use crate::scene::Scene;
@@ -45,6 +46,7 @@ mod group;
 mod packet_shading;
 pub use group::{GROUP, GroupStart, GroupState, trace, trace_group, trace_group_from};
 mod last_segment;
+pub mod light_aim;
 pub mod light_paths;
 mod path;
 pub use path::ChildPath;

@@ -193,12 +193,19 @@ pub struct ChildPath {
     pub pdf_per_nm: f32,
     /// Its throughput at its wavelength, past the surface.
     pub value: f32,
+    /// Where light paths run: whether its path's first surface scattered
+    /// through a non-delta lobe, and whether its events since its last
+    /// non-delta one are all delta with a dispersive refraction among
+    /// them (the partition's state, `caustics.rs`; both false otherwise).
+    pub caustic_state: (bool, bool),
 }
 
 /// The lanes of a bounce that spawn children, and what their samples need.
 struct Spawn<'a> {
     lanes: LaneMask,
     depth: u32,
+    /// The partition's state before the bounce, where light paths run.
+    caustics: Option<CausticLanes>,
     geometry: SpawnGeometry,
     uniforms: &'a SampleUniforms<'a>,
 }
@@ -610,6 +617,7 @@ impl<S: Copy> PathState<S> {
         active = active
             .and(sample.valid)
             .and(LaneMask::from_simd(sample.weight.simd_gt(f32x8::ZERO)));
+        let caustics_before = self.caustics;
         if light_traced_caustics {
             let delta = LaneMask::from_simd(sample.pdf.simd_eq(f32x8::ZERO));
             let refracted = LaneMask::from_simd(sample.wi.dot(normal).simd_lt(f32x8::ZERO));
@@ -623,6 +631,7 @@ impl<S: Copy> PathState<S> {
             let spawn = Spawn {
                 lanes: spawning,
                 depth,
+                caustics: light_traced_caustics.then_some(caustics_before),
                 geometry: SpawnGeometry {
                     normal,
                     shading_normal,
@@ -741,6 +750,10 @@ impl<S: Copy> PathState<S> {
             .to_lanes();
             let directions = sample.wi.to_lanes();
             let weight = sample.weight.to_array();
+            let delta = LaneMask::from_simd(sample.pdf.simd_eq(f32x8::ZERO));
+            let refracted =
+                LaneMask::from_simd(sample.wi.dot(geometry.normal).simd_lt(f32x8::ZERO));
+            let dispersive = shading.dispersive(lanes.and(delta).and(refracted));
             for lane in lanes.and(sample.valid).iter() {
                 let value = transport.sampled_value(&through, lane, slot) * weight[lane];
                 if value > 0.0 && value.is_finite() {
@@ -755,6 +768,14 @@ impl<S: Copy> PathState<S> {
                         lambda_nm,
                         pdf_per_nm,
                         value,
+                        caustic_state: spawn.caustics.map_or((false, false), |before| {
+                            before.child(
+                                lane,
+                                spawn.depth,
+                                delta.contains(lane),
+                                dispersive.contains(lane),
+                            )
+                        }),
                     });
                 }
             }

@@ -105,8 +105,8 @@ use crate::film::filter::{Filter, FilterError, MAX_SPLAT_MARGIN_PX};
 use crate::film::{Film, FilmMode};
 use crate::integrator::light_paths::{FilmHit, LightPathSettings, LightPaths};
 use crate::integrator::{
-    GROUP, GroupStart, GroupState, IntegratorSettings, PathContext, RayCounts, trace_group,
-    trace_group_from,
+    CausticLanes, GROUP, GroupStart, GroupState, IntegratorSettings, PathContext, RayCounts,
+    trace_group, trace_group_from,
 };
 use crate::packet::RayPacket;
 use crate::sampling::disk::concentric_disk_x8;
@@ -790,8 +790,16 @@ fn trace_children<T: Transport>(
             let mut stream_keys: [[u64; LANES]; GROUP] =
                 [core::array::from_fn(|lane| u64::MAX - lane as u64); GROUP];
             let mut active = [LaneMask::NONE; GROUP];
+            let mut caustics = [(LaneMask::NONE, LaneMask::NONE); GROUP];
             for (k, child) in batch.iter().enumerate() {
                 let (p, lane) = (k / LANES, k % LANES);
+                let (scattered_first, chain) = child.caustic_state;
+                if scattered_first {
+                    caustics[p].0 = caustics[p].0.with(lane);
+                }
+                if chain {
+                    caustics[p].1 = caustics[p].1.with(lane);
+                }
                 origins[p][lane] = child.origin;
                 directions[p][lane] = child.direction;
                 seeds[p][lane] = Some((child.lambda_nm, child.pdf_per_nm, child.value));
@@ -825,6 +833,7 @@ fn trace_children<T: Transport>(
             let start = GroupStart {
                 depth,
                 throughput: Some(&throughput),
+                caustics: caustics.map(|(first, chain)| CausticLanes::of_children(first, chain)),
             };
             let radiance = trace_group_from(
                 context,
@@ -1374,7 +1383,6 @@ pub fn render_observed<T: Transport>(
             seed: settings.seed,
             width: settings.width,
             height: settings.height,
-            children: transport.spawns_children(scene),
         },
     );
     let mut light_film = light_paths.as_ref().map(|_| {

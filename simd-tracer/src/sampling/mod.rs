@@ -1,5 +1,6 @@
 //! Random numbers and sampling.
 
+pub mod cone;
 pub mod disk;
 pub mod distribution;
 pub mod rng;

@@ -144,6 +144,11 @@ impl InstancedMesh {
         &self.triangles
     }
 
+    /// Each triangle's material, in the order of [`Self::triangles`].
+    pub fn materials(&self) -> &[MaterialId] {
+        &self.triangle_material
+    }
+
     /// Bytes held (vector capacities).
     fn memory_bytes(&self) -> usize {
         fn vec_bytes<T>(v: &Vec<T>) -> usize {

@@ -23,7 +23,7 @@ pub mod tangent;
 pub mod transform;
 mod triangle_store;
 
-use crate::accel::{Bvh, InstanceHit, TriangleSubset};
+use crate::accel::{Bvh, InstanceHit, TriangleSubset, WideStack};
 use crate::ids::NO_INSTANCE;
 use crate::ids::{AngularId, FluorophoreId, MaterialId, NO_ID, SpectrumId, TextureId};
 use crate::packet::{PacketHit, Ray, RayPacket};
@@ -187,6 +187,16 @@ fn emitters(bvh: &Bvh, surfaces: &PackedSurfaces) -> TriangleSubset {
         .filter_map(|k| u32::try_from(k).ok())
         .collect();
     bvh.subset(&emissive)
+}
+
+/// Scratch stacks of one ray's walks through the scene's 8-wide trees
+/// ([`Scene::intersect_one`]): its own triangles', the instances' top
+/// level's and a mesh's.
+#[derive(Default)]
+pub struct WideStacks {
+    own: WideStack,
+    top: WideStack,
+    mesh: WideStack,
 }
 
 impl Scene {
@@ -412,6 +422,39 @@ impl Scene {
         };
         let t_max = own.map_or(ray.t_max, |h| h.t);
         instances.bvh().intersect(&Ray { t_max, ..*ray }).or(own)
+    }
+
+    /// Closest hit of one incoherent ray by the 8-wide trees (the walk
+    /// [`Scene::intersect_incoherent`] gives each lane, without a packet):
+    /// what light paths trace. `stacks` is reusable scratch space.
+    pub fn intersect_one(&self, ray: &Ray, stacks: &mut WideStacks) -> Option<InstanceHit> {
+        let own = self
+            .bvh
+            .intersect_wide(ray, &mut stacks.own)
+            .map(|h| InstanceHit {
+                t: h.t,
+                u: h.u,
+                v: h.v,
+                triangle: h.triangle,
+                instance: NO_INSTANCE,
+            });
+        let Some(instances) = &self.instances else {
+            return own;
+        };
+        let t_max = own.map_or(ray.t_max, |h| h.t);
+        instances
+            .bvh()
+            .intersect_wide(&Ray { t_max, ..*ray }, &mut stacks.top, &mut stacks.mesh)
+            .or(own)
+    }
+
+    /// Occlusion of one incoherent ray by the 8-wide trees.
+    pub fn occluded_one(&self, ray: &Ray, stacks: &mut WideStacks) -> bool {
+        self.bvh.occluded_wide(ray, &mut stacks.own)
+            || self.instances.as_ref().is_some_and(|i| {
+                i.bvh()
+                    .occluded_wide(ray, &mut stacks.top, &mut stacks.mesh)
+            })
     }
 
     /// The scalar oracle of [`Scene::occluded_incoherent`].

@@ -9,13 +9,8 @@
 //! Mitsuba 3 and pbrt-v4 sample spheres, uniformly in the cone of
 //! directions it subtends. This module does the latter.
 //!
-//! **The cone.** With `d = |c − x|` the distance to the centre `c` and `r`
-//! the radius, the sphere subtends the half-angle `θ_max` with
-//! `sin² θ_max = r²/d²`. Its solid angle is `Ω = 2π (1 − cos θ_max)`,
-//! evaluated as `2π sin² θ_max / (1 + cos θ_max)` (no cancellation for a
-//! small, distant sphere). A direction is drawn uniformly in the cone:
-//! `1 − cos θ = u (1 − cos θ_max)`, `φ = 2π v`, about the axis `(c − x)/d`;
-//! its pdf is `1/Ω` per steradian. The distance to the sphere along it is
+//! **The cone** (`sampling::cone`): directions are drawn uniformly in the
+//! cone the sphere subtends, with the pdf `1/Ω` per steradian. The distance to the sphere along it is
 //! the nearer root of `t² − 2 t d cos θ + d² − r² = 0`, evaluated as
 //! `(d² − r²) / (d cos θ + √(r² − d² sin² θ))` (the product of the roots
 //! over the larger one, no cancellation).
@@ -46,8 +41,8 @@
 //! above grows with the sag (`MeshPlacement::sphere`).
 
 use crate::ids::SpectrumId;
+use crate::sampling::cone::{ConeDirection, SphereCone};
 use glam::Vec3;
-use std::f32::consts::TAU;
 use std::ops::Range;
 
 /// A spherical emitter: a tessellated sphere's triangles, lit uniformly
@@ -73,21 +68,6 @@ pub struct ConeSample {
     pub distance: f32,
     /// Solid-angle pdf `1/Ω` (without the selection probability).
     pub pdf_sr: f32,
-}
-
-/// The cone of a sphere seen from a point outside it.
-#[derive(Debug, Clone, Copy)]
-struct Cone {
-    /// Unit direction to the centre.
-    axis: Vec3,
-    distance_to_center: f32,
-    /// `d² − r²`, the product of the two distances to the sphere along
-    /// any ray from the origin that meets it.
-    roots_product: f32,
-    /// `1 − cos θ_max`.
-    one_minus_cos_max: f32,
-    /// `1/Ω`.
-    pdf_sr: f32,
 }
 
 impl SphereLight {
@@ -123,26 +103,8 @@ impl SphereLight {
     /// The cone seen from `origin`; `None` inside the ball, on its surface
     /// or where the numbers are not finite (so that [`Self::pdf_sr`] and
     /// [`Self::sample`] agree on where the light can be sampled).
-    fn cone(&self, origin: Vec3) -> Option<Cone> {
-        let to_center = self.center - origin;
-        let distance_sq = to_center.length_squared();
-        let radius_sq = self.radius * self.radius;
-        if !(distance_sq > radius_sq && distance_sq.is_finite()) {
-            return None;
-        }
-        let distance_to_center = distance_sq.sqrt();
-        let sin_sq_max = radius_sq / distance_sq;
-        let cos_max = (1.0 - sin_sq_max).max(0.0).sqrt();
-        let one_minus_cos_max = sin_sq_max / (1.0 + cos_max);
-        let pdf_sr = 1.0 / (TAU * one_minus_cos_max);
-        let roots_product = distance_sq - radius_sq;
-        (one_minus_cos_max > 0.0 && pdf_sr.is_finite() && roots_product > 0.0).then(|| Cone {
-            axis: to_center / distance_to_center,
-            distance_to_center,
-            roots_product,
-            one_minus_cos_max,
-            pdf_sr,
-        })
+    fn cone(&self, origin: Vec3) -> Option<SphereCone> {
+        SphereCone::new(self.center, self.radius, origin)
     }
 
     /// Solid-angle pdf `1/Ω` with which [`SphereLight::sample`] draws a
@@ -156,13 +118,11 @@ impl SphereLight {
     /// inside the ball.
     pub fn sample(&self, origin: Vec3, [u, v]: [f32; 2]) -> Option<ConeSample> {
         let cone = self.cone(origin)?;
-        let one_minus_cos = u * cone.one_minus_cos_max;
-        let cos_theta = 1.0 - one_minus_cos;
-        let sin_sq = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0);
-        let sin_theta = sin_sq.sqrt();
-        let (sin_phi, cos_phi) = (TAU * v).sin_cos();
-        let (t1, t2) = cone.axis.any_orthonormal_pair();
-        let wi = (cone.axis * cos_theta + (t1 * cos_phi + t2 * sin_phi) * sin_theta).normalize();
+        let ConeDirection {
+            direction: wi,
+            cos_theta,
+            sin_sq,
+        } = cone.sample([u, v]);
         let d = cone.distance_to_center;
         let r = self.radius;
         let half_chord = (r * r - d * d * sin_sq).max(0.0).sqrt();
@@ -190,7 +150,7 @@ pub fn sphere_holding(spheres: &[SphereLight], triangle: u32) -> Option<usize> {
 mod tests {
     use super::*;
     use crate::sampling::rng::Rng;
-    use std::f32::consts::PI;
+    use std::f32::consts::{PI, TAU};
 
     fn light(center: Vec3, radius: f32) -> SphereLight {
         SphereLight {

@@ -1,0 +1,628 @@
+//! Where a light path's first segment goes: a mixture of the lamp's cosine
+//! distribution and the cones of the dispersive glass seen from the lamp.
+//!
+//! **Why.** A light path counts only if the events from its lamp to its
+//! first non-delta vertex are delta and one of them refracts through a
+//! dispersive dielectric (`light_paths.rs`): its *first* segment must
+//! reach glass. A lamp that emits by its cosine sends most paths
+//! elsewhere, and in a slit projector (`prism`'s lamp at the end of a
+//! black tube) nearly all of them into the tube's wall, where they end
+//! after costing a ray. Photon mappers aim photons at specular objects for
+//! the same reason (Jensen's projection maps); here the glass is bounded
+//! by spheres and the first direction drawn in their cones.
+//!
+//! **The density.** With `K` targets (balls bounding the triangles of each
+//! dispersive material, and each instance whose mesh holds such
+//! triangles), a share `a` of the paths ([`COSINE_SHARE`]) leaves by the
+//! cosine (`|cos θ|/π` over the emitting side, halved for a two-sided
+//! lamp), the rest aim at one target chosen uniformly, uniformly in its
+//! cone (`sampling::cone`; from inside a ball, uniformly over the sphere
+//! of directions, `1/4π`):
+//!
+//! ```text
+//! p(ω) = a p_cos(ω) + (1 − a)/K Σ_k [ω ∈ cone_k] / Ω_k
+//! ```
+//!
+//! a one-sample mixture whose weights are folded into the density (Veach's
+//! thesis, §9.2.2), so the path starts with `β = L_e |cos θ| A / (P p(ω))`.
+//! The cosine share keeps `p ≥ a p_cos` everywhere the lamp emits: paths
+//! that reach glass outside every cone (by a mirror first, or glass the
+//! targets leave out) are still drawn, with weights at most `1/a` of a
+//! cosine light tracer's, so the estimate stays unbiased for every path.
+//! Without targets `a = 1`: the plain cosine.
+//!
+//! **Targets.** One ball per dispersive material over its triangles, one
+//! per instance that shows dispersive triangles; beyond
+//! [`MAX_TARGETS`] they merge into one ball around all of them (the
+//! density's cost per path grows with `K`).
+
+use crate::sampling::cone::SphereCone;
+use crate::scene::Scene;
+use crate::shading::material::sample_cosine;
+use glam::Vec3;
+use std::f32::consts::PI;
+
+/// The share of light paths that leave by the lamp's cosine where there
+/// are targets (module docs): a quarter, so that three in four aim at the
+/// glass while no direction's weight exceeds four times the cosine light
+/// tracer's.
+pub const COSINE_SHARE: f32 = 0.25;
+
+/// Most targets kept apart (module docs).
+pub const MAX_TARGETS: usize = 64;
+
+/// A ball bounding glass.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AimTarget {
+    /// Centre.
+    pub center: Vec3,
+    /// Radius.
+    pub radius: f32,
+}
+
+/// The emitting side(s) of a lamp's triangle.
+#[derive(Debug, Clone, Copy)]
+pub struct Emitting {
+    /// The triangle's unit front normal.
+    pub normal: Vec3,
+    /// Whether it emits on both sides.
+    pub two_sided: bool,
+}
+
+impl Emitting {
+    /// `p_cos(ω)` (module docs), 0 off the emitting side(s).
+    fn cosine_pdf_sr(&self, direction: Vec3) -> f32 {
+        let cos = direction.dot(self.normal);
+        if self.two_sided {
+            0.5 * cos.abs() / PI
+        } else {
+            cos.max(0.0) / PI
+        }
+    }
+}
+
+/// A first direction and its density.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aimed {
+    /// Unit direction.
+    pub direction: Vec3,
+    /// `p(ω)` per steradian (module docs).
+    pub pdf_sr: f32,
+}
+
+/// The light paths' first-direction density (module docs).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LightAim {
+    targets: Vec<AimTarget>,
+}
+
+/// An axis-aligned box, grown point by point.
+#[derive(Debug, Clone, Copy)]
+struct Bounds {
+    min: Vec3,
+    max: Vec3,
+}
+
+impl Bounds {
+    const EMPTY: Self = Self {
+        min: Vec3::INFINITY,
+        max: Vec3::NEG_INFINITY,
+    };
+
+    fn grow(&mut self, point: Vec3) {
+        self.min = self.min.min(point);
+        self.max = self.max.max(point);
+    }
+
+    fn union(self, other: Self) -> Self {
+        Self {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+        }
+    }
+
+    fn corners(&self) -> impl Iterator<Item = Vec3> + '_ {
+        (0..8u32).map(|k| {
+            Vec3::new(
+                if k & 1 == 0 { self.min.x } else { self.max.x },
+                if k & 2 == 0 { self.min.y } else { self.max.y },
+                if k & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
+    }
+
+    /// The ball through the box's corners, if the box holds a point.
+    fn ball(&self) -> Option<AimTarget> {
+        let radius = 0.5 * (self.max - self.min).length();
+        (self.min.cmple(self.max).all() && radius > 0.0 && radius.is_finite()).then(|| AimTarget {
+            center: 0.5 * (self.min + self.max),
+            radius,
+        })
+    }
+}
+
+impl LightAim {
+    /// The targets of `scene`: its dispersive glass (module docs).
+    pub fn new(scene: &Scene) -> Self {
+        let disperses: Vec<bool> = scene
+            .materials()
+            .iter()
+            .map(|m| m.bsdf.disperses())
+            .collect();
+        let dispersive = |m: Option<crate::ids::MaterialId>| {
+            m.is_some_and(|m| disperses.get(m.index()).copied().unwrap_or(false))
+        };
+        let mut by_material = vec![Bounds::EMPTY; disperses.len()];
+        for (index, triangle) in scene.triangles().iter().enumerate() {
+            let material = scene.material_of(index);
+            if let Some(m) = material.filter(|&m| dispersive(Some(m))) {
+                triangle
+                    .iter()
+                    .for_each(|&p| by_material[m.index()].grow(p));
+            }
+        }
+        let mut boxes: Vec<Bounds> = by_material
+            .into_iter()
+            .filter(|b| b.ball().is_some())
+            .collect();
+        if let Some(instances) = scene.instances() {
+            // Per mesh: the box of the triangles whose own material
+            // disperses, and the box of all of them (for an instance that
+            // shows every triangle in one material).
+            let meshes: Vec<[Bounds; 2]> = instances
+                .meshes()
+                .iter()
+                .map(|mesh| {
+                    let mut own = Bounds::EMPTY;
+                    let mut all = Bounds::EMPTY;
+                    for (triangle, &material) in mesh.triangles().iter().zip(mesh.materials()) {
+                        for &p in triangle {
+                            all.grow(p);
+                            if dispersive(Some(material)) {
+                                own.grow(p);
+                            }
+                        }
+                    }
+                    [own, all]
+                })
+                .collect();
+            for (instance, mesh) in instances.instance_meshes().enumerate() {
+                let (Some(placement), Some([own, all])) = (
+                    u32::try_from(instance)
+                        .ok()
+                        .and_then(|i| instances.placement(i)),
+                    meshes.get(mesh as usize),
+                ) else {
+                    continue;
+                };
+                let local = match placement.material {
+                    Some(m) if dispersive(Some(m)) => *all,
+                    Some(_) => continue,
+                    None => *own,
+                };
+                if local.ball().is_none() {
+                    continue;
+                }
+                let affine = placement.transform.affine();
+                let mut world = Bounds::EMPTY;
+                local
+                    .corners()
+                    .for_each(|c| world.grow(affine.transform_point3(c)));
+                boxes.push(world);
+            }
+        }
+        Self::from_boxes(&boxes)
+    }
+
+    /// Targets around `boxes` (`[min, max]` corners), merged into one
+    /// beyond [`MAX_TARGETS`]; empty boxes are left out.
+    pub fn from_corners(boxes: &[[Vec3; 2]]) -> Self {
+        let boxes: Vec<Bounds> = boxes
+            .iter()
+            .map(|&[min, max]| Bounds { min, max })
+            .collect();
+        Self::from_boxes(&boxes)
+    }
+
+    fn from_boxes(boxes: &[Bounds]) -> Self {
+        let targets = if boxes.len() > MAX_TARGETS {
+            let all = boxes.iter().fold(Bounds::EMPTY, |a, &b| a.union(b));
+            all.ball().into_iter().collect()
+        } else {
+            boxes.iter().filter_map(Bounds::ball).collect()
+        };
+        Self { targets }
+    }
+
+    /// The targets.
+    pub fn targets(&self) -> &[AimTarget] {
+        &self.targets
+    }
+
+    /// Checks the invariants: at most [`MAX_TARGETS`] targets, each with a
+    /// finite centre and a finite positive radius.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.targets.len() > MAX_TARGETS {
+            return Err(format!(
+                "{} light-path targets, more than {MAX_TARGETS}",
+                self.targets.len()
+            ));
+        }
+        match self
+            .targets
+            .iter()
+            .find(|t| !(t.center.is_finite() && t.radius > 0.0 && t.radius.is_finite()))
+        {
+            Some(t) => Err(format!(
+                "light-path target at {} with radius {}",
+                t.center, t.radius
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// The cosine's share `a` (module docs).
+    fn cosine_share(&self) -> f32 {
+        if self.targets.is_empty() {
+            1.0
+        } else {
+            COSINE_SHARE
+        }
+    }
+
+    /// A first direction from `origin` on a lamp `emitting`, from four
+    /// uniforms in `[0, 1)` (the strategy, the side or target, the
+    /// direction's two); `None` where it leaves off the emitting side(s).
+    pub fn sample(&self, origin: Vec3, emitting: &Emitting, u: [f32; 4]) -> Option<Aimed> {
+        let share = self.cosine_share();
+        let (direction, chosen) = if u[0] < share {
+            let normal = if emitting.two_sided && u[1] < 0.5 {
+                -emitting.normal
+            } else {
+                emitting.normal
+            };
+            (sample_cosine(normal, u[2], u[3]), None)
+        } else {
+            let count = self.targets.len();
+            let k = ((u[1] * count as f32) as usize).min(count.saturating_sub(1));
+            let target = self.targets.get(k)?;
+            let direction = match SphereCone::new(target.center, target.radius, origin) {
+                Some(cone) => cone.sample([u[2], u[3]]).direction,
+                None => uniform_sphere([u[2], u[3]]),
+            };
+            (direction, Some(k))
+        };
+        let pdf_sr = self.density(origin, emitting, direction, chosen);
+        (emitting.cosine_pdf_sr(direction) > 0.0 && pdf_sr > 0.0 && pdf_sr.is_finite())
+            .then_some(Aimed { direction, pdf_sr })
+    }
+
+    /// `p(ω)` of [`Self::sample`] for the unit `direction` from `origin`
+    /// (module docs).
+    pub fn pdf_sr(&self, origin: Vec3, emitting: &Emitting, direction: Vec3) -> f32 {
+        self.density(origin, emitting, direction, None)
+    }
+
+    /// `p(ω)`, counting target `chosen` as holding `direction` (its own
+    /// sample: no rounding at its cone's rim can leave it out).
+    fn density(
+        &self,
+        origin: Vec3,
+        emitting: &Emitting,
+        direction: Vec3,
+        chosen: Option<usize>,
+    ) -> f32 {
+        let share = self.cosine_share();
+        let cosine = share * emitting.cosine_pdf_sr(direction);
+        if self.targets.is_empty() {
+            return cosine;
+        }
+        let cones: f32 = self
+            .targets
+            .iter()
+            .enumerate()
+            .map(|(k, t)| match SphereCone::new(t.center, t.radius, origin) {
+                Some(cone) if chosen == Some(k) || cone.contains(direction) => cone.pdf_sr,
+                Some(_) => 0.0,
+                None => 1.0 / (4.0 * PI),
+            })
+            .sum();
+        cosine + (1.0 - share) * cones / self.targets.len() as f32
+    }
+}
+
+/// A uniform direction on the unit sphere from `(u, v)` in `[0, 1)²`.
+fn uniform_sphere([u, v]: [f32; 2]) -> Vec3 {
+    let z = 1.0 - 2.0 * u;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (sin_phi, cos_phi) = (2.0 * PI * v).sin_cos();
+    Vec3::new(r * cos_phi, r * sin_phi, z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::rng::Rng;
+
+    fn lamp(two_sided: bool) -> Emitting {
+        Emitting {
+            normal: Vec3::Y,
+            two_sided,
+        }
+    }
+
+    /// The mean of `f(ω)/p(ω)` over `n` samples, and its standard error.
+    fn estimate(
+        aim: &LightAim,
+        emitting: &Emitting,
+        n: u32,
+        f: impl Fn(Vec3) -> f64,
+    ) -> (f64, f64) {
+        let mut rng = Rng::new(5, 1);
+        let (mut sum, mut sum_sq) = (0.0f64, 0.0f64);
+        // The density of a sample, evaluated again for its direction alone,
+        // is the sampler's but where rounding puts a sample of a cone on
+        // its rim outside it: a few in a million.
+        let mut rim = 0u32;
+        for _ in 0..n {
+            let u = [
+                rng.next_f32(),
+                rng.next_f32(),
+                rng.next_f32(),
+                rng.next_f32(),
+            ];
+            if let Some(a) = aim.sample(Vec3::ZERO, emitting, u) {
+                let pdf = aim.pdf_sr(Vec3::ZERO, emitting, a.direction);
+                rim += u32::from((pdf - a.pdf_sr).abs() > 1e-4 * a.pdf_sr);
+                let w = f(a.direction) / f64::from(a.pdf_sr);
+                sum += w;
+                sum_sq += w * w;
+            }
+        }
+        assert!(rim <= n / 100_000, "{rim} densities differ");
+        let mean = sum / f64::from(n);
+        (
+            mean,
+            ((sum_sq / f64::from(n) - mean * mean) / f64::from(n)).sqrt(),
+        )
+    }
+
+    /// Two targets above a lamp facing `+y`, one of them around the lamp.
+    fn aim() -> LightAim {
+        LightAim::from_corners(&[
+            [Vec3::new(0.5, 1.5, -0.2), Vec3::new(0.9, 2.0, 0.3)],
+            [Vec3::splat(-0.1), Vec3::splat(0.1)],
+        ])
+    }
+
+    #[test]
+    fn the_mixture_integrates_what_the_cosine_does() {
+        // ∫ cos θ dω over the emitting side is π; with f = |cos θ| the
+        // estimate converges to it for one- and two-sided lamps (2π), and
+        // so does the integral of cos θ over a cap around a target (an
+        // indicator the cones favour). A density with the wrong cone share
+        // (the cosine's share doubled in the weight) misses.
+        let aim = aim();
+        assert!(aim.validate().is_ok());
+        assert_eq!(aim.targets().len(), 2);
+        for (two_sided, exact) in [(false, PI), (true, 2.0 * PI)] {
+            let emitting = lamp(two_sided);
+            let (mean, sigma) = estimate(&aim, &emitting, 200_000, |w| f64::from(w.y.abs()));
+            let exact = f64::from(exact);
+            assert!(
+                (mean - exact).abs() < 4.0 * sigma,
+                "{mean} vs {exact} ± {sigma}"
+            );
+        }
+        // The cap: directions within 10° of (0.7, 1.75, 0.05); its cosine
+        // integral by dense quadrature in f64.
+        let axis = Vec3::new(0.7, 1.75, 0.05).normalize();
+        let cap_cos = 10f32.to_radians().cos();
+        let in_cap = |w: Vec3| w.dot(axis) >= cap_cos;
+        let emitting = lamp(false);
+        let (mean, sigma) = estimate(&aim, &emitting, 200_000, |w| {
+            if in_cap(w) {
+                f64::from(w.y.max(0.0))
+            } else {
+                0.0
+            }
+        });
+        let steps = 2000;
+        let mut exact = 0.0f64;
+        for i in 0..steps {
+            for j in 0..steps {
+                let z = 1.0 - 2.0 * (f64::from(i) + 0.5) / f64::from(steps);
+                let phi = 2.0 * std::f64::consts::PI * (f64::from(j) + 0.5) / f64::from(steps);
+                let r = (1.0 - z * z).sqrt();
+                let w = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+                if in_cap(w) {
+                    exact += f64::from(w.y.max(0.0));
+                }
+            }
+        }
+        exact *= 4.0 * std::f64::consts::PI / f64::from(steps * steps);
+        assert!(
+            (mean - exact).abs() < 4.0 * sigma + 1e-4 * exact,
+            "{mean} vs {exact}"
+        );
+        // The cap is sampled far more densely than by the cosine alone:
+        // its relative error is well below the cosine's at equal samples.
+        let cosine = LightAim::default();
+        let (plain, plain_sigma) = estimate(&cosine, &emitting, 200_000, |w| {
+            if in_cap(w) {
+                f64::from(w.y.max(0.0))
+            } else {
+                0.0
+            }
+        });
+        assert!((plain - exact).abs() < 4.0 * plain_sigma);
+        assert!(sigma < 0.5 * plain_sigma, "{sigma} against {plain_sigma}");
+        // Negative control: weights as if every sample were the cosine's
+        // (the mixture's density ignored) are far off.
+        let mut rng = Rng::new(5, 1);
+        let n = 200_000;
+        let mut wrong = 0.0f64;
+        for _ in 0..n {
+            let u = [
+                rng.next_f32(),
+                rng.next_f32(),
+                rng.next_f32(),
+                rng.next_f32(),
+            ];
+            if let Some(a) = aim.sample(Vec3::ZERO, &emitting, u) {
+                if in_cap(a.direction) {
+                    wrong += f64::from(PI);
+                }
+            }
+        }
+        wrong /= f64::from(n);
+        assert!((wrong - exact).abs() > 10.0 * sigma, "{wrong} vs {exact}");
+    }
+
+    #[test]
+    fn one_sided_lamps_aim_only_forwards() {
+        // A target behind a one-sided lamp: none of its samples leaves.
+        let aim =
+            LightAim::from_corners(&[[Vec3::new(-0.2, -2.0, -0.2), Vec3::new(0.2, -1.5, 0.2)]]);
+        let emitting = lamp(false);
+        let mut rng = Rng::new(9, 1);
+        for _ in 0..10_000 {
+            let u = [
+                rng.next_f32(),
+                rng.next_f32(),
+                rng.next_f32(),
+                rng.next_f32(),
+            ];
+            if let Some(a) = aim.sample(Vec3::ZERO, &emitting, u) {
+                assert!(a.direction.y > 0.0);
+            }
+        }
+        // Behind the lamp the density is the cone's share alone (the
+        // samples drawn there are lost, not moved); a two-sided lamp adds
+        // its cosine's there.
+        let cone = SphereCone::new(aim.targets()[0].center, aim.targets()[0].radius, Vec3::ZERO)
+            .map_or(0.0, |c| c.pdf_sr);
+        let behind = aim.pdf_sr(Vec3::ZERO, &emitting, -Vec3::Y);
+        assert!(
+            (behind - (1.0 - COSINE_SHARE) * cone).abs() <= 1e-6 * cone,
+            "{behind}"
+        );
+        let two_sided = aim.pdf_sr(Vec3::ZERO, &lamp(true), -Vec3::Y);
+        let expected = behind + COSINE_SHARE * 0.5 / PI;
+        assert!(
+            (two_sided - expected).abs() <= 1e-6 * expected,
+            "{two_sided}"
+        );
+    }
+
+    /// A glass triangle of the scene's own, two glass cubes `[−1, 1]³`
+    /// placed as instances, and what is no target: a grey triangle and a
+    /// third cube shown in grey. The targets are the triangle's ball and
+    /// each glass instance's, around its world box.
+    #[test]
+    fn targets_bound_the_dispersive_triangles_and_instances()
+    -> Result<(), Box<dyn std::error::Error>> {
+        use crate::scene::SceneBuilder;
+        use crate::scene::analytic::cube_mesh;
+        use crate::scene::builtin::prism::add_sf11_glass;
+        use crate::scene::instances::InstancePlacement;
+        use crate::scene::transform::Transform;
+        use crate::shading::material::Material;
+        use crate::spectra::SpectrumSource;
+        let mut b = SceneBuilder::new(spectral_core::SpectralRange::VISIBLE);
+        let glass = add_sf11_glass(&mut b)?;
+        let grey = b.add_spectrum("grey", SpectrumSource::Constant(0.5))?;
+        let grey = b.add_material(Material::lambert("grey", grey));
+        b.add_triangle([Vec3::ZERO, Vec3::X, Vec3::Y], glass);
+        b.add_triangle(
+            [
+                Vec3::splat(5.0),
+                Vec3::new(6.0, 5.0, 5.0),
+                Vec3::new(5.0, 6.0, 5.0),
+            ],
+            grey,
+        );
+        let cube = b.add_instanced_mesh(vec![(cube_mesh(), glass)])?;
+        let centres = [
+            Vec3::new(10.0, 0.0, 0.0),
+            Vec3::new(-10.0, 2.0, 0.0),
+            Vec3::new(0.0, 0.0, -20.0),
+        ];
+        for (k, &centre) in centres.iter().enumerate() {
+            b.add_instance(
+                cube,
+                InstancePlacement {
+                    transform: Transform::scale(Vec3::splat(2.0))?
+                        .then(&Transform::translate(centre)?)?,
+                    material: (k == 2).then_some(grey),
+                    flip_normals: false,
+                    face_normals: false,
+                },
+            )?;
+        }
+        b.set_camera(crate::scene::camera::Camera::look_at(
+            Vec3::Z * 30.0,
+            Vec3::ZERO,
+            Vec3::Y,
+            40.0,
+        )?);
+        let scene = b.build()?;
+        assert!(scene.instances().is_some_and(|i| i.len() == 3));
+        let aim = LightAim::new(&scene);
+        aim.validate()?;
+        let expected = [
+            AimTarget {
+                center: Vec3::new(0.5, 0.5, 0.0),
+                radius: 0.5 * 2.0f32.sqrt(),
+            },
+            AimTarget {
+                center: centres[0],
+                radius: 2.0 * 3.0f32.sqrt(),
+            },
+            AimTarget {
+                center: centres[1],
+                radius: 2.0 * 3.0f32.sqrt(),
+            },
+        ];
+        assert_eq!(aim.targets().len(), expected.len(), "{:?}", aim.targets());
+        for (target, expected) in aim.targets().iter().zip(&expected) {
+            assert!(
+                (target.center - expected.center).length() < 1e-4,
+                "{target:?}"
+            );
+            assert!((target.radius - expected.radius).abs() < 1e-4, "{target:?}");
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn targets_merge_beyond_the_limit_and_validate() {
+        let boxes: Vec<[Vec3; 2]> = (0..=MAX_TARGETS)
+            .map(|k| {
+                let c = Vec3::new(k as f32, 0.0, 0.0);
+                [c, c + Vec3::ONE]
+            })
+            .collect();
+        let merged = LightAim::from_corners(&boxes);
+        assert_eq!(merged.targets().len(), 1);
+        let ball = merged.targets()[0];
+        for [min, max] in &boxes {
+            assert!((*min - ball.center).length() <= ball.radius * (1.0 + 1e-6));
+            assert!((*max - ball.center).length() <= ball.radius * (1.0 + 1e-6));
+        }
+        assert!(merged.validate().is_ok());
+        let kept = LightAim::from_corners(&boxes[..MAX_TARGETS]);
+        assert_eq!(kept.targets().len(), MAX_TARGETS);
+        // Empty and non-finite boxes are left out; a broken target fails
+        // validation.
+        let empty = LightAim::from_corners(&[[Vec3::ONE, Vec3::ZERO], [Vec3::ZERO, Vec3::NAN]]);
+        assert!(empty.targets().is_empty());
+        let broken = LightAim {
+            targets: vec![AimTarget {
+                center: Vec3::ZERO,
+                radius: -1.0,
+            }],
+        };
+        assert!(broken.validate().is_err());
+    }
+}
