@@ -344,6 +344,15 @@ mod tests {
     use super::*;
     use crate::sampling::rng::Rng;
 
+    fn uniforms(rng: &mut Rng) -> [f32; 4] {
+        [
+            rng.next_f32(),
+            rng.next_f32(),
+            rng.next_f32(),
+            rng.next_f32(),
+        ]
+    }
+
     fn lamp(two_sided: bool) -> Emitting {
         Emitting {
             normal: Vec3::Y,
@@ -365,12 +374,7 @@ mod tests {
         // its rim outside it: a few in a million.
         let mut rim = 0u32;
         for _ in 0..n {
-            let u = [
-                rng.next_f32(),
-                rng.next_f32(),
-                rng.next_f32(),
-                rng.next_f32(),
-            ];
+            let u = uniforms(&mut rng);
             if let Some(a) = aim.sample(Vec3::ZERO, emitting, u) {
                 let pdf = aim.pdf_sr(Vec3::ZERO, emitting, a.direction);
                 rim += u32::from((pdf - a.pdf_sr).abs() > 1e-4 * a.pdf_sr);
@@ -463,12 +467,7 @@ mod tests {
         let n = 200_000;
         let mut wrong = 0.0f64;
         for _ in 0..n {
-            let u = [
-                rng.next_f32(),
-                rng.next_f32(),
-                rng.next_f32(),
-                rng.next_f32(),
-            ];
+            let u = uniforms(&mut rng);
             if let Some(a) = aim.sample(Vec3::ZERO, &emitting, u) {
                 if in_cap(a.direction) {
                     wrong += f64::from(PI);
@@ -487,12 +486,7 @@ mod tests {
         let emitting = lamp(false);
         let mut rng = Rng::new(9, 1);
         for _ in 0..10_000 {
-            let u = [
-                rng.next_f32(),
-                rng.next_f32(),
-                rng.next_f32(),
-                rng.next_f32(),
-            ];
+            let u = uniforms(&mut rng);
             if let Some(a) = aim.sample(Vec3::ZERO, &emitting, u) {
                 assert!(a.direction.y > 0.0);
             }

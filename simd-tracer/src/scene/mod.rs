@@ -23,7 +23,7 @@ pub mod tangent;
 pub mod transform;
 mod triangle_store;
 
-use crate::accel::{Bvh, InstanceHit, TriangleSubset, WideStack};
+use crate::accel::{Bvh, Hit, InstanceBvh, InstanceHit, TriangleSubset, WideStack};
 use crate::ids::NO_INSTANCE;
 use crate::ids::{AngularId, FluorophoreId, MaterialId, NO_ID, SpectrumId, TextureId};
 use crate::packet::{PacketHit, Ray, RayPacket};
@@ -410,7 +410,20 @@ impl Scene {
     /// scalar triangle test at every level. A hit on the scene's own
     /// triangles has instance [`NO_INSTANCE`].
     pub fn intersect(&self, ray: &Ray) -> Option<InstanceHit> {
-        let own = self.bvh.intersect(ray).map(|h| InstanceHit {
+        self.nearer_instance(ray, self.bvh.intersect(ray), |instances, ray| {
+            instances.intersect(ray)
+        })
+    }
+
+    /// The scene's own hit `own` of `ray` as an instance hit, or the
+    /// instances' hit by `walk` where it is nearer.
+    fn nearer_instance(
+        &self,
+        ray: &Ray,
+        own: Option<Hit>,
+        walk: impl FnOnce(&InstanceBvh, &Ray) -> Option<InstanceHit>,
+    ) -> Option<InstanceHit> {
+        let own = own.map(|h| InstanceHit {
             t: h.t,
             u: h.u,
             v: h.v,
@@ -421,31 +434,17 @@ impl Scene {
             return own;
         };
         let t_max = own.map_or(ray.t_max, |h| h.t);
-        instances.bvh().intersect(&Ray { t_max, ..*ray }).or(own)
+        walk(instances.bvh(), &Ray { t_max, ..*ray }).or(own)
     }
 
     /// Closest hit of one incoherent ray by the 8-wide trees (the walk
     /// [`Scene::intersect_incoherent`] gives each lane, without a packet):
     /// what light paths trace. `stacks` is reusable scratch space.
     pub fn intersect_one(&self, ray: &Ray, stacks: &mut WideStacks) -> Option<InstanceHit> {
-        let own = self
-            .bvh
-            .intersect_wide(ray, &mut stacks.own)
-            .map(|h| InstanceHit {
-                t: h.t,
-                u: h.u,
-                v: h.v,
-                triangle: h.triangle,
-                instance: NO_INSTANCE,
-            });
-        let Some(instances) = &self.instances else {
-            return own;
-        };
-        let t_max = own.map_or(ray.t_max, |h| h.t);
-        instances
-            .bvh()
-            .intersect_wide(&Ray { t_max, ..*ray }, &mut stacks.top, &mut stacks.mesh)
-            .or(own)
+        let own = self.bvh.intersect_wide(ray, &mut stacks.own);
+        self.nearer_instance(ray, own, |instances, ray| {
+            instances.intersect_wide(ray, &mut stacks.top, &mut stacks.mesh)
+        })
     }
 
     /// Occlusion of one incoherent ray by the 8-wide trees.
