@@ -137,8 +137,8 @@ pub enum Caustics {
     Camera,
     /// Light paths from the lamps carry the light that passes dispersive
     /// glass before its first diffuse bounce
-    /// (`simd_tracer::integrator::light_paths`; pinhole cameras, scenes
-    /// without fluorescence, `--dispersion-paths hero`).
+    /// (`simd_tracer::integrator::light_paths`; perspective cameras, a
+    /// pinhole or a thin lens; scenes without fluorescence).
     LightPaths,
 }
 

@@ -569,18 +569,48 @@ fn seed_means<T: Transport>(
 /// control: the lamp 10 % darker fails the mean-colour bound.
 #[test]
 fn light_paths_and_camera_paths_share_the_caustic_without_bias() -> TestResult {
-    let scene = lamp_wedge_scene(LAMP_RADIANCE, 0.5)?;
+    share_the_caustic_without_bias(None, 256, &[(true, false), (false, false), (true, true)])
+}
+
+/// The same through a thin lens (aperture radius 0.08, focused on the
+/// floor under the wedge): light paths connect to points of the aperture
+/// drawn as the camera rays draw theirs (`Camera::project_through_lens`).
+#[test]
+fn through_a_thin_lens_light_paths_share_the_caustic_without_bias() -> TestResult {
+    share_the_caustic_without_bias(Some((0.08, 4.0)), 1024, &[(true, false)])
+}
+
+/// The wedge scene, seen through a thin lens `(aperture radius, focus
+/// distance)` where one is given.
+fn wedge(lamp_radiance: f64, lens: Option<(f32, f32)>) -> TestResult<Scene> {
+    let mut scene = lamp_wedge_scene(lamp_radiance, 0.5)?;
+    if let Some((aperture, focus)) = lens {
+        let camera = scene.camera().with_lens(aperture, focus)?;
+        scene.set_camera(camera);
+    }
+    Ok(scene)
+}
+
+/// The checks of [`light_paths_and_camera_paths_share_the_caustic_without_bias`]
+/// for the hybrids `cases` (light paths, children) seen through `lens`, at
+/// `spp` samples per pixel.
+fn share_the_caustic_without_bias(
+    lens: Option<(f32, f32)>,
+    spp: u32,
+    cases: &[(bool, bool)],
+) -> TestResult {
+    let scene = wedge(LAMP_RADIANCE, lens)?;
     let white = spectral_core::xyz::white_point(&ConstantSpectrum::new(1.0)?)?;
     let sampled = SampledTransport::<4>::new(RANGE, WavelengthStrategy::Hero);
-    let (reference, reference_means) = seed_means(&sampled, &scene, 100, 256)?;
-    let (second, _) = seed_means(&sampled, &scene, 200, 256)?;
+    let (reference, reference_means) = seed_means(&sampled, &scene, 100, spp)?;
+    let (second, _) = seed_means(&sampled, &scene, 200, spp)?;
     let noise = mean_delta_e(&second, &reference, white);
-    for (light_paths, children) in [(true, false), (false, false), (true, true)] {
+    for &(light_paths, children) in cases {
         let hybrid = hybrid_with(light_paths, children)?;
-        let (image, means) = seed_means(&hybrid, &scene, 300, 256)?;
+        let (image, means) = seed_means(&hybrid, &scene, 300, spp)?;
         let error = mean_delta_e(&image, &reference, white);
         let z = z_scores(&means, &reference_means);
-        let case = format!("light paths {light_paths}, children {children}");
+        let case = format!("lens {lens:?}, light paths {light_paths}, children {children}");
         eprintln!(
             "{case}: ΔE {error:.3} (reference noise {noise:.3}), z = {z:?}, mean {:?} vs {:?}",
             means[0], reference_means[0]
@@ -591,8 +621,8 @@ fn light_paths_and_camera_paths_share_the_caustic_without_bias() -> TestResult {
         );
         assert!(z.iter().all(|&z| z <= Z_BOUND), "{case}: z = {z:?}");
     }
-    let darker = lamp_wedge_scene(LAMP_RADIANCE * DARKER, 0.5)?;
-    let (_, darker_means) = seed_means(&hybrid_with_light_paths(true)?, &darker, 300, 256)?;
+    let darker = wedge(LAMP_RADIANCE * DARKER, lens)?;
+    let (_, darker_means) = seed_means(&hybrid_with_light_paths(true)?, &darker, 300, spp)?;
     let z = z_scores(&darker_means, &reference_means);
     assert!(
         z.iter().any(|&z| z > Z_BOUND),
@@ -624,32 +654,35 @@ const LIGHT_PATH_NOISE_RATIO: f64 = 0.25;
 
 /// Under the wedge the hybrid with light paths has less noise at equal
 /// samples per pixel than the hybrid whose camera paths must find the
-/// lamp through the glass. Negative control: camera paths against a third
-/// seed set are not below the ratio of their own noise.
+/// lamp through the glass, through a pinhole and through a thin lens.
+/// Negative control: camera paths against a third seed set are not below
+/// the ratio of their own noise.
 #[test]
 fn light_paths_lower_the_noise_of_the_caustic() -> TestResult {
-    let scene = lamp_wedge_scene(LAMP_RADIANCE, 0.5)?;
     let (with, without) = (
         hybrid_with_light_paths(true)?,
         hybrid_with_light_paths(false)?,
     );
-    let (l1, _) = seed_means(&with, &scene, 500, 64)?;
-    let (l2, _) = seed_means(&with, &scene, 600, 64)?;
-    let (c1, _) = seed_means(&without, &scene, 500, 64)?;
-    let (c2, _) = seed_means(&without, &scene, 600, 64)?;
-    let (c3, _) = seed_means(&without, &scene, 700, 64)?;
-    let light = relative_rms(&l1, &l2, &c1);
-    let camera = relative_rms(&c1, &c2, &c1);
-    eprintln!("caustic noise: light paths {light:.3}, camera paths {camera:.3}");
-    assert!(
-        light < LIGHT_PATH_NOISE_RATIO * camera,
-        "{light} vs {camera}"
-    );
-    let again = relative_rms(&c1, &c3, &c1);
-    assert!(
-        again >= LIGHT_PATH_NOISE_RATIO * camera,
-        "negative control: {again} vs {camera}"
-    );
+    for lens in [None, Some((0.08, 4.0))] {
+        let scene = wedge(LAMP_RADIANCE, lens)?;
+        let (l1, _) = seed_means(&with, &scene, 500, 64)?;
+        let (l2, _) = seed_means(&with, &scene, 600, 64)?;
+        let (c1, _) = seed_means(&without, &scene, 500, 64)?;
+        let (c2, _) = seed_means(&without, &scene, 600, 64)?;
+        let (c3, _) = seed_means(&without, &scene, 700, 64)?;
+        let light = relative_rms(&l1, &l2, &c1);
+        let camera = relative_rms(&c1, &c2, &c1);
+        eprintln!("lens {lens:?}: caustic noise: light paths {light:.3}, camera paths {camera:.3}");
+        assert!(
+            light < LIGHT_PATH_NOISE_RATIO * camera,
+            "{lens:?}: {light} vs {camera}"
+        );
+        let again = relative_rms(&c1, &c3, &c1);
+        assert!(
+            again >= LIGHT_PATH_NOISE_RATIO * camera,
+            "{lens:?}: negative control: {again} vs {camera}"
+        );
+    }
     Ok(())
 }
 

@@ -16,12 +16,15 @@
 //! triangles), a share `a` of the paths ([`COSINE_SHARE`]) leaves by the
 //! cosine (`|cos θ|/π` over the emitting side, halved for a two-sided
 //! lamp), the rest aim at one target chosen uniformly, uniformly in its
-//! cone (`sampling::cone`; from inside a ball, uniformly over the sphere
-//! of directions, `1/4π`):
+//! cone (`sampling::cone`):
 //!
 //! ```text
 //! p(ω) = a p_cos(ω) + (1 − a)/K Σ_k [ω ∈ cone_k] / Ω_k
 //! ```
+//!
+//! where `K` counts the targets the lamp point can aim at: a ball that
+//! holds the point is left out (its cone would be the whole sphere, worse
+//! than the cosine), and so is a ball wholly behind a one-sided lamp.
 //!
 //! a one-sample mixture whose weights are folded into the density (Veach's
 //! thesis, §9.2.2), so the path starts with `β = L_e |cos θ| A / (P p(ω))`.
@@ -29,7 +32,9 @@
 //! that reach glass outside every cone (by a mirror first, or glass the
 //! targets leave out) are still drawn, with weights at most `1/a` of a
 //! cosine light tracer's, so the estimate stays unbiased for every path.
-//! Without targets `a = 1`: the plain cosine.
+//! Without targets to aim at `a = 1`: the plain cosine. The mixture, `K`
+//! included, depends only on the lamp point, so each point's density is
+//! exact.
 //!
 //! **Targets.** One ball per dispersive material over its triangles, one
 //! per instance that shows dispersive triangles; beyond
@@ -261,20 +266,27 @@ impl LightAim {
         }
     }
 
-    /// The cosine's share `a` (module docs).
-    fn cosine_share(&self) -> f32 {
-        if self.targets.is_empty() {
-            1.0
-        } else {
-            COSINE_SHARE
-        }
+    /// The cones of the targets a lamp at `origin` can aim at: not one
+    /// whose ball holds `origin`, nor, for a one-sided lamp, one wholly
+    /// behind it (`cos(axis, n) ≤ −sin θ_max`).
+    fn cones<'s>(
+        &'s self,
+        origin: Vec3,
+        emitting: &'s Emitting,
+    ) -> impl Iterator<Item = SphereCone> + 's {
+        self.targets.iter().filter_map(move |t| {
+            SphereCone::new(t.center, t.radius, origin).filter(|cone| {
+                emitting.two_sided || cone.axis.dot(emitting.normal) > -cone.sin_sq_max.sqrt()
+            })
+        })
     }
 
     /// A first direction from `origin` on a lamp `emitting`, from four
     /// uniforms in `[0, 1)` (the strategy, the side or target, the
     /// direction's two); `None` where it leaves off the emitting side(s).
     pub fn sample(&self, origin: Vec3, emitting: &Emitting, u: [f32; 4]) -> Option<Aimed> {
-        let share = self.cosine_share();
+        let count = self.cones(origin, emitting).count();
+        let share = cosine_share(count);
         let (direction, chosen) = if u[0] < share {
             let normal = if emitting.two_sided && u[1] < 0.5 {
                 -emitting.normal
@@ -283,14 +295,9 @@ impl LightAim {
             };
             (sample_cosine(normal, u[2], u[3]), None)
         } else {
-            let count = self.targets.len();
             let k = ((u[1] * count as f32) as usize).min(count.saturating_sub(1));
-            let target = self.targets.get(k)?;
-            let direction = match SphereCone::new(target.center, target.radius, origin) {
-                Some(cone) => cone.sample([u[2], u[3]]).direction,
-                None => uniform_sphere([u[2], u[3]]),
-            };
-            (direction, Some(k))
+            let cone = self.cones(origin, emitting).nth(k)?;
+            (cone.sample([u[2], u[3]]).direction, Some(k))
         };
         let pdf_sr = self.density(origin, emitting, direction, chosen);
         (emitting.cosine_pdf_sr(direction) > 0.0 && pdf_sr > 0.0 && pdf_sr.is_finite())
@@ -303,8 +310,8 @@ impl LightAim {
         self.density(origin, emitting, direction, None)
     }
 
-    /// `p(ω)`, counting target `chosen` as holding `direction` (its own
-    /// sample: no rounding at its cone's rim can leave it out).
+    /// `p(ω)`, counting the `chosen`-th cone as holding `direction` (its
+    /// own sample: no rounding at its rim can leave it out).
     fn density(
         &self,
         origin: Vec3,
@@ -312,31 +319,25 @@ impl LightAim {
         direction: Vec3,
         chosen: Option<usize>,
     ) -> f32 {
-        let share = self.cosine_share();
+        let (count, cones) = self.cones(origin, emitting).enumerate().fold(
+            (0usize, 0.0f32),
+            |(count, sum), (k, cone)| {
+                let holds = chosen == Some(k) || cone.contains(direction);
+                (count + 1, if holds { sum + cone.pdf_sr } else { sum })
+            },
+        );
+        let share = cosine_share(count);
         let cosine = share * emitting.cosine_pdf_sr(direction);
-        if self.targets.is_empty() {
+        if count == 0 {
             return cosine;
         }
-        let cones: f32 = self
-            .targets
-            .iter()
-            .enumerate()
-            .map(|(k, t)| match SphereCone::new(t.center, t.radius, origin) {
-                Some(cone) if chosen == Some(k) || cone.contains(direction) => cone.pdf_sr,
-                Some(_) => 0.0,
-                None => 1.0 / (4.0 * PI),
-            })
-            .sum();
-        cosine + (1.0 - share) * cones / self.targets.len() as f32
+        cosine + (1.0 - share) * cones / count as f32
     }
 }
 
-/// A uniform direction on the unit sphere from `(u, v)` in `[0, 1)²`.
-fn uniform_sphere([u, v]: [f32; 2]) -> Vec3 {
-    let z = 1.0 - 2.0 * u;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let (sin_phi, cos_phi) = (2.0 * PI * v).sin_cos();
-    Vec3::new(r * cos_phi, r * sin_phi, z)
+/// The cosine's share `a` with `count` cones to aim at (module docs).
+fn cosine_share(count: usize) -> f32 {
+    if count == 0 { 1.0 } else { COSINE_SHARE }
 }
 
 #[cfg(test)]
@@ -479,8 +480,10 @@ mod tests {
     }
 
     #[test]
-    fn one_sided_lamps_aim_only_forwards() {
-        // A target behind a one-sided lamp: none of its samples leaves.
+    fn lamps_aim_only_at_targets_they_can_reach() {
+        // A target wholly behind a one-sided lamp is left out: the plain
+        // cosine, nothing leaves backwards, the density behind is 0. A
+        // two-sided lamp aims at it: the cone's share plus the cosine's.
         let aim =
             LightAim::from_corners(&[[Vec3::new(-0.2, -2.0, -0.2), Vec3::new(0.2, -1.5, 0.2)]]);
         let emitting = lamp(false);
@@ -489,24 +492,29 @@ mod tests {
             let u = uniforms(&mut rng);
             if let Some(a) = aim.sample(Vec3::ZERO, &emitting, u) {
                 assert!(a.direction.y > 0.0);
+                let cosine = a.direction.y / PI;
+                assert!((a.pdf_sr - cosine).abs() <= 1e-6 * cosine, "{a:?}");
             }
         }
-        // Behind the lamp the density is the cone's share alone (the
-        // samples drawn there are lost, not moved); a two-sided lamp adds
-        // its cosine's there.
+        assert_eq!(aim.pdf_sr(Vec3::ZERO, &emitting, -Vec3::Y), 0.0);
         let cone = SphereCone::new(aim.targets()[0].center, aim.targets()[0].radius, Vec3::ZERO)
             .map_or(0.0, |c| c.pdf_sr);
-        let behind = aim.pdf_sr(Vec3::ZERO, &emitting, -Vec3::Y);
-        assert!(
-            (behind - (1.0 - COSINE_SHARE) * cone).abs() <= 1e-6 * cone,
-            "{behind}"
-        );
         let two_sided = aim.pdf_sr(Vec3::ZERO, &lamp(true), -Vec3::Y);
-        let expected = behind + COSINE_SHARE * 0.5 / PI;
+        let expected = (1.0 - COSINE_SHARE) * cone + COSINE_SHARE * 0.5 / PI;
         assert!(
             (two_sided - expected).abs() <= 1e-6 * expected,
-            "{two_sided}"
+            "{two_sided} vs {expected}"
         );
+        // A lamp inside a target's ball: that target is left out too (its
+        // cone would be the whole sphere); with it alone, the cosine.
+        let around = LightAim::from_corners(&[[Vec3::splat(-1.0), Vec3::splat(1.0)]]);
+        let up = Vec3::new(0.3, 0.8, 0.1).normalize();
+        let density = around.pdf_sr(Vec3::ZERO, &emitting, up);
+        assert!((density - up.y / PI).abs() <= 1e-6, "{density}");
+        // A target half behind the lamp is kept.
+        let beside =
+            LightAim::from_corners(&[[Vec3::new(2.0, -0.5, -0.5), Vec3::new(3.0, 0.5, 0.5)]]);
+        assert!(beside.pdf_sr(Vec3::ZERO, &emitting, Vec3::X) > 0.0);
     }
 
     /// A glass triangle of the scene's own, two glass cubes `[−1, 1]³`

@@ -48,7 +48,10 @@
 //! C(x) = β f(ω_c, ω_l) |ω_l·n_s| |ω_c·n_g| / |ω_l·n_g| / d² · dA_px/dω
 //! ```
 //!
-//! (`Camera::project`: `dA_px/dω = 1/(k² cos³θ)`), where the camera's
+//! (`Camera::project`: `dA_px/dω = 1/(k² cos³θ)`; through a thin lens the
+//! connection goes to a point of the aperture drawn uniformly, as camera
+//! rays draw theirs, with the same density at that point,
+//! `Camera::project_through_lens`), where the camera's
 //! BSDF evaluation with the viewer at `ω_c` is the adjoint's value for
 //! light from `ω_l` (generalized reciprocity: no `η` enters a connection).
 //! With `M` light paths a pass, `C/(C M)` at `λ` becomes XYZ as a sampled
@@ -57,9 +60,9 @@
 //! the camera paths': a connection from the `i`-th vertex is a path of
 //! `i + 1` segments.
 //!
-//! **Limits.** A pinhole camera only (a thin lens or an orthographic
-//! camera sees a point along one ray, which a connection cannot find; the
-//! renderer then leaves the caustics to the camera paths). Not in scenes
+//! **Limits.** A perspective camera only (an orthographic camera sees a
+//! point along one ray, which a connection cannot find; the renderer then
+//! leaves the caustics to the camera paths). Not in scenes
 //! with fluorescence (a fluorescent bounce shifts a light path's
 //! wavelength by a re-emission the camera side integrates). With
 //! `--dispersion-paths all` the children a refraction spawns start with the
@@ -74,6 +77,7 @@ use super::light_aim::{Aimed, Emitting, LightAim};
 use super::packet_shading::offset;
 use super::{IntegratorSettings, RR_MAX_SURVIVAL, RayCounts, SHADOW_EPSILON};
 use crate::packet::{PacketHit, Ray};
+use crate::sampling::disk::concentric_disk;
 use crate::sampling::rng::{Purpose, Rng};
 use crate::scene::camera::Projection;
 use crate::scene::{Scene, WideStacks};
@@ -148,6 +152,15 @@ struct Tally<'h> {
     hits: &'h mut Vec<FilmHit>,
     counts: &'h mut RayCounts,
     stacks: WideStacks,
+}
+
+/// What a connection to the camera draws besides its vertex: the
+/// wavelength, the lobe number and the point of the lens's unit disk.
+#[derive(Clone, Copy)]
+struct Connection<'w> {
+    wavelength: &'w SampledWavelengths<1>,
+    u_lobe: f32,
+    lens_point: (f32, f32),
 }
 
 /// One wavelength's light path past the stretch its wavelengths share.
@@ -249,15 +262,14 @@ fn shading_normal_factor(vertex: &Vertex, shading: Vec3, from: Vec3, to: Vec3) -
 impl<'a> LightPaths<'a> {
     /// The light paths of a render, or `None` where it traces none: the
     /// transport asks for none, nothing disperses, the scene has no
-    /// emissive triangle or has fluorescence, or the camera is not a
-    /// pinhole (module docs).
+    /// emissive triangle or has fluorescence, or the camera is
+    /// orthographic (module docs).
     pub fn new(scene: &'a Scene, settings: LightPathSettings) -> Option<Self> {
         let spectra = settings.spectra?;
         let camera = scene.camera();
-        let pinhole = camera.lens().is_none()
-            && matches!(camera.projection(), Projection::Perspective { .. });
+        let perspective = matches!(camera.projection(), Projection::Perspective { .. });
         let disperses = scene.materials().iter().any(|m| m.bsdf.disperses());
-        let usable = pinhole
+        let usable = perspective
             && disperses
             && scene.fluorophores().is_empty()
             && !scene.lights().is_empty()
@@ -544,7 +556,17 @@ impl<'a> LightPaths<'a> {
             let from = -walk.ray.direction.normalize();
             let uniforms = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
             if walk.dispersed && walk.depth.saturating_add(1) <= self.settings.max_depth {
-                let connection = (&walk.wavelength, uniforms[0]);
+                // A thin lens: the connection's point on the aperture,
+                // uniform as the camera rays' (pinholes draw nothing).
+                let lens_point = match self.scene.camera().lens() {
+                    Some(_) => concentric_disk(rng.next_f32(), rng.next_f32()),
+                    None => (0.0, 0.0),
+                };
+                let connection = Connection {
+                    wavelength: &walk.wavelength,
+                    u_lobe: uniforms[0],
+                    lens_point,
+                };
                 if let Some(hit) = self.connect(&vertex, bsdf, from, connection, walk.beta, tally) {
                     tally.hits.push(FilmHit {
                         xyz: hit.xyz.map(|c| c * scale),
@@ -594,14 +616,20 @@ impl<'a> LightPaths<'a> {
         vertex: &Vertex,
         bsdf: &Bsdf,
         from: Vec3,
-        (wavelength, u_lobe): (&SampledWavelengths<1>, f32),
+        connection: Connection<'_>,
         beta: f32,
         tally: &mut Tally<'_>,
     ) -> Option<FilmHit> {
+        let Connection {
+            wavelength,
+            u_lobe,
+            lens_point,
+        } = connection;
         let scene = self.scene;
         let camera = scene.camera();
-        let film = camera.project(vertex.position, self.width, self.height)?;
-        let to_camera = camera.position() - vertex.position;
+        let (film, eye) =
+            camera.project_through_lens(vertex.position, lens_point, self.width, self.height)?;
+        let to_camera = eye - vertex.position;
         let distance_sq = to_camera.length_squared();
         let view = to_camera / distance_sq.sqrt();
         if !vertex.scatters_towards(view) {
@@ -632,10 +660,10 @@ impl<'a> LightPaths<'a> {
         if !(value.is_finite() && value > 0.0) {
             return None;
         }
-        // The shadow ray ends short of the pinhole, or at the near clip
-        // plane, in front of which the camera sees nothing.
+        // The shadow ray ends short of the pinhole (the lens point), or at
+        // the near clip plane, in front of which the camera sees nothing.
         let origin = vertex.departure(view);
-        let to_pinhole = camera.position() - origin;
+        let to_pinhole = eye - origin;
         let depth = to_pinhole.dot(camera.axes().forward);
         let near = camera.clip().map_or(0.0, |clip| clip.near);
         let t_max = (1.0 - SHADOW_EPSILON).min(1.0 - near / depth);
