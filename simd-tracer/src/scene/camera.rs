@@ -567,6 +567,17 @@ impl Camera {
 mod tests {
     use super::*;
 
+    /// The tests' camera: at (0.3, 1, 3.9) looking down the −z axis,
+    /// slightly down, with `projection`.
+    fn test_camera(projection: Projection) -> Result<Camera, CameraError> {
+        Camera::look_at_with(
+            Vec3::new(0.3, 1.0, 3.9),
+            Vec3::new(0.1, 0.9, 0.0),
+            Vec3::Y,
+            projection,
+        )
+    }
+
     #[test]
     fn packet_rays_equal_scalar_rays_bit_for_bit() {
         let mut rng = crate::sampling::rng::Rng::new(3, 5);
@@ -574,13 +585,7 @@ mod tests {
             Projection::Perspective { fov_deg: 39.3 },
             Projection::Orthographic { view_size: 2.7 },
         ] {
-            let cam = Camera::look_at_with(
-                Vec3::new(0.3, 1.0, 3.9),
-                Vec3::new(0.1, 0.9, 0.0),
-                Vec3::Y,
-                projection,
-            )
-            .unwrap();
+            let cam = test_camera(projection).unwrap();
             for (width, height) in [(512, 512), (640, 360), (1, 1), (37, 1000)] {
                 for _ in 0..500 {
                     let x: [f32; 8] =
@@ -612,12 +617,7 @@ mod tests {
     /// and orthographic or thin-lens cameras, have no film point.
     #[test]
     fn points_project_to_the_film_points_whose_rays_meet_them() -> Result<(), CameraError> {
-        let cam = Camera::look_at_with(
-            Vec3::new(0.3, 1.0, 3.9),
-            Vec3::new(0.1, 0.9, 0.0),
-            Vec3::Y,
-            Projection::Perspective { fov_deg: 50.0 },
-        )?;
+        let cam = test_camera(Projection::Perspective { fov_deg: 50.0 })?;
         let (width, height) = (640, 360);
         for cam in [cam, cam.with_shift([0.1, -0.2])?] {
             for &(x, y) in &[
@@ -691,12 +691,7 @@ mod tests {
     #[test]
     fn points_project_through_the_lens_to_the_film_points_whose_rays_meet_them()
     -> Result<(), CameraError> {
-        let pinhole = Camera::look_at_with(
-            Vec3::new(0.3, 1.0, 3.9),
-            Vec3::new(0.1, 0.9, 0.0),
-            Vec3::Y,
-            Projection::Perspective { fov_deg: 50.0 },
-        )?;
+        let pinhole = test_camera(Projection::Perspective { fov_deg: 50.0 })?;
         let (width, height) = (640, 360);
         let cam = pinhole.with_lens(0.2, 3.0)?.with_shift([0.05, 0.1])?;
         let lens = cam.lens().ok_or(CameraError::Lens)?;
@@ -767,15 +762,11 @@ mod tests {
                 "{depth}"
             );
         }
-        let ortho = Camera::look_at_with(
-            Vec3::ZERO,
-            Vec3::Z,
-            Vec3::Y,
-            Projection::Orthographic { view_size: 2.0 },
-        )?;
+        let ortho = test_camera(Projection::Orthographic { view_size: 2.0 })?;
+        let ahead = ortho.position + ortho.forward;
         assert!(
             ortho
-                .project_through_lens(Vec3::Z, (0.0, 0.0), width, height)
+                .project_through_lens(ahead, (0.0, 0.0), width, height)
                 .is_none()
         );
         Ok(())
