@@ -136,7 +136,8 @@ pub enum Caustics {
     #[default]
     Camera,
     /// Light paths from the lamps carry the light that passes dispersive
-    /// glass before its first diffuse bounce
+    /// glass, or is mirrored by its surface, before its first diffuse
+    /// bounce
     /// (`simd_tracer::integrator::light_paths`; perspective cameras, a
     /// pinhole or a thin lens; scenes without fluorescence).
     LightPaths,

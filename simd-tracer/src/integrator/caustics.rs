@@ -8,18 +8,28 @@
 //! * its first surface `x₁` scattered through a non-delta lobe (a light
 //!   path reaches the camera by a connection from such a vertex), and
 //! * the events between its last non-delta vertex and the emitter are all
-//!   delta, at least one of them a refraction through a dispersive
-//!   dielectric (light that a shadow ray cannot follow, whose direction
-//!   depends on wavelength: a camera path finds it only by chance), and
+//!   delta, at least one of them on a material that disperses (a
+//!   refraction through dispersive glass, whose direction depends on
+//!   wavelength, or a reflection off its surface: light that a shadow ray
+//!   cannot follow, which a camera path finds only by chance), and
 //! * the emitter is one the light paths start from: a triangle of the
 //!   light set (sphere lights, instances and the environment are not).
 //!
 //! Every other path stays the camera paths'. Both sides classify a vertex
 //! the same way — by the lobe that scattered there (a light sample or
 //! connection is a non-delta event; a sampled lobe with pdf 0 a delta
-//! one) and by the geometry (a refraction leaves on the other side of the
-//! surface) — so the two sets partition path space: each path is counted
-//! by exactly one estimator, and the sum is unbiased without weights.
+//! one) and by its material ([`crate::shading::material::Bsdf::disperses`])
+//! — so the two sets partition path space: each path is counted by
+//! exactly one estimator, and the sum is unbiased without weights.
+//!
+//! **Why reflections too.** The glass's surface mirrors about a tenth of a
+//! lamp's light (SF11 at normal incidence: `((n − 1)/(n + 1))² ≈ 0.08`);
+//! left to the camera paths, the light it mirrors onto a wall or a sphere
+//! was found only by the few paths whose bounce happens to reflect onto
+//! the lamp, as bright isolated pixels in `prism` (measured in
+//! `docs/results.md`, "Reflections off the glass to the light paths").
+//! The light paths are aimed at the dispersive glass anyway, and a
+//! reflected one lands where it belongs.
 
 use crate::simd::LaneMask;
 
@@ -29,7 +39,7 @@ pub struct CausticLanes {
     /// Lanes whose first surface scattered through a non-delta lobe.
     scattered_first: LaneMask,
     /// Lanes whose events since their last non-delta one are all delta,
-    /// at least one of them a dispersive refraction.
+    /// at least one of them on a material that disperses.
     dispersive_chain: LaneMask,
 }
 
@@ -41,28 +51,28 @@ impl CausticLanes {
     };
 
     /// Records the events that the bounce at `depth` sampled for its lanes
-    /// `active`: `delta` took a delta lobe, and of those
-    /// `dispersive_refraction` refracted through a dispersive dielectric.
+    /// `active`: `delta` took a delta lobe, and of those `dispersive_delta`
+    /// did so on a material that disperses.
     pub(super) fn after_sample(
         &mut self,
         depth: u32,
         active: LaneMask,
         delta: LaneMask,
-        dispersive_refraction: LaneMask,
+        dispersive_delta: LaneMask,
     ) {
         let delta = delta.and(active);
         if depth == 1 {
             self.scattered_first = active.and_not(delta);
         }
-        let chain = self.dispersive_chain.or(dispersive_refraction);
+        let chain = self.dispersive_chain.or(dispersive_delta);
         self.dispersive_chain = chain.and(delta);
     }
 
     /// Where a child (`ChildPath`) of lane `lane` starts, whose own sample
-    /// of the surface that spawned it was `delta` and a `dispersive`
-    /// refraction: `self` is the parent's state before that event (the
-    /// child's event replaces the hero's). Returns the child's
-    /// `(scattered_first, dispersive_chain)`.
+    /// of the surface that spawned it was `delta`, on a material that
+    /// disperses where `dispersive`: `self` is the parent's state before
+    /// that event (the child's event replaces the hero's). Returns the
+    /// child's `(scattered_first, dispersive_chain)`.
     pub(super) fn child(
         &self,
         lane: usize,

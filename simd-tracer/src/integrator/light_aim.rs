@@ -2,9 +2,8 @@
 //! distribution and the cones of the dispersive glass seen from the lamp.
 //!
 //! **Why.** A light path counts only if the events from its lamp to its
-//! first non-delta vertex are delta and one of them refracts through a
-//! dispersive dielectric (`light_paths.rs`): its *first* segment must
-//! reach glass. A lamp that emits by its cosine sends most paths
+//! first non-delta vertex are delta and one of them is on dispersive
+//! glass (`light_paths.rs`): its *first* segment must reach glass. A lamp that emits by its cosine sends most paths
 //! elsewhere, and in a slit projector (`prism`'s lamp at the end of a
 //! black tube) nearly all of them into the tube's wall, where they end
 //! after costing a ray. Photon mappers aim photons at specular objects for

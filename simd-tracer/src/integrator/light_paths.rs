@@ -14,14 +14,15 @@
 //!
 //! **Which paths** (`caustics.rs`, the camera side): a path is the light
 //! paths' when the events from its lamp up to its first non-delta vertex
-//! are all delta, at least one a refraction through a dispersive
-//! dielectric, and the vertex the camera sees scattered through a non-delta
-//! lobe. Camera paths leave exactly those out, so the two estimators count
-//! disjoint parts of path space and their sum needs no weights. The walk
-//! below follows that definition: it connects to the camera at every
-//! non-delta vertex once its first stretch of delta events held a
-//! dispersive refraction, and ends as soon as a non-delta event comes
-//! without one (no path with that beginning is its).
+//! are all delta, at least one on a material that disperses (a refraction
+//! through dispersive glass or a reflection off it), and the vertex the
+//! camera sees scattered through a non-delta lobe. Camera paths leave
+//! exactly those out, so the two estimators count disjoint parts of path
+//! space and their sum needs no weights. The walk below follows that
+//! definition: it connects to the camera at every non-delta vertex once
+//! its first stretch of delta events met dispersive glass, and ends as
+//! soon as a non-delta event comes without that (no path with that
+//! beginning is its).
 //!
 //! **The estimate.** A path starts on an emissive triangle of the light
 //! set, chosen with the light sampler's probability `P` (the set's own
@@ -143,7 +144,6 @@ struct Scatter {
     /// `f cos θ/p` of the adjoint at the wavelength.
     factor: f32,
     delta: bool,
-    refracted: bool,
 }
 
 /// Where a chunk of light paths leaves its film hits and ray counts, and
@@ -173,7 +173,7 @@ struct Walk {
     start: f32,
     /// Still in the first stretch of delta events (module docs).
     first_stretch: bool,
-    /// That stretch held a dispersive refraction.
+    /// That stretch held a delta event on a material that disperses.
     dispersed: bool,
     wavelength: SampledWavelengths<1>,
     /// The walk's share of the path's estimate, `1/C`.
@@ -422,14 +422,15 @@ impl<'a> LightPaths<'a> {
             } else {
                 self.scatter(&vertex, bsdf, from, lambdas[0], uniforms)
             };
-            // A delta refraction through a material that disperses counts
-            // as dispersive on the camera side (`caustics.rs`) even where
-            // its direction does not depend on wavelength (a mask's pass
-            // through): the walks start there too.
-            let refracts_dispersively = hero_scatter
+            // A delta event on a material that disperses counts as
+            // dispersive on the camera side (`caustics.rs`) even where its
+            // direction does not depend on wavelength (a reflection off
+            // the glass, a mask's pass through): the walks start there too,
+            // each wavelength with its own sample of the event.
+            let meets_glass = hero_scatter
                 .as_ref()
-                .is_some_and(|s| s.delta && s.refracted && bsdf.disperses());
-            if depends || refracts_dispersively {
+                .is_some_and(|s| s.delta && bsdf.disperses());
+            if depends || meets_glass {
                 let share = 1.0 / LIGHT_PATH_WAVELENGTHS as f32;
                 for (i, (&lambda_nm, &pdf_per_nm)) in
                     lambdas.iter().zip(wavelengths.pdf_per_nm()).enumerate()
@@ -444,7 +445,6 @@ impl<'a> LightPaths<'a> {
                     if !(scattered.delta && beta[i] > 0.0 && pdf_per_nm > 0.0) {
                         continue;
                     }
-                    let dispersed = scattered.refracted && bsdf.disperses();
                     let walk = Walk {
                         ray: Ray {
                             origin: vertex.departure(scattered.to),
@@ -455,7 +455,7 @@ impl<'a> LightPaths<'a> {
                         beta: beta[i] * scattered.factor,
                         start: start[i],
                         first_stretch: true,
-                        dispersed,
+                        dispersed: bsdf.disperses(),
                         wavelength: SampledWavelengths::from_parts([lambda_nm], [pdf_per_nm]),
                         share,
                     };
@@ -538,12 +538,11 @@ impl<'a> LightPaths<'a> {
             to,
             factor,
             delta: sample.pdf == 0.0,
-            refracted,
         })
     }
 
     /// One wavelength's walk past the shared stretch: a connection to the
-    /// camera from every vertex once a dispersive refraction came first
+    /// camera from every vertex once dispersive glass came first
     /// (module docs).
     fn walk(&self, rng: &mut Rng, mut walk: Walk, tally: &mut Tally<'_>) {
         let scale = walk.share / self.per_pass() as f32;
@@ -585,7 +584,7 @@ impl<'a> LightPaths<'a> {
             walk.beta *= scattered.factor;
             if walk.first_stretch {
                 if scattered.delta {
-                    walk.dispersed |= scattered.refracted && bsdf.disperses();
+                    walk.dispersed |= bsdf.disperses();
                 } else if walk.dispersed {
                     walk.first_stretch = false;
                 } else {

@@ -195,7 +195,7 @@ pub struct ChildPath {
     pub value: f32,
     /// Where light paths run: whether its path's first surface scattered
     /// through a non-delta lobe, and whether its events since its last
-    /// non-delta one are all delta with a dispersive refraction among
+    /// non-delta one are all delta with one on dispersive glass among
     /// them (the partition's state, `caustics.rs`; both false otherwise).
     pub caustic_state: (bool, bool),
 }
@@ -620,8 +620,7 @@ impl<S: Copy> PathState<S> {
         let caustics_before = self.caustics;
         if light_traced_caustics {
             let delta = LaneMask::from_simd(sample.pdf.simd_eq(f32x8::ZERO));
-            let refracted = LaneMask::from_simd(sample.wi.dot(normal).simd_lt(f32x8::ZERO));
-            let dispersive = shading.dispersive(active.and(delta).and(refracted));
+            let dispersive = shading.dispersive(active.and(delta));
             self.caustics.after_sample(depth, active, delta, dispersive);
         }
         let mut terminating = sample.terminate_secondary.and(active);
@@ -751,9 +750,7 @@ impl<S: Copy> PathState<S> {
             let directions = sample.wi.to_lanes();
             let weight = sample.weight.to_array();
             let delta = LaneMask::from_simd(sample.pdf.simd_eq(f32x8::ZERO));
-            let refracted =
-                LaneMask::from_simd(sample.wi.dot(geometry.normal).simd_lt(f32x8::ZERO));
-            let dispersive = shading.dispersive(lanes.and(delta).and(refracted));
+            let dispersive = shading.dispersive(lanes.and(delta));
             for lane in lanes.and(sample.valid).iter() {
                 let value = transport.sampled_value(&through, lane, slot) * weight[lane];
                 if value > 0.0 && value.is_finite() {
