@@ -3,7 +3,8 @@
 //!
 //! **Why.** A light path counts only if the events from its lamp to its
 //! first non-delta vertex are delta and one of them is on dispersive
-//! glass (`light_paths.rs`): its *first* segment must reach glass. A lamp that emits by its cosine sends most paths
+//! glass (`light_paths.rs`): its *first* segment must reach glass. A lamp
+//! that emits by its cosine sends most paths
 //! elsewhere, and in a slit projector (`prism`'s lamp at the end of a
 //! black tube) nearly all of them into the tube's wall, where they end
 //! after costing a ray. Photon mappers aim photons at specular objects for
@@ -13,12 +14,13 @@
 //! **The density.** With `K` targets (balls bounding the triangles of each
 //! dispersive material, and each instance whose mesh holds such
 //! triangles), a share `a` of the paths ([`COSINE_SHARE`]) leaves by the
-//! cosine (`|cos θ|/π` over the emitting side, halved for a two-sided
-//! lamp), the rest aim at one target chosen uniformly, uniformly in its
-//! cone (`sampling::cone`):
+//! lamp's own density `p_own` — a triangle's cosine (`|cos θ|/π` over the
+//! emitting side, halved for a two-sided lamp), a point light's uniform
+//! sphere (`1/4π`) — the rest aim at one target chosen uniformly,
+//! uniformly in its cone (`sampling::cone`):
 //!
 //! ```text
-//! p(ω) = a p_cos(ω) + (1 − a)/K Σ_k [ω ∈ cone_k] / Ω_k
+//! p(ω) = a p_own(ω) + (1 − a)/K Σ_k [ω ∈ cone_k] / Ω_k
 //! ```
 //!
 //! where `K` counts the targets the lamp point can aim at: a ball that
@@ -26,8 +28,9 @@
 //! than the cosine), and so is a ball wholly behind a one-sided lamp.
 //!
 //! a one-sample mixture whose weights are folded into the density (Veach's
-//! thesis, §9.2.2), so the path starts with `β = L_e |cos θ| A / (P p(ω))`.
-//! The cosine share keeps `p ≥ a p_cos` everywhere the lamp emits: paths
+//! thesis, §9.2.2), so the path starts with `β = L_e |cos θ| A / (P p(ω))`
+//! (a point light: `β = I f(θ) / (P p(ω))`, `f` a spot's profile).
+//! The own share keeps `p ≥ a p_own` everywhere the lamp emits: paths
 //! that reach glass outside every cone (by a mirror first, or glass the
 //! targets leave out) are still drawn, with weights at most `1/a` of a
 //! cosine light tracer's, so the estimate stays unbiased for every path.
@@ -64,25 +67,74 @@ pub struct AimTarget {
     pub radius: f32,
 }
 
-/// The emitting side(s) of a lamp's triangle.
+/// How a light path's lamp emits: the own density of the mixture (module
+/// docs) and the side(s) it can aim at.
 #[derive(Debug, Clone, Copy)]
-pub struct Emitting {
-    /// The triangle's unit front normal.
-    pub normal: Vec3,
-    /// Whether it emits on both sides.
-    pub two_sided: bool,
+pub enum Emitting {
+    /// A lamp's triangle: by the cosine about its unit front `normal`, on
+    /// both sides where `two_sided`.
+    Surface {
+        /// The triangle's unit front normal.
+        normal: Vec3,
+        /// Whether it emits on both sides.
+        two_sided: bool,
+    },
+    /// A point light: uniformly over the sphere (a spot's cone weighs the
+    /// path's start, not the density).
+    Point,
 }
 
 impl Emitting {
-    /// `p_cos(ω)` (module docs), 0 off the emitting side(s).
-    fn cosine_pdf_sr(&self, direction: Vec3) -> f32 {
-        let cos = direction.dot(self.normal);
-        if self.two_sided {
-            0.5 * cos.abs() / PI
-        } else {
-            cos.max(0.0) / PI
+    /// `p_own(ω)` (module docs), 0 off the emitting side(s).
+    fn own_pdf_sr(&self, direction: Vec3) -> f32 {
+        match *self {
+            Self::Surface { normal, two_sided } => {
+                let cos = direction.dot(normal);
+                if two_sided {
+                    0.5 * cos.abs() / PI
+                } else {
+                    cos.max(0.0) / PI
+                }
+            }
+            Self::Point => 1.0 / (4.0 * PI),
         }
     }
+
+    /// A direction of the own density from two uniforms, choosing a side
+    /// of a two-sided triangle by `u_side`.
+    fn sample_own(&self, u_side: f32, u: f32, v: f32) -> Vec3 {
+        match *self {
+            Self::Surface { normal, two_sided } => {
+                let normal = if two_sided && u_side < 0.5 {
+                    -normal
+                } else {
+                    normal
+                };
+                sample_cosine(normal, u, v)
+            }
+            Self::Point => uniform_sphere(u, v),
+        }
+    }
+
+    /// Whether a cone of `cone.sin_sq_max` about `cone.axis` reaches the
+    /// emitting side(s).
+    fn reaches(&self, cone: &SphereCone) -> bool {
+        match *self {
+            Self::Surface { normal, two_sided } => {
+                two_sided || cone.axis.dot(normal) > -cone.sin_sq_max.sqrt()
+            }
+            Self::Point => true,
+        }
+    }
+}
+
+/// A uniform direction on the unit sphere from two uniforms (`z = 1 − 2u`,
+/// `φ = 2πv`: Archimedes' hat-box theorem makes `z` uniform).
+fn uniform_sphere(u: f32, v: f32) -> Vec3 {
+    let z = 1.0 - 2.0 * u;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (sin, cos) = (2.0 * PI * v).sin_cos();
+    Vec3::new(r * cos, r * sin, z)
 }
 
 /// A first direction and its density.
@@ -274,9 +326,7 @@ impl LightAim {
         emitting: &'s Emitting,
     ) -> impl Iterator<Item = SphereCone> + 's {
         self.targets.iter().filter_map(move |t| {
-            SphereCone::new(t.center, t.radius, origin).filter(|cone| {
-                emitting.two_sided || cone.axis.dot(emitting.normal) > -cone.sin_sq_max.sqrt()
-            })
+            SphereCone::new(t.center, t.radius, origin).filter(|cone| emitting.reaches(cone))
         })
     }
 
@@ -287,19 +337,14 @@ impl LightAim {
         let count = self.cones(origin, emitting).count();
         let share = cosine_share(count);
         let (direction, chosen) = if u[0] < share {
-            let normal = if emitting.two_sided && u[1] < 0.5 {
-                -emitting.normal
-            } else {
-                emitting.normal
-            };
-            (sample_cosine(normal, u[2], u[3]), None)
+            (emitting.sample_own(u[1], u[2], u[3]), None)
         } else {
             let k = ((u[1] * count as f32) as usize).min(count.saturating_sub(1));
             let cone = self.cones(origin, emitting).nth(k)?;
             (cone.sample([u[2], u[3]]).direction, Some(k))
         };
         let pdf_sr = self.density(origin, emitting, direction, chosen);
-        (emitting.cosine_pdf_sr(direction) > 0.0 && pdf_sr > 0.0 && pdf_sr.is_finite())
+        (emitting.own_pdf_sr(direction) > 0.0 && pdf_sr > 0.0 && pdf_sr.is_finite())
             .then_some(Aimed { direction, pdf_sr })
     }
 
@@ -326,7 +371,7 @@ impl LightAim {
             },
         );
         let share = cosine_share(count);
-        let cosine = share * emitting.cosine_pdf_sr(direction);
+        let cosine = share * emitting.own_pdf_sr(direction);
         if count == 0 {
             return cosine;
         }
@@ -354,7 +399,7 @@ mod tests {
     }
 
     fn lamp(two_sided: bool) -> Emitting {
-        Emitting {
+        Emitting::Surface {
             normal: Vec3::Y,
             two_sided,
         }
@@ -476,6 +521,40 @@ mod tests {
         }
         wrong /= f64::from(n);
         assert!((wrong - exact).abs() > 10.0 * sigma, "{wrong} vs {exact}");
+    }
+
+    /// A point light's mixture covers the whole sphere: `∫ 1 dω = 4π` and
+    /// `∫ max(cos θ, 0) dω = π` about any axis, within 4σ, with the targets
+    /// (the one around the light left out) and without. Negative control:
+    /// a one-sided lamp's mixture at the same point, which draws no
+    /// direction below its side, misses `4π` by more than 10σ.
+    #[test]
+    fn point_lights_aim_over_the_whole_sphere() {
+        use std::f64::consts::PI;
+        // Without targets every weight is `4π` in `f32`: a rounding floor.
+        let rounding = 1e-6 * 4.0 * PI;
+        for aim in [aim(), LightAim::default()] {
+            for (f, exact) in [
+                (
+                    Box::new(|_: Vec3| 1.0) as Box<dyn Fn(Vec3) -> f64>,
+                    4.0 * PI,
+                ),
+                (Box::new(|w: Vec3| f64::from(w.x.max(0.0))), PI),
+                (Box::new(|w: Vec3| f64::from((-w.y).max(0.0))), PI),
+            ] {
+                let (mean, sigma) = estimate(&aim, &Emitting::Point, 200_000, &f);
+                assert!(
+                    (mean - exact).abs() < 4.0 * sigma + rounding,
+                    "{mean} vs {exact} ± {sigma}"
+                );
+            }
+        }
+        let (mean, sigma) = estimate(&aim(), &lamp(false), 200_000, |_| 1.0);
+        let exact = 4.0 * PI;
+        assert!(
+            (mean - exact).abs() > 10.0 * sigma + rounding,
+            "{mean} vs {exact}"
+        );
     }
 
     #[test]

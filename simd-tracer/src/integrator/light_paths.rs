@@ -25,14 +25,18 @@
 //! beginning is its).
 //!
 //! **The estimate.** A path starts on an emissive triangle of the light
-//! set, chosen with the light sampler's probability `P` (the set's own
-//! choice, conditional on choosing a triangle), at a uniform point (pdf
-//! `1/A`), in a direction drawn by the lamp's cosine or aimed at the
-//! dispersive glass (`light_aim.rs`: a mixture of both, density `p_ω` per
-//! steradian), carrying [`LIGHT_PATH_WAVELENGTHS`] wavelengths `λ_i` drawn
-//! as the hybrid draws a split's (hero rotations, each with the marginal
-//! density `p`): each starts with the weight
-//! `β_i = L_e(λ_i) |cos θ| A / (P p_ω)`. Up to the first
+//! set or at a point or spot light (`light_start.rs`), chosen with the
+//! light sampler's probability `P` renormalized over those lights, on a
+//! triangle at a uniform point (pdf `1/A`), in a direction drawn by the
+//! lamp's own density (a triangle's cosine, a point's sphere) or aimed at
+//! the dispersive glass (`light_aim.rs`: a mixture of both, density `p_ω`
+//! per steradian), carrying [`LIGHT_PATH_WAVELENGTHS`] wavelengths `λ_i`
+//! drawn as the hybrid draws a split's (hero rotations, each with the
+//! marginal density `p`): each starts with the weight
+//! `β_i = L_e(λ_i) |cos θ| A / (P p_ω)` (at a point light of intensity
+//! `I` and spot profile `f`: `I(λ_i) f(θ) / (P p_ω)`; camera paths never
+//! reach a point light, so its light through the glass is the light
+//! paths' alone). Up to the first
 //! surface whose direction depends on wavelength the path is shared (the
 //! hero's sample, each wavelength's factor); there each wavelength takes
 //! its own direction and goes on alone, carrying `1/C` of the estimate
@@ -74,7 +78,8 @@
 //! the radiance factor, which cancels over a path that leaves the medium
 //! it entered, so only light connected from inside such a medium is off.
 
-use super::light_aim::{Aimed, Emitting, LightAim};
+use super::light_aim::{Aimed, LightAim};
+use super::light_start::LightStarts;
 use super::packet_shading::offset;
 use super::{IntegratorSettings, RR_MAX_SURVIVAL, RayCounts, SHADOW_EPSILON};
 use crate::packet::{PacketHit, Ray};
@@ -112,6 +117,8 @@ pub struct LightPaths<'a> {
     seed: u64,
     width: u32,
     height: u32,
+    /// Where the paths start.
+    starts: LightStarts,
     /// Where the paths' first segments go.
     aim: LightAim,
 }
@@ -261,31 +268,27 @@ fn shading_normal_factor(vertex: &Vertex, shading: Vec3, from: Vec3, to: Vec3) -
 
 impl<'a> LightPaths<'a> {
     /// The light paths of a render, or `None` where it traces none: the
-    /// transport asks for none, nothing disperses, the scene has no
-    /// emissive triangle or has fluorescence, or the camera is
-    /// orthographic (module docs).
+    /// transport asks for none, nothing disperses, the scene has neither an
+    /// emissive triangle nor a point light or has fluorescence, or the
+    /// camera is orthographic (module docs).
     pub fn new(scene: &'a Scene, settings: LightPathSettings) -> Option<Self> {
         let spectra = settings.spectra?;
         let camera = scene.camera();
         let perspective = matches!(camera.projection(), Projection::Perspective { .. });
         let disperses = scene.materials().iter().any(|m| m.bsdf.disperses());
-        let usable = perspective
-            && disperses
-            && scene.fluorophores().is_empty()
-            && !scene.lights().is_empty()
-            && scene.light_sampler().triangle_share() > 0.0;
-        usable.then(|| {
-            let aim = LightAim::new(scene);
-            debug_assert!(aim.validate().is_ok(), "{:?}", aim.validate());
-            Self {
-                scene,
-                spectra,
-                settings: settings.integrator,
-                seed: settings.seed,
-                width: settings.width,
-                height: settings.height,
-                aim,
-            }
+        let usable = perspective && disperses && scene.fluorophores().is_empty();
+        let starts = LightStarts::new(scene).filter(|_| usable)?;
+        let aim = LightAim::new(scene);
+        debug_assert!(aim.validate().is_ok(), "{:?}", aim.validate());
+        Some(Self {
+            scene,
+            spectra,
+            settings: settings.integrator,
+            seed: settings.seed,
+            width: settings.width,
+            height: settings.height,
+            starts,
+            aim,
         })
     }
 
@@ -364,17 +367,8 @@ impl<'a> LightPaths<'a> {
         let scene = self.scene;
         let wavelengths = self.spectra.draw::<LIGHT_PATH_WAVELENGTHS>(rng.next_f32());
         let (u_light, u, v) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
-        let Some(light) = scene.lights().sample(u_light, u, v) else {
+        let Some(light) = self.starts.choose(scene, u_light, u, v) else {
             return;
-        };
-        let surface = light.surface;
-        let pmf = surface.light_pmf / scene.light_sampler().triangle_share();
-        if !(pmf > 0.0 && surface.area > 0.0) {
-            return;
-        }
-        let emitting = Emitting {
-            normal: surface.normal,
-            two_sided: surface.two_sided,
         };
         let u_aim = [
             rng.next_f32(),
@@ -382,25 +376,25 @@ impl<'a> LightPaths<'a> {
             rng.next_f32(),
             rng.next_f32(),
         ];
-        let Some(Aimed { direction, pdf_sr }) = self.aim.sample(light.point, &emitting, u_aim)
+        let Some(Aimed { direction, pdf_sr }) =
+            self.aim.sample(light.origin, &light.emitting, u_aim)
         else {
             return;
         };
-        let cos = direction.dot(surface.normal);
-        let side = if cos >= 0.0 {
-            surface.normal
-        } else {
-            -surface.normal
-        };
-        let emission = LaneSpectrum::scene(surface.emission);
+        let emission = LaneSpectrum::scene(light.emission);
         let lambdas = *wavelengths.lambda_nm();
         let start = lambdas.map(|lambda_nm| {
             let le = self.spectra.factor(scene, &emission, lambda_nm);
-            le * cos.abs() * surface.area / (pmf * pdf_sr)
+            light.beta(le, direction, pdf_sr)
         });
+        // Outside a spot's cone (or where the lamp emits nothing at these
+        // wavelengths) the path would carry nothing.
+        if !start.iter().any(|&b| b > 0.0) {
+            return;
+        }
         let mut beta = start;
         let mut ray = Ray {
-            origin: offset(light.point, side),
+            origin: light.departure(direction),
             direction,
             t_max: f32::INFINITY,
         };

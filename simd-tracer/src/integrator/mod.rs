@@ -48,6 +48,7 @@ pub use group::{GROUP, GroupStart, GroupState, trace, trace_group, trace_group_f
 mod last_segment;
 pub mod light_aim;
 pub mod light_paths;
+mod light_start;
 mod path;
 pub use path::ChildPath;
 

@@ -31,7 +31,7 @@ fn departure(direction: Vec3x8, normal: Vec3x8, above: Vec3x8, below: Vec3x8) ->
 }
 
 /// The largest `f32` below 1: a rescaled light number stays in [0, 1).
-const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+pub(super) const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// The environment map's radiance at `uv` in the lanes of `lanes` (0
 /// elsewhere).

@@ -382,6 +382,18 @@ impl LightSampler {
         &self.spheres
     }
 
+    /// The point and spot lights, each with its absolute selection
+    /// probability.
+    pub fn point_lights(&self) -> impl Iterator<Item = (&PointLight, f32)> + '_ {
+        self.others
+            .iter()
+            .zip(&self.pmf)
+            .filter_map(|(light, &pmf)| match light {
+                OtherLight::Point(point) => Some((point, pmf)),
+                _ => None,
+            })
+    }
+
     /// The solid-angle pdf (with the selection probability) with which NEE
     /// samples the sphere light that triangle `triangle` belongs to, seen
     /// from `origin`: the MIS weight of a BSDF sample that hits it. `None`
