@@ -13,7 +13,9 @@
 //!   wavelength, or a reflection off its surface: light that a shadow ray
 //!   cannot follow, which a camera path finds only by chance), and
 //! * the emitter is one the light paths start from: a triangle of the
-//!   light set (sphere lights, instances and the environment are not).
+//!   light set or of a sphere light (instances and the environment are
+//!   not; point and spot lights, which light paths start from too, no
+//!   camera path reaches).
 //!
 //! Every other path stays the camera paths'. Both sides classify a vertex
 //! the same way — by the lobe that scattered there (a light sample or

@@ -130,7 +130,7 @@ impl Emitting {
 
 /// A uniform direction on the unit sphere from two uniforms (`z = 1 − 2u`,
 /// `φ = 2πv`: Archimedes' hat-box theorem makes `z` uniform).
-fn uniform_sphere(u: f32, v: f32) -> Vec3 {
+pub(super) fn uniform_sphere(u: f32, v: f32) -> Vec3 {
     let z = 1.0 - 2.0 * u;
     let r = (1.0 - z * z).max(0.0).sqrt();
     let (sin, cos) = (2.0 * PI * v).sin_cos();

@@ -25,9 +25,10 @@
 //! beginning is its).
 //!
 //! **The estimate.** A path starts on an emissive triangle of the light
-//! set or at a point or spot light (`light_start.rs`), chosen with the
-//! light sampler's probability `P` renormalized over those lights, on a
-//! triangle at a uniform point (pdf `1/A`), in a direction drawn by the
+//! set, at a point or spot light, or on a sphere light (`light_start.rs`),
+//! chosen with the light sampler's probability `P` renormalized over those
+//! lights, on a triangle at a uniform point (pdf `1/A`; a sphere's `A` is
+//! `4πρ²`), in a direction drawn by the
 //! lamp's own density (a triangle's cosine, a point's sphere) or aimed at
 //! the dispersive glass (`light_aim.rs`: a mixture of both, density `p_ω`
 //! per steradian), carrying [`LIGHT_PATH_WAVELENGTHS`] wavelengths `λ_i`

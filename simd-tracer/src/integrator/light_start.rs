@@ -14,25 +14,37 @@
 //! restricted to the lights light paths start from, the triangles' share
 //! `P_tri` and each point light's `P_k`, divided by their sum `S`; a
 //! triangle then has `P = P_light / S` (its absolute NEE probability over
-//! `S`), a point light `P_k / S`. Without point lights `S = P_tri` and the
-//! choice is the triangles' as before, number for number.
+//! `S`), a point light `P_k / S`, and likewise a sphere light. Without
+//! point and sphere lights `S = P_tri` and the choice is the triangles' as
+//! before, number for number.
+//!
+//! **Sphere lights.** A camera path can hit a sphere light's triangles
+//! through glass, so the camera side leaves those paths out as it does a
+//! lamp triangle's (`caustics.rs`). A light path starts on the analytic
+//! sphere (a uniform point, density `1/(4πρ²)`, the cosine about its
+//! outward normal), the sphere next-event estimation integrates
+//! (`shading::sphere_light`): the tessellation lies inside it, so the
+//! first ray never meets the light's own triangles, and the two differ by
+//! the band between the silhouettes that next-event estimation already
+//! counts (a relative `2·10⁻³` at the default sag).
 //!
 //! **The start.** `β = L_e(λ) |cos θ| A / (P p(ω))` on a triangle (the
 //! point uniform on it, density `1/A`), `β = s I(λ) f(θ) / (P p(ω))` at a
 //! point light of intensity `s I` and spot profile `f` (1 without a
-//! cone), `p(ω)` the first direction's density (`light_aim.rs`). The
-//! environment, directional lights and spherical lights start none: a
-//! camera path can hit a sphere light through glass, which would need the
-//! camera side's partition to know it, and the others have no position.
+//! cone), `p(ω)` the first direction's density (`light_aim.rs`), and on a
+//! sphere light `β = L_e(λ) cos θ 4πρ² / (P p(ω))`. The environment and
+//! directional lights start none: they have no position to start from.
 
-use super::light_aim::Emitting;
+use super::light_aim::{Emitting, uniform_sphere};
 use super::packet_shading::offset;
 use super::path::ONE_BELOW;
 use crate::ids::SpectrumId;
 use crate::scene::Scene;
 use crate::shading::light_sampler::PointLight;
+use crate::shading::sphere_light::SphereLight;
 use crate::shading::spot_cone::SpotCone;
 use glam::Vec3;
+use std::f32::consts::PI;
 
 /// The lights light paths start from and their probabilities (module
 /// docs).
@@ -42,6 +54,8 @@ pub(super) struct LightStarts {
     triangle_share: f32,
     /// The point and spot lights with their absolute probabilities `P_k`.
     points: Vec<(PointLight, f32)>,
+    /// The sphere lights with theirs.
+    spheres: Vec<(SphereLight, f32)>,
     /// `S = P_tri + Σ P_k`.
     total: f32,
 }
@@ -77,22 +91,34 @@ impl LightStarts {
             .filter(|(_, pmf)| *pmf > 0.0)
             .map(|(light, pmf)| (*light, pmf))
             .collect();
-        let total = triangle_share + points.iter().map(|(_, pmf)| pmf).sum::<f32>();
+        let spheres: Vec<(SphereLight, f32)> = sampler
+            .spheres_with_pmf()
+            .filter(|(_, pmf)| *pmf > 0.0)
+            .map(|(light, pmf)| (light.clone(), pmf))
+            .collect();
+        let others = points.iter().map(|(_, pmf)| pmf);
+        let total = triangle_share
+            + others
+                .chain(spheres.iter().map(|(_, pmf)| pmf))
+                .sum::<f32>();
         (total > 0.0).then_some(Self {
             triangle_share,
             points,
+            spheres,
             total,
         })
     }
 
-    /// The start chosen by `u_light`, its point on a triangle by `(u, v)`
-    /// (all in `[0, 1)`); `None` where the light emits nothing there.
+    /// The start chosen by `u_light`, its point on a triangle or a sphere
+    /// by `(u, v)` (all in `[0, 1)`); `None` where the light emits nothing
+    /// there.
     pub(super) fn choose(&self, scene: &Scene, u_light: f32, u: f32, v: f32) -> Option<LightStart> {
         let x = u_light * self.total;
-        if self.points.is_empty() || x < self.triangle_share {
-            // Without point lights `u_light` is the triangles' own number,
+        let triangles_only = self.points.is_empty() && self.spheres.is_empty();
+        if triangles_only || x < self.triangle_share {
+            // With triangles alone `u_light` is the triangles' own number,
             // unscaled, so their paths are those of before, bit for bit.
-            let u_triangle = if self.points.is_empty() {
+            let u_triangle = if triangles_only {
                 u_light
             } else {
                 (x / self.triangle_share).min(ONE_BELOW)
@@ -113,22 +139,53 @@ impl LightStarts {
             });
         }
         let mut end = self.triangle_share;
-        let (light, pmf) = self
-            .points
-            .iter()
-            .find(|(_, pmf)| {
-                end += pmf;
-                x < end
-            })
-            .or(self.points.last())?;
-        Some(LightStart {
+        for (light, pmf) in &self.points {
+            end += pmf;
+            if x < end {
+                return Some(self.point_start(light, *pmf));
+            }
+        }
+        for (light, pmf) in &self.spheres {
+            end += pmf;
+            if x < end {
+                return Some(self.sphere_start(light, *pmf, (u, v)));
+            }
+        }
+        // Rounding left `x` past the last end: the last light.
+        match (self.spheres.last(), self.points.last()) {
+            (Some((light, pmf)), _) => Some(self.sphere_start(light, *pmf, (u, v))),
+            (None, Some((light, pmf))) => Some(self.point_start(light, *pmf)),
+            (None, None) => None,
+        }
+    }
+
+    /// The start at point light `light`, chosen with `P_k = pmf`.
+    fn point_start(&self, light: &PointLight, pmf: f32) -> LightStart {
+        LightStart {
             origin: light.position,
             emitting: Emitting::Point,
             emission: light.intensity,
             measure: light.scale,
             pmf: pmf / self.total,
             cone: light.cone,
-        })
+        }
+    }
+
+    /// The start on sphere light `light`, chosen with `pmf`, at the point
+    /// of the uniforms `(u, v)` (module docs).
+    fn sphere_start(&self, light: &SphereLight, pmf: f32, (u, v): (f32, f32)) -> LightStart {
+        let normal = uniform_sphere(u, v);
+        LightStart {
+            origin: light.center + light.radius * normal,
+            emitting: Emitting::Surface {
+                normal,
+                two_sided: false,
+            },
+            emission: light.emission,
+            measure: 4.0 * PI * light.radius * light.radius,
+            pmf: pmf / self.total,
+            cone: None,
+        }
     }
 }
 

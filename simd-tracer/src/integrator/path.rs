@@ -390,8 +390,17 @@ impl<S: Copy> PathState<S> {
         // that light paths carry.
         let mut emits = surface.emits_towards(cos_o).and(active);
         if light_traced_caustics && !emits.is_empty() {
-            let in_light_set = LaneMask::from_simd(surface.light_pmf.simd_gt(f32x8::ZERO));
-            emits = emits.and_not(self.caustics.light_traced(emits.and(in_light_set)));
+            // The emitters light paths start from (`light_start.rs`).
+            let mut starts = LaneMask::from_simd(surface.light_pmf.simd_gt(f32x8::ZERO));
+            let sampler = scene.light_sampler();
+            if sampler.has_spheres() {
+                for lane in emits.and_not(starts).iter() {
+                    if sampler.in_chosen_sphere(hit.triangle[lane]) {
+                        starts = starts.with(lane);
+                    }
+                }
+            }
+            emits = emits.and_not(self.caustics.light_traced(emits.and(starts)));
         }
         if !emits.is_empty() && visible {
             let distance = hit.t * direction_length;

@@ -382,6 +382,19 @@ impl LightSampler {
         &self.spheres
     }
 
+    /// The spherical lights, each with its absolute selection probability.
+    pub fn spheres_with_pmf(&self) -> impl Iterator<Item = (&SphereLight, f32)> + '_ {
+        self.spheres.iter().zip(self.sphere_pmf.iter().copied())
+    }
+
+    /// Whether triangle `triangle` belongs to a sphere light that NEE
+    /// chooses with a positive probability.
+    pub fn in_chosen_sphere(&self, triangle: u32) -> bool {
+        sphere_holding(&self.spheres, triangle)
+            .and_then(|index| self.sphere_pmf.get(index))
+            .is_some_and(|&pmf| pmf > 0.0)
+    }
+
     /// The point and spot lights, each with its absolute selection
     /// probability.
     pub fn point_lights(&self) -> impl Iterator<Item = (&PointLight, f32)> + '_ {
