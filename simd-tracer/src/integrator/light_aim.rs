@@ -38,15 +38,23 @@
 //! included, depends only on the lamp point, so each point's density is
 //! exact.
 //!
+//! **Beams.** Parallel light (a directional light) has one direction and
+//! starts anywhere on a disk across it ([`Beam`]: the radius of the sphere
+//! around the scene, a diameter before its centre). The same mixture is
+//! drawn over the disk's points per unit area: a share `a` uniform over
+//! the disk, the rest uniform over the disk a target's ball casts on it,
+//! `p(x) = a/(π R²) + (1 − a)/K Σ_k [x ∈ disk_k] / (π r_k²)`.
+//!
 //! **Targets.** One ball per dispersive material over its triangles, one
 //! per instance that shows dispersive triangles; beyond
 //! [`MAX_TARGETS`] they merge into one ball around all of them (the
 //! density's cost per path grows with `K`).
 
 use crate::sampling::cone::SphereCone;
+use crate::sampling::disk::concentric_disk;
 use crate::scene::Scene;
 use crate::shading::material::sample_cosine;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
 /// The share of light paths that leave by the lamp's cosine where there
@@ -379,6 +387,115 @@ impl LightAim {
     }
 }
 
+/// Parallel light across the scene (a directional light): its paths enter
+/// through a disk across the beam, of the radius of the sphere around the
+/// scene, a scene's diameter before its centre (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Beam {
+    /// Unit direction the light travels.
+    pub travel: Vec3,
+    /// Centre of the sphere around the scene.
+    pub center: Vec3,
+    /// Its radius.
+    pub radius: f32,
+}
+
+/// Where a path of parallel light starts and its density per unit area of
+/// the beam's cross-section.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AimedBeam {
+    /// The ray's origin.
+    pub origin: Vec3,
+    /// `p(x)` per unit area (module docs).
+    pub pdf_per_area: f32,
+}
+
+impl LightAim {
+    /// A start of parallel light `beam` from four uniforms in `[0, 1)` (the
+    /// strategy, the target, the point's two): a quarter uniform over the
+    /// beam's disk, the rest uniform over the disk each target's ball
+    /// casts on the cross-section (module docs).
+    pub fn sample_beam(&self, beam: &Beam, u: [f32; 4]) -> Option<AimedBeam> {
+        let frame = beam.travel.any_orthonormal_pair();
+        let count = self.targets.len();
+        let (x, y) = concentric_disk(u[2], u[3]);
+        let (p, chosen) = if u[0] < cosine_share(count) {
+            (beam.radius * Vec2::new(x, y), Chosen::Own)
+        } else {
+            let k = ((u[1] * count as f32) as usize).min(count.saturating_sub(1));
+            let (centre, radius) = self.discs(beam, frame).nth(k)?;
+            (centre + radius * Vec2::new(x, y), Chosen::Target(k))
+        };
+        let pdf_per_area = self.beam_density(beam, frame, p, chosen);
+        let (t, b) = frame;
+        let origin = beam.center - 2.0 * beam.radius * beam.travel + t * p.x + b * p.y;
+        (pdf_per_area > 0.0 && pdf_per_area.is_finite()).then_some(AimedBeam {
+            origin,
+            pdf_per_area,
+        })
+    }
+
+    /// `p(x)` of [`Self::sample_beam`] at the start `origin` (module docs).
+    pub fn beam_pdf_per_area(&self, beam: &Beam, origin: Vec3) -> f32 {
+        let frame = beam.travel.any_orthonormal_pair();
+        let d = origin - beam.center;
+        let p = Vec2::new(d.dot(frame.0), d.dot(frame.1));
+        self.beam_density(beam, frame, p, Chosen::Neither)
+    }
+
+    /// The disks the targets' balls cast on the cross-section of `beam`:
+    /// centre in the `frame` and radius.
+    fn discs<'s>(
+        &'s self,
+        beam: &Beam,
+        (t, b): (Vec3, Vec3),
+    ) -> impl Iterator<Item = (Vec2, f32)> + 's {
+        let center = beam.center;
+        self.targets.iter().map(move |target| {
+            let d = target.center - center;
+            (Vec2::new(d.dot(t), d.dot(b)), target.radius)
+        })
+    }
+
+    /// The beam's `p(x)` at the cross-section's point `p`, counting the
+    /// strategy that drew it as holding it (no rounding at a rim can leave
+    /// it out).
+    fn beam_density(&self, beam: &Beam, frame: (Vec3, Vec3), p: Vec2, chosen: Chosen) -> f32 {
+        let count = self.targets.len();
+        let share = cosine_share(count);
+        let disk_area = |radius: f32| PI * radius * radius;
+        let on_disk = chosen == Chosen::Own || p.length() <= beam.radius;
+        let own = if on_disk {
+            share / disk_area(beam.radius)
+        } else {
+            0.0
+        };
+        if count == 0 {
+            return own;
+        }
+        let discs = self
+            .discs(beam, frame)
+            .enumerate()
+            .filter(|&(k, (centre, radius))| {
+                chosen == Chosen::Target(k) || p.distance(centre) <= radius
+            })
+            .map(|(_, (_, radius))| 1.0 / disk_area(radius))
+            .sum::<f32>();
+        own + (1.0 - share) * discs / count as f32
+    }
+}
+
+/// Which strategy drew a beam's start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Chosen {
+    /// The uniform disk across the beam.
+    Own,
+    /// The disk of target `k`.
+    Target(usize),
+    /// None (a density asked for a given point).
+    Neither,
+}
+
 /// The cosine's share `a` with `count` cones to aim at (module docs).
 fn cosine_share(count: usize) -> f32 {
     if count == 0 { 1.0 } else { COSINE_SHARE }
@@ -521,6 +638,75 @@ mod tests {
         }
         wrong /= f64::from(n);
         assert!((wrong - exact).abs() > 10.0 * sigma, "{wrong} vs {exact}");
+    }
+
+    /// A beam's starts cover its cross-section: `∫ [x on the disk] dA = π R²`
+    /// and `∫ [x in a target's disk] dA = π r²` within 4σ (with the aim's
+    /// two targets, one wholly inside the disk); the density a start reports
+    /// is the density at its origin. Negative control: weighing the starts
+    /// by the disk's uniform density alone misses `π R²` by more than 10σ.
+    #[test]
+    fn beams_cover_the_cross_section_and_aim_at_the_targets() {
+        use std::f64::consts::PI;
+        let aim = aim();
+        let beam = Beam {
+            travel: Vec3::new(0.3, -1.0, 0.2).normalize(),
+            center: Vec3::new(0.2, 1.0, 0.0),
+            radius: 3.0,
+        };
+        let frame = beam.travel.any_orthonormal_pair();
+        let plane = |origin: Vec3| {
+            let d = origin - beam.center;
+            Vec2::new(d.dot(frame.0), d.dot(frame.1))
+        };
+        let discs: Vec<(Vec2, f32)> = aim.discs(&beam, frame).collect();
+        let mut rng = Rng::new(9, 3);
+        let n = 200_000u32;
+        let (mut own, mut target, mut uniform) = ([0.0f64; 2], [0.0f64; 2], [0.0f64; 2]);
+        let add = |sums: &mut [f64; 2], w: f64| {
+            sums[0] += w;
+            sums[1] += w * w;
+        };
+        for _ in 0..n {
+            let start = aim.sample_beam(&beam, uniforms(&mut rng)).expect("a start");
+            let density = aim.beam_pdf_per_area(&beam, start.origin);
+            assert!((density - start.pdf_per_area).abs() <= 1e-3 * start.pdf_per_area);
+            let p = plane(start.origin);
+            let w = 1.0 / f64::from(start.pdf_per_area);
+            let on_disk = p.length() <= beam.radius;
+            add(&mut own, if on_disk { w } else { 0.0 });
+            let (centre, radius) = discs[0];
+            add(
+                &mut target,
+                if p.distance(centre) <= radius { w } else { 0.0 },
+            );
+            let uniform_density = f64::from(COSINE_SHARE) / (PI * f64::from(beam.radius).powi(2));
+            add(
+                &mut uniform,
+                if on_disk { 1.0 / uniform_density } else { 0.0 },
+            );
+        }
+        let stat = |[sum, sum_sq]: [f64; 2]| {
+            let mean = sum / f64::from(n);
+            (
+                mean,
+                ((sum_sq / f64::from(n) - mean * mean) / f64::from(n)).sqrt(),
+            )
+        };
+        let disk = PI * f64::from(beam.radius).powi(2);
+        let (mean, sigma) = stat(own);
+        assert!(
+            (mean - disk).abs() < 4.0 * sigma,
+            "{mean} vs {disk} ± {sigma}"
+        );
+        let exact = PI * f64::from(discs[0].1).powi(2);
+        let (mean, sigma) = stat(target);
+        assert!(
+            (mean - exact).abs() < 4.0 * sigma,
+            "{mean} vs {exact} ± {sigma}"
+        );
+        let (wrong, _) = stat(uniform);
+        assert!((wrong - disk).abs() > 10.0 * sigma, "{wrong} vs {disk}");
     }
 
     /// A point light's mixture covers the whole sphere: `∫ 1 dω = 4π` and

@@ -79,8 +79,8 @@
 //! the radiance factor, which cancels over a path that leaves the medium
 //! it entered, so only light connected from inside such a medium is off.
 
-use super::light_aim::{Aimed, LightAim};
-use super::light_start::LightStarts;
+use super::light_aim::{Aimed, AimedBeam, LightAim};
+use super::light_start::{LightStarts, Place, departure};
 use super::packet_shading::offset;
 use super::{IntegratorSettings, RR_MAX_SURVIVAL, RayCounts, SHADOW_EPSILON};
 use crate::packet::{PacketHit, Ray};
@@ -377,16 +377,33 @@ impl<'a> LightPaths<'a> {
             rng.next_f32(),
             rng.next_f32(),
         ];
-        let Some(Aimed { direction, pdf_sr }) =
-            self.aim.sample(light.origin, &light.emitting, u_aim)
-        else {
-            return;
+        let (origin, direction, density) = match light.place {
+            Place::At { origin, emitting } => {
+                let Some(Aimed { direction, pdf_sr }) = self.aim.sample(origin, &emitting, u_aim)
+                else {
+                    return;
+                };
+                let Some(origin) = self.starts.enter(origin, direction) else {
+                    return;
+                };
+                (departure(origin, &emitting, direction), direction, pdf_sr)
+            }
+            Place::Beam(beam) => {
+                let Some(AimedBeam {
+                    origin,
+                    pdf_per_area,
+                }) = self.aim.sample_beam(&beam, u_aim)
+                else {
+                    return;
+                };
+                (origin, beam.travel, pdf_per_area)
+            }
         };
         let emission = LaneSpectrum::scene(light.emission);
         let lambdas = *wavelengths.lambda_nm();
         let start = lambdas.map(|lambda_nm| {
             let le = self.spectra.factor(scene, &emission, lambda_nm);
-            light.beta(le, direction, pdf_sr)
+            light.beta(le, direction, density)
         });
         // Outside a spot's cone (or where the lamp emits nothing at these
         // wavelengths) the path would carry nothing.
@@ -395,7 +412,7 @@ impl<'a> LightPaths<'a> {
         }
         let mut beta = start;
         let mut ray = Ray {
-            origin: light.departure(direction),
+            origin,
             direction,
             t_max: f32::INFINITY,
         };

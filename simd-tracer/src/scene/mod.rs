@@ -364,6 +364,12 @@ impl Scene {
         self.instances.as_ref()
     }
 
+    /// The box around all geometry, instances included (`None` when the
+    /// scene has none).
+    pub fn world_bounds(&self) -> Option<(Vec3, Vec3)> {
+        world_bounds(&self.bvh, self.instances.as_ref())
+    }
+
     /// Closest hits of a coherent packet (camera rays): the triangles'
     /// packet traversal, then the instances' ([`crate::accel::InstanceBvh`]),
     /// which keep a lane's hit unless theirs is nearer.
@@ -777,6 +783,14 @@ pub(crate) fn validate_surface_records(
 /// The unit geometric normal of a triangle, `(b − a) × (c − a)` normalised.
 fn geometric_normal([a, b, c]: &[Vec3; 3]) -> Vec3 {
     (*b - *a).cross(*c - *a).normalize()
+}
+
+/// The box around the triangles of `bvh` and the instances' world boxes.
+fn world_bounds(bvh: &Bvh, instances: Option<&Instances>) -> Option<(Vec3, Vec3)> {
+    [bvh.bounds(), instances.and_then(|i| i.bvh().bounds())]
+        .into_iter()
+        .flatten()
+        .reduce(|(min, max), (lo, hi)| (min.min(lo), max.max(hi)))
 }
 
 /// Whether triangle `index` belongs to one of `spheres` (in ascending
@@ -1791,13 +1805,7 @@ impl SceneBuilder {
                 ));
             }
         }
-        let bounds = [
-            bvh.bounds(),
-            instances.as_ref().and_then(|i| i.bvh().bounds()),
-        ]
-        .into_iter()
-        .flatten()
-        .reduce(|(min, max), (lo, hi)| (min.min(lo), max.max(hi)));
+        let bounds = world_bounds(&bvh, instances.as_ref());
         let scene_radius = bounds.map_or(1.0, |(min, max)| 0.5 * (max - min).length());
         let light_sampler = LightSampler::new(&SceneLights {
             triangle_groups: lights.group_powers(),

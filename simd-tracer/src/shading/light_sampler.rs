@@ -395,6 +395,18 @@ impl LightSampler {
             .is_some_and(|&pmf| pmf > 0.0)
     }
 
+    /// The directional lights, each with its absolute selection
+    /// probability.
+    pub fn directional_lights(&self) -> impl Iterator<Item = (&DirectionalLight, f32)> + '_ {
+        self.others
+            .iter()
+            .zip(&self.pmf)
+            .filter_map(|(light, &pmf)| match light {
+                OtherLight::Directional(directional) => Some((directional, pmf)),
+                _ => None,
+            })
+    }
+
     /// The point and spot lights, each with its absolute selection
     /// probability.
     pub fn point_lights(&self) -> impl Iterator<Item = (&PointLight, f32)> + '_ {
