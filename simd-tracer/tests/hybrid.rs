@@ -548,8 +548,6 @@ fn add_wedge_and_camera(mut b: SceneBuilder) -> TestResult<Scene> {
 /// [`point_light_wedge_scene`].
 #[derive(Debug, Clone, Copy)]
 enum WedgeLight {
-    /// A point light of this intensity (equal energy).
-    Point(f64),
     /// A small ball of emitting triangles of this radius and radiance.
     Ball(f32, f64),
     /// A sphere light (sampled in its cone) of this radius and radiance.
@@ -557,9 +555,9 @@ enum WedgeLight {
     /// A directional light of this irradiance, travelling along
     /// [`BEAM_TRAVEL`].
     Directional(f64),
-    /// A point light of this intensity this far back along
-    /// [`BEAM_TRAVEL`] from [`POINT_LIGHT_POSITION`].
-    Far(f64, f32),
+    /// A point light of this intensity (equal energy) this far back along
+    /// [`BEAM_TRAVEL`] from [`POINT_LIGHT_POSITION`] (0: there).
+    Point(f64, f32),
 }
 
 /// The direction a directional light over the wedge travels: down, a
@@ -575,15 +573,6 @@ fn point_light_wedge_scene(light: WedgeLight) -> TestResult<Scene> {
     let mut b = SceneBuilder::new(RANGE);
     let black = floor(&mut b)?;
     match light {
-        WedgeLight::Point(intensity) => {
-            let intensity = b.add_spectrum("point", SpectrumSource::Constant(intensity))?;
-            b.add_point_light(PointLight {
-                position: POINT_LIGHT_POSITION,
-                intensity,
-                scale: 1.0,
-                cone: None,
-            });
-        }
         WedgeLight::Ball(radius, radiance) => {
             let radiance = b.add_spectrum("ball", SpectrumSource::Constant(radiance))?;
             let mut ball = Material::lambert("ball", black);
@@ -599,8 +588,8 @@ fn point_light_wedge_scene(light: WedgeLight) -> TestResult<Scene> {
                 scale: 1.0,
             });
         }
-        WedgeLight::Far(intensity, distance) => {
-            let intensity = b.add_spectrum("far", SpectrumSource::Constant(intensity))?;
+        WedgeLight::Point(intensity, distance) => {
+            let intensity = b.add_spectrum("point", SpectrumSource::Constant(intensity))?;
             b.add_point_light(PointLight {
                 position: POINT_LIGHT_POSITION - distance * BEAM_TRAVEL.normalize(),
                 intensity,
@@ -670,11 +659,11 @@ fn point_lights_send_their_caustic() -> TestResult {
     );
     let spp = 256;
     let reference = floor_means(&with, &ball, spp)?;
-    let point = point_light_wedge_scene(WedgeLight::Point(intensity))?;
+    let point = point_light_wedge_scene(WedgeLight::Point(intensity, 0.0))?;
     let z = z_scores(&floor_means(&with, &point, spp)?, &reference);
     eprintln!("point light: intensity {intensity:.4}, z = {z:?}");
     assert!(z.iter().all(|&z| z <= Z_BOUND), "z = {z:?}");
-    let dimmer = point_light_wedge_scene(WedgeLight::Point(intensity * DARKER))?;
+    let dimmer = point_light_wedge_scene(WedgeLight::Point(intensity * DARKER, 0.0))?;
     let z = z_scores(&floor_means(&with, &dimmer, spp)?, &reference);
     eprintln!("10 % dimmer: z = {z:?}");
     assert!(
@@ -724,7 +713,7 @@ fn directional_lights_send_their_caustic() -> TestResult {
     let mut far = Vec::new();
     for distance in [2000.0f32, 20000.0] {
         let intensity = IRRADIANCE * f64::from(distance + to_floor).powi(2);
-        let scene = point_light_wedge_scene(WedgeLight::Far(intensity, distance))?;
+        let scene = point_light_wedge_scene(WedgeLight::Point(intensity, distance))?;
         far.push(stat(&light_path_part(&scene, spp)?));
     }
     eprintln!("light paths' part: sun {sun:?}, far points {far:?}");
