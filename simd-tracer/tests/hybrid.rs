@@ -535,6 +535,12 @@ fn add_wedge_and_camera(mut b: SceneBuilder) -> TestResult<Scene> {
         [corners[0], corners[2], corners[1]].map(|c| at(c, -depth)),
         glass,
     );
+    with_floor_camera(b)
+}
+
+/// `b` seen by the camera of the floor scenes (from the side, a little
+/// above the floor), built.
+fn with_floor_camera(mut b: SceneBuilder) -> TestResult<Scene> {
     b.set_camera(Camera::look_at(
         Vec3::new(0.0, 0.6, 4.0),
         Vec3::new(0.0, 0.0, 0.0),
@@ -844,13 +850,7 @@ fn glass_ceiling_scene(lamp_radiance: f64, lamp_half_size: f32) -> TestResult<Sc
             material,
         );
     }
-    b.set_camera(Camera::look_at(
-        Vec3::new(0.0, 0.6, 4.0),
-        Vec3::new(0.0, 0.0, 0.0),
-        Vec3::Y,
-        40.0,
-    )?);
-    Ok(b.build()?)
+    with_floor_camera(b)
 }
 
 /// Light that dispersive glass mirrors onto the floor is the light paths'
