@@ -54,7 +54,7 @@ use super::packet_shading::offset;
 use super::path::ONE_BELOW;
 use crate::ids::SpectrumId;
 use crate::scene::Scene;
-use crate::shading::light_sampler::PointLight;
+use crate::shading::light_sampler::{DirectionalLight, PointLight};
 use crate::shading::sphere_light::SphereLight;
 use crate::shading::spot_cone::SpotCone;
 use glam::Vec3;
@@ -72,7 +72,7 @@ pub(super) struct LightStarts {
     spheres: Vec<(SphereLight, f32)>,
     /// The directional lights with theirs, each as the beam it sends
     /// across the scene.
-    beams: Vec<(Beam, SpectrumId, f32, f32)>,
+    beams: Vec<(DirectionalLight, Beam, f32)>,
     /// The sphere around the scene's geometry: centre and radius.
     bounding: Option<(Vec3, f32)>,
     /// `S = P_tri + Σ P_k`.
@@ -135,7 +135,7 @@ impl LightStarts {
         let bounding = scene
             .world_bounds()
             .map(|(min, max)| (0.5 * (min + max), 0.5 * (max - min).length()));
-        let beams: Vec<(Beam, SpectrumId, f32, f32)> = bounding
+        let beams: Vec<(DirectionalLight, Beam, f32)> = bounding
             .map(|(center, radius)| {
                 sampler
                     .directional_lights()
@@ -147,7 +147,7 @@ impl LightStarts {
                             center,
                             radius,
                         };
-                        Some((beam, light.irradiance, light.scale, pmf))
+                        Some((*light, beam, pmf))
                     })
                     .collect()
             })
@@ -155,7 +155,7 @@ impl LightStarts {
         let total = triangle_share
             + points.iter().map(|(_, pmf)| pmf).sum::<f32>()
             + spheres.iter().map(|(_, pmf)| pmf).sum::<f32>()
-            + beams.iter().map(|(_, _, _, pmf)| pmf).sum::<f32>();
+            + beams.iter().map(|(_, _, pmf)| pmf).sum::<f32>();
         (total > 0.0).then_some(Self {
             triangle_share,
             points,
@@ -211,15 +211,15 @@ impl LightStarts {
                 return Some(self.sphere_start(light, *pmf, (u, v)));
             }
         }
-        for &(beam, irradiance, scale, pmf) in &self.beams {
+        for (light, beam, pmf) in &self.beams {
             end += pmf;
             if x < end {
-                return Some(self.beam_start(beam, irradiance, scale, pmf));
+                return Some(self.beam_start(light, *beam, *pmf));
             }
         }
         // Rounding left `x` past the last end: the last light.
-        if let Some(&(beam, irradiance, scale, pmf)) = self.beams.last() {
-            return Some(self.beam_start(beam, irradiance, scale, pmf));
+        if let Some((light, beam, pmf)) = self.beams.last() {
+            return Some(self.beam_start(light, *beam, *pmf));
         }
         match (self.spheres.last(), self.points.last()) {
             (Some((light, pmf)), _) => Some(self.sphere_start(light, *pmf, (u, v))),
@@ -260,13 +260,13 @@ impl LightStarts {
         Some(origin + t * direction)
     }
 
-    /// The start of a directional light of irradiance `scale · E` chosen
-    /// with `pmf`: its beam.
-    fn beam_start(&self, beam: Beam, irradiance: SpectrumId, scale: f32, pmf: f32) -> LightStart {
+    /// The start of directional light `light`, chosen with `pmf`: its
+    /// `beam`.
+    fn beam_start(&self, light: &DirectionalLight, beam: Beam, pmf: f32) -> LightStart {
         LightStart {
             place: Place::Beam(beam),
-            emission: irradiance,
-            measure: scale,
+            emission: light.irradiance,
+            measure: light.scale,
             pmf: pmf / self.total,
             cone: None,
         }

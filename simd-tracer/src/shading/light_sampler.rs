@@ -398,10 +398,8 @@ impl LightSampler {
     /// The directional lights, each with its absolute selection
     /// probability.
     pub fn directional_lights(&self) -> impl Iterator<Item = (&DirectionalLight, f32)> + '_ {
-        self.others
-            .iter()
-            .zip(&self.pmf)
-            .filter_map(|(light, &pmf)| match light {
+        self.others_with_pmf()
+            .filter_map(|(light, pmf)| match light {
                 OtherLight::Directional(directional) => Some((directional, pmf)),
                 _ => None,
             })
@@ -410,13 +408,17 @@ impl LightSampler {
     /// The point and spot lights, each with its absolute selection
     /// probability.
     pub fn point_lights(&self) -> impl Iterator<Item = (&PointLight, f32)> + '_ {
-        self.others
-            .iter()
-            .zip(&self.pmf)
-            .filter_map(|(light, &pmf)| match light {
+        self.others_with_pmf()
+            .filter_map(|(light, pmf)| match light {
                 OtherLight::Point(point) => Some((point, pmf)),
                 _ => None,
             })
+    }
+
+    /// The lights that are not triangles, each with its absolute
+    /// selection probability.
+    fn others_with_pmf(&self) -> impl Iterator<Item = (&OtherLight, f32)> + '_ {
+        self.others.iter().zip(self.pmf.iter().copied())
     }
 
     /// The solid-angle pdf (with the selection probability) with which NEE
